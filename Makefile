@@ -1,0 +1,40 @@
+# ClothLight developer entry points. Both README commands go through here:
+#   make demo   set up the environment and run the main job on the default (the paper's red cotton)
+#   make test   set up the environment and run the test suite
+#
+# The virtual environment lives outside the clone, keyed by the hash of everything that
+# defines it, so repeated runs and fresh clones on the same machine reuse it; a new machine
+# builds it from scratch.  Override with `make VENV=/some/path ...`.
+PYTHON ?= python3.11
+ENV_HASH := $(shell cat requirements.txt scripts/setup_env.py | sha256sum | cut -c1-12)
+VENV ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/clothlight/venv-$(ENV_HASH)
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.clothlight-installed
+OUT ?= out
+
+.PHONY: setup demo test bench extension clean
+
+setup: $(STAMP)
+
+$(STAMP): requirements.txt scripts/setup_env.py
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -r requirements.txt
+	$(PY) scripts/setup_env.py
+	@touch $(STAMP)
+	@echo "environment ready: $(VENV)"
+
+demo: setup
+	$(PY) -m precompute demo --out $(OUT)
+
+test: setup
+	$(PY) -m pytest
+
+bench: setup
+	$(PY) -m benchmarks
+
+extension: setup
+	$(PY) scripts/build_extension.py --output-dir dist
+
+clean:
+	rm -rf $(OUT) dist .pytest_cache

@@ -1,0 +1,27 @@
+"""ClothLight add-on: woven cloth samples, yarn-BRDF materials and a virtual gonioreflectometer.
+
+Core logic (weave geometry, table reading) is importable without Blender;
+the Blender-facing modules (preferences, properties, operators, ui) are
+registered here, in order, and unregistered in reverse.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+# Modules holding Blender classes, in registration order.
+_BLENDER_MODULES = ("preferences", "operators", "ui")
+
+
+def _modules():
+    return [importlib.import_module(f".{name}", __package__) for name in _BLENDER_MODULES]
+
+
+def register() -> None:
+    for module in _modules():
+        module.register()
+
+
+def unregister() -> None:
+    for module in reversed(_modules()):
+        module.unregister()

@@ -1,0 +1,54 @@
+"""Renders meant to be measured: fixed Cycles settings and float pixels read back from disk.
+
+Background Blender has no pixels in the Render Result, so every measurement
+render is written as a 32-bit float OpenEXR file and read back.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+from .render_setup import use_cycles_osl_on_cpu
+
+
+def configure_measurement_render(scene, *, resolution: tuple[int, int], samples: int, seed: int = 0) -> None:
+    """Cycles OSL on the CPU, no denoising, no adaptive sampling, fixed seed, linear 'Standard' output."""
+    use_cycles_osl_on_cpu(scene)
+    cycles = scene.cycles
+    cycles.samples = samples
+    cycles.use_adaptive_sampling = False
+    cycles.use_denoising = False
+    cycles.seed = seed
+    cycles.use_animated_seed = False
+    render = scene.render
+    render.resolution_x, render.resolution_y = resolution
+    render.resolution_percentage = 100
+    render.film_transparent = True
+    render.image_settings.file_format = "OPEN_EXR"
+    render.image_settings.color_depth = "32"
+    render.image_settings.exr_codec = "ZIP"
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+
+
+def render_to_array(scene, path: str | pathlib.Path) -> np.ndarray:
+    """Render ``scene`` to the EXR file ``path`` and return its pixels, shape (H, W, 4), top row first."""
+    import bpy
+
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True, scene=scene.name)
+    image = bpy.data.images.load(str(path), check_existing=False)
+    try:
+        width, height = image.size
+        pixels = np.empty(width * height * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+    finally:
+        bpy.data.images.remove(image)
+    # Blender stores images bottom row first.
+    return pixels.reshape(height, width, 4)[::-1]

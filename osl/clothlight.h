@@ -125,4 +125,78 @@ int cl_sun_occluded(point P, vector Ng_out, vector L, float min_distance)
     return trace(origin, L, "mindist", min_distance);
 }
 
+// ---- Baked yarn tables (docs/table-spec.md) -------------------------------------------------
+
+// Right-handed yarn frame from the outward normal and the yarn axis: x = axis, y = n x t, z = n.
+void cl_yarn_frame(normal n, vector tangent, output vector x, output vector y, output vector z)
+{
+    z = normalize(n);
+    x = normalize(tangent - dot(tangent, z) * z);
+    y = cross(z, x);
+}
+
+vector cl_to_frame(vector d, vector x, vector y, vector z)
+{
+    return vector(dot(d, x), dot(d, y), dot(d, z));
+}
+
+// Texture lookup that reproduces the table's cell values at cell centres and interpolates
+// linearly between them: zero filter width (no mipmaps, no derivative blur), clamped wrap.
+color cl_table_texel(string file, float u, float v)
+{
+    return texture(file, u, v, 0, 0, 0, 0, "wrap", "clamp", "interp", "linear");
+}
+
+// One exit-direction tile of an atlas whose tiles are tile_count x tile_rows cells of
+// exit_resolution^2 pixels; (s, t) are the exit direction's square coordinates.  (s, t) is held
+// inside the tile's outermost pixel centres so linear filtering never reads a neighbouring tile.
+color cl_tile_lookup(string file, int tile_col, int tile_row, int tiles_x, int tiles_y,
+                     int exit_resolution, float s, float t)
+{
+    float half_texel = 0.5 / exit_resolution;
+    float sc = clamp(s, half_texel, 1.0 - half_texel);
+    float tc = clamp(t, half_texel, 1.0 - half_texel);
+    return cl_table_texel(file, (tile_col + sc) / tiles_x, (tile_row + tc) / tiles_y);
+}
+
+// Yarn BRDF rho(wi, wo) = L_o / E_perp (1/sr) from the atlas: incidence tiles on the sphere grid
+// (blended bilinearly between the four nearest cell centres), exit pixels on the hemisphere grid.
+color cl_yarn_rho(string file, int incidence_resolution, int exit_resolution, vector wi, vector wo)
+{
+    float si, ti, so, to;
+    cl_sphere_to_square(wi, si, ti);
+    cl_hemisphere_to_square(wo, so, to);
+    int n = incidence_resolution;
+    float fx = clamp(si * n - 0.5, 0.0, n - 1.0);
+    float fy = clamp(ti * n - 0.5, 0.0, n - 1.0);
+    int i0 = int(floor(fx));
+    int j0 = int(floor(fy));
+    int i1 = min(i0 + 1, n - 1);
+    int j1 = min(j0 + 1, n - 1);
+    float ax = fx - i0;
+    float ay = fy - j0;
+    color c00 = cl_tile_lookup(file, i0, j0, n, n, exit_resolution, so, to);
+    color c10 = cl_tile_lookup(file, i1, j0, n, n, exit_resolution, so, to);
+    color c01 = cl_tile_lookup(file, i0, j1, n, n, exit_resolution, so, to);
+    color c11 = cl_tile_lookup(file, i1, j1, n, n, exit_resolution, so, to);
+    return mix(mix(c00, c10, ax), mix(c01, c11, ax), ay);
+}
+
+// Direction of closure-mixture lobe k in the yarn frame; the order of
+// precompute.closure_fit.closure_lobe_directions(): +x +y +z -x -y -z, then the cube diagonals
+// (sx, sy, sz) / sqrt(3) with sx, sy, sz running over (+1, -1) and sz varying fastest.
+vector cl_lobe_direction(int k)
+{
+    if (k < 6) {
+        float sign = (k < 3) ? 1.0 : -1.0;
+        int axis = k % 3;
+        return vector(axis == 0 ? sign : 0.0, axis == 1 ? sign : 0.0, axis == 2 ? sign : 0.0);
+    }
+    int d = k - 6;
+    float sx = (d & 4) ? -1.0 : 1.0;
+    float sy = (d & 2) ? -1.0 : 1.0;
+    float sz = (d & 1) ? -1.0 : 1.0;
+    return vector(sx, sy, sz) / sqrt(3.0);
+}
+
 #endif

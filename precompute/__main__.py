@@ -14,7 +14,7 @@ from .errors import ParameterError
 
 # Each module in precompute/cli defines add_parser(subparsers), whose parser sets
 # ``func(args) -> int``.  Listed by name so a missing optional command fails loudly.
-COMMAND_MODULES = ("optics", "slab", "bake", "plot", "demo")
+COMMAND_MODULES = ("optics", "slab", "bake", "plot")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,106 @@
+"""Material builder: ClothLight's OSL shaders as Cycles materials on the woven sample.
+
+The shader is embedded as an internal text block (a saved .blend renders
+elsewhere), table paths sit on string sockets, and the mesh attributes the
+shader needs arrive through linked sockets: in Cycles ``getattribute`` alone
+does not see them.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from .mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
+from .osl_shaders import add_script_node
+
+SUN_MODE = "SUN"
+GENERAL_MODE = "GENERAL"
+
+
+def _object_to_world(tree, attribute_name: str, vector_type: str, location):
+    """An Attribute node reading ``attribute_name`` and a Vector Transform taking it to world space."""
+    attribute = tree.nodes.new("ShaderNodeAttribute")
+    attribute.attribute_type = "GEOMETRY"
+    attribute.attribute_name = attribute_name
+    attribute.location = location
+    transform = tree.nodes.new("ShaderNodeVectorTransform")
+    transform.vector_type = vector_type
+    transform.convert_from = "OBJECT"
+    transform.convert_to = "WORLD"
+    transform.location = (location[0] + 200, location[1])
+    tree.links.new(attribute.outputs["Vector"], transform.inputs["Vector"])
+    return transform.outputs["Vector"]
+
+
+def _new_material(name: str, shader_name: str):
+    material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    tree = material.node_tree
+    tree.nodes.clear()
+    shader = add_script_node(tree, shader_name)
+    shader.location = (300, 0)
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    output.location = (600, 0)
+    tree.links.new(shader.outputs["BSDF"], output.inputs["Surface"])
+    tree.links.new(_object_to_world(tree, CLOTH_NORMAL, "NORMAL", (-200, -200)), shader.inputs["ClothNormal"])
+    material["clothlight_shader"] = shader_name
+    return material, shader
+
+
+def shader_node(material):
+    """The ClothLight script node of ``material``, or None."""
+    for node in material.node_tree.nodes:
+        if node.type == "SCRIPT" and node.script and node.script.name.startswith("clothlight_"):
+            return node
+    return None
+
+
+def build_baseline_material(name: str = "ClothLight Baseline", *, mode: str = SUN_MODE):
+    """The paper's §6 baseline: Lambert (0.6/π, 0, 0) plus Cook–Torrance with m = 0.8."""
+    material, shader = _new_material(name, "cloth_baseline")
+    shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
+    return material
+
+
+def build_yarn_material(
+    tables,
+    name: str = "ClothLight Yarn",
+    *,
+    mode: str = SUN_MODE,
+):
+    """The yarn material reading baked tables.
+
+    Parameters
+    ----------
+    tables
+        A :class:`clothlight.tables.YarnTableFiles`: checked table paths and resolutions.
+    mode
+        :data:`SUN_MODE` (exact under the scene's sun, for validation) or
+        :data:`GENERAL_MODE` (closure mixture, any lighting).
+    """
+    material, shader = _new_material(name, "cloth_yarn")
+    tree = material.node_tree
+    tree.links.new(_object_to_world(tree, YARN_TANGENT, "VECTOR", (-200, 200)), shader.inputs["YarnTangent"])
+    shader.inputs["Table"].default_value = str(tables.brdf_path)
+    shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
+    shader.inputs["ExitResolution"].default_value = tables.exit_resolution
+    shader.inputs["LobeTable"].default_value = str(tables.lobe_path)
+    shader.inputs["LobeCount"].default_value = tables.lobe_count
+    shader.inputs["IOR"].default_value = tables.host_index
+    shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
+    return material
+
+
+def sync_sun(material, sun_object) -> None:
+    """Copy ``sun_object``'s direction and irradiance into a sun-mode ClothLight material.
+
+    A Blender sun shines along its local −Z axis, so the direction toward it is
+    the world +Z column of its matrix; its strength is the irradiance in W/m² on a
+    plane facing it.  Its angular size is ignored: sun mode assumes parallel light.
+    """
+    node = shader_node(material)
+    if node is None:
+        raise ValueError(f"material {material.name!r} has no ClothLight shader")
+    toward_sun = sun_object.matrix_world.to_3x3().col[2].normalized()
+    node.inputs["SunDirection"].default_value = tuple(toward_sun)
+    irradiance = [sun_object.data.energy * c for c in sun_object.data.color]
+    node.inputs["SunIrradiance"].default_value = (*irradiance, 1.0)

@@ -1,0 +1,130 @@
+"""How the yarn tables are laid out as images, and how a shader reads them back.
+
+The layout is specified in docs/table-spec.md; ``osl/clothlight.h`` reads it
+(``cl_yarn_rho``, ``cl_tile_lookup``) and :func:`interpolate_rho` is its exact
+NumPy twin, used to check the shader and by anything that evaluates a table
+outside Blender.
+
+BRDF atlas
+    ``N_i × N_i`` tiles, one per incidence cell of ``AngularGrid("sphere", N_i)``;
+    incidence cell ``(i, j)`` (flat ``j·N_i + i``) is the tile in column ``i``
+    and row ``j`` counted from the top.  Each tile is ``N_o × N_o`` pixels, one
+    per exit cell of ``AngularGrid("hemisphere", N_o)``; exit cell ``(p, q)`` is
+    pixel column ``p`` and row ``q`` of the tile.  Image size ``N_i·N_o`` square.
+Lobe atlas
+    one row of ``K`` tiles of ``N_o × N_o`` pixels: tile ``k`` holds the weight
+    of closure lobe ``k`` (:mod:`precompute.closure_fit`) for every exit cell.
+
+Pixel centres are cell centres in the equal-area square.  Images are stored
+top row first (``t = 0`` is the top row for OSL ``texture()``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import ParameterError
+from .grids import AngularGrid
+
+
+def _check_square(count: int, name: str) -> int:
+    n = int(round(np.sqrt(count)))
+    if n * n != count:
+        raise ParameterError(name, count, "a square number of cells (N × N grid)")
+    return n
+
+
+def brdf_atlas(rho: np.ndarray) -> np.ndarray:
+    """Pack ``rho`` (N_i², N_o², C) into the BRDF atlas image (N_i·N_o, N_i·N_o, C), top row first."""
+    rho = np.asarray(rho)
+    n_i = _check_square(rho.shape[0], "rho incidence cells")
+    n_o = _check_square(rho.shape[1], "rho exit cells")
+    channels = rho.shape[2]
+    # (j, i, q, p, c) -> rows (j, q), columns (i, p)
+    tiles = rho.reshape(n_i, n_i, n_o, n_o, channels)
+    return tiles.transpose(0, 2, 1, 3, 4).reshape(n_i * n_o, n_i * n_o, channels)
+
+
+def rho_from_brdf_atlas(atlas: np.ndarray, incidence_resolution: int) -> np.ndarray:
+    """Inverse of :func:`brdf_atlas`."""
+    atlas = np.asarray(atlas)
+    n_i = incidence_resolution
+    if atlas.shape[0] != atlas.shape[1] or atlas.shape[0] % n_i:
+        raise ParameterError("atlas shape", atlas.shape, f"square, a multiple of {n_i} pixels per side")
+    n_o = atlas.shape[0] // n_i
+    channels = atlas.shape[2]
+    tiles = atlas.reshape(n_i, n_o, n_i, n_o, channels).transpose(0, 2, 1, 3, 4)
+    return tiles.reshape(n_i * n_i, n_o * n_o, channels)
+
+
+def lobe_atlas(weights: np.ndarray) -> np.ndarray:
+    """Pack closure weights (N_o², K, C) into the lobe atlas image (N_o, K·N_o, C)."""
+    weights = np.asarray(weights)
+    n_o = _check_square(weights.shape[0], "weights exit cells")
+    lobes, channels = weights.shape[1], weights.shape[2]
+    tiles = weights.reshape(n_o, n_o, lobes, channels)  # (q, p, k, c)
+    return tiles.transpose(0, 2, 1, 3).reshape(n_o, lobes * n_o, channels)
+
+
+def weights_from_lobe_atlas(atlas: np.ndarray, lobe_count: int) -> np.ndarray:
+    """Inverse of :func:`lobe_atlas`."""
+    atlas = np.asarray(atlas)
+    n_o = atlas.shape[0]
+    if atlas.shape[1] != lobe_count * n_o:
+        raise ParameterError("lobe atlas shape", atlas.shape, f"({n_o}, {lobe_count}·{n_o}, C)")
+    tiles = atlas.reshape(n_o, lobe_count, n_o, atlas.shape[2]).transpose(0, 2, 1, 3)
+    return tiles.reshape(n_o * n_o, lobe_count, atlas.shape[2])
+
+
+def _bilinear_in_tile(atlas, tile_col, tile_row, tile_size, s, t):
+    """Bilinear filtering between pixel centres of one tile, with (s, t) held inside its
+    outermost pixel centres: what ``cl_tile_lookup`` gets from OSL ``texture()``."""
+    half = 0.5 / tile_size
+    x = np.clip(s, half, 1.0 - half) * tile_size - 0.5
+    y = np.clip(t, half, 1.0 - half) * tile_size - 0.5
+    x0 = np.clip(np.floor(x).astype(int), 0, tile_size - 1)
+    y0 = np.clip(np.floor(y).astype(int), 0, tile_size - 1)
+    x1 = np.minimum(x0 + 1, tile_size - 1)
+    y1 = np.minimum(y0 + 1, tile_size - 1)
+    ax = (x - x0)[..., None]
+    ay = (y - y0)[..., None]
+    row0 = tile_row * tile_size
+    col0 = tile_col * tile_size
+    c00 = atlas[row0 + y0, col0 + x0]
+    c10 = atlas[row0 + y0, col0 + x1]
+    c01 = atlas[row0 + y1, col0 + x0]
+    c11 = atlas[row0 + y1, col0 + x1]
+    return (c00 * (1 - ax) + c10 * ax) * (1 - ay) + (c01 * (1 - ax) + c11 * ax) * ay
+
+
+def interpolate_rho(atlas: np.ndarray, incidence_resolution: int, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
+    """ρ(ω_i, ω_o) from a BRDF atlas exactly as the shader interpolates it.
+
+    ``wi`` (…, 3) any unit direction, ``wo`` (…, 3) with z ≥ 0, both in the
+    yarn frame.  Bilinear between the four nearest incidence-cell centres
+    (clamped at the square's border), bilinear between exit-cell centres.
+    """
+    atlas = np.asarray(atlas, float)
+    n_i = incidence_resolution
+    n_o = atlas.shape[0] // n_i
+    wi, wo = np.broadcast_arrays(np.asarray(wi, float), np.asarray(wo, float))
+    st_i = AngularGrid("sphere", n_i).direction_to_square(wi)
+    st_o = AngularGrid("hemisphere", n_o).direction_to_square(wo)
+    fx = np.clip(st_i[..., 0] * n_i - 0.5, 0.0, n_i - 1.0)
+    fy = np.clip(st_i[..., 1] * n_i - 0.5, 0.0, n_i - 1.0)
+    i0 = np.floor(fx).astype(int)
+    j0 = np.floor(fy).astype(int)
+    i1 = np.minimum(i0 + 1, n_i - 1)
+    j1 = np.minimum(j0 + 1, n_i - 1)
+    ax = (fx - i0)[..., None]
+    ay = (fy - j0)[..., None]
+    so, to = st_o[..., 0], st_o[..., 1]
+    out = np.empty(wi.shape[:-1] + (atlas.shape[2],))
+    for idx in np.ndindex(wi.shape[:-1]):
+        def tile(col, row):
+            return _bilinear_in_tile(atlas, col[idx], row[idx], n_o, so[idx], to[idx])
+
+        c00, c10, c01, c11 = tile(i0, j0), tile(i1, j0), tile(i0, j1), tile(i1, j1)
+        a, b = ax[idx], ay[idx]
+        out[idx] = (c00 * (1 - a) + c10 * a) * (1 - b) + (c01 * (1 - a) + c11 * a) * b
+    return out

@@ -153,6 +153,30 @@ def sphere_cell(x: float, y: float, z: float, n: int) -> int:
     return square_cell(s, t, n)
 
 
+@numba.njit(cache=True)
+def _square_to_hemisphere_array(s, t, out):
+    for k in range(s.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2] = square_to_hemisphere(s[k], t[k])
+
+
+@numba.njit(cache=True)
+def _square_to_sphere_array(s, t, out):
+    for k in range(s.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2] = square_to_sphere(s[k], t[k])
+
+
+@numba.njit(cache=True)
+def _hemisphere_to_square_array(d, out):
+    for k in range(d.shape[0]):
+        out[k, 0], out[k, 1] = hemisphere_to_square(d[k, 0], d[k, 1], d[k, 2])
+
+
+@numba.njit(cache=True)
+def _sphere_to_square_array(d, out):
+    for k in range(d.shape[0]):
+        out[k, 0], out[k, 1] = sphere_to_square(d[k, 0], d[k, 1], d[k, 2])
+
+
 @dataclass(frozen=True)
 class AngularGrid:
     """An ``N × N`` equal-solid-angle grid over the hemisphere or the sphere.
@@ -186,20 +210,18 @@ class AngularGrid:
 
     def square_to_direction(self, s, t) -> np.ndarray:
         """Directions (…, 3) for square coordinates ``s, t`` in ``[0, 1]``."""
-        fn = square_to_hemisphere if self.domain == "hemisphere" else square_to_sphere
+        kernel = _square_to_hemisphere_array if self.domain == "hemisphere" else _square_to_sphere_array
         s, t = np.broadcast_arrays(np.asarray(s, float), np.asarray(t, float))
         out = np.empty(s.shape + (3,))
-        for idx in np.ndindex(s.shape):
-            out[idx] = fn(float(s[idx]), float(t[idx]))
+        kernel(s.reshape(-1), t.reshape(-1), out.reshape(-1, 3))
         return out
 
     def direction_to_square(self, directions) -> np.ndarray:
         """Square coordinates (…, 2) of unit directions (…, 3)."""
-        fn = hemisphere_to_square if self.domain == "hemisphere" else sphere_to_square
-        d = np.asarray(directions, float)
+        kernel = _hemisphere_to_square_array if self.domain == "hemisphere" else _sphere_to_square_array
+        d = np.ascontiguousarray(directions, dtype=float)
         out = np.empty(d.shape[:-1] + (2,))
-        for idx in np.ndindex(d.shape[:-1]):
-            out[idx] = fn(*(float(c) for c in d[idx]))
+        kernel(d.reshape(-1, 3), out.reshape(-1, 2))
         return out
 
     def cell_of(self, directions) -> np.ndarray:

@@ -4,8 +4,10 @@
 (:class:`precompute.medium.MediumParameters`) into μs, μa, μt (1/mm), albedo,
 asymmetry g and a tabulated phase function with its sampling table (paper §3.3:
 "scattering cross-sections and phase functions were calculated from the Mie
-theory").  Several particle species combine by adding coefficients and
-weighting their phase functions by their scattering coefficients.
+theory").  Species combine by adding their coefficients, and their phase
+functions are weighted by their scattering coefficients:
+``p = Σ μs_i p_i / Σ μs_i``.  Absorption adds the host's own, the particles'
+(Mie ``Q_abs``) and the dye's (:mod:`precompute.dye`).
 """
 
 from __future__ import annotations
@@ -15,9 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dye import dye_absorption_coefficient
-from .medium import DEFAULT_PRESET, MediumParameters, load_preset
+from .medium import MediumParameters, load_preset
 from .mie import species_scattering
-from .phase import DEFAULT_COS_THETA, DEFAULT_ICDF_SIZE, asymmetry_parameter, phase_inverse_cdf
+from .phase import DEFAULT_ICDF_SIZE, asymmetry_parameter, cos_theta_grid, phase_inverse_cdf
+
+__all__ = ["MediumOptics", "medium_optics", "load_preset"]
 
 
 @dataclass(frozen=True)
@@ -26,14 +30,15 @@ class MediumOptics:
 
     Attributes
     ----------
-    wavelengths_nm : (L,) vacuum wavelengths, nm
+    wavelengths_nm : (L,) vacuum wavelengths, nm, strictly increasing
     mu_s, mu_a, mu_t : (L,) scattering, absorption, extinction coefficients, 1/mm
-    albedo : (L,) single-scattering albedo μs/μt
-    g : (L,) asymmetry parameter ⟨cos θ⟩
+    albedo : (L,) single-scattering albedo μs/μt (0 where μt = 0)
+    g : (L,) asymmetry parameter ⟨cos θ⟩ of the phase table
     host_index : (L,) real refractive index of the host
-    cos_theta : (M,) grid of the phase table over [−1, 1]
+    cos_theta : (M,) uniform grid of the phase table over [−1, 1]
     phase : (L, M) phase function, 1/sr, 2π∫p dμ = 1
-    phase_icdf : (L, K) μ at cumulative probability k/(K−1)
+    phase_icdf : (L, K) μ at cumulative probability k/(K−1); sample by linear interpolation in u
+    dependent_scattering : "none" or "percus-yevick", the model the coefficients were computed with
     """
 
     wavelengths_nm: np.ndarray
@@ -46,37 +51,41 @@ class MediumOptics:
     cos_theta: np.ndarray
     phase: np.ndarray
     phase_icdf: np.ndarray
+    dependent_scattering: str = "none"
 
     @property
     def boundary_index(self) -> float:
         """One real index for the yarn boundary: the host index averaged over the wavelengths.
 
         Refraction is taken as wavelength-independent so that one path serves
-        every wavelength; the host's dispersion over the visible is ~1 %.
+        every wavelength; a host's dispersion over the visible is ~1 %.
         """
         return float(np.mean(self.host_index))
 
 
 def medium_optics(params: MediumParameters, *, icdf_size: int = DEFAULT_ICDF_SIZE) -> MediumOptics:
-    """Optical properties of ``params`` on its wavelength grid (see the module docstring)."""
+    """Optical properties of ``params`` on its wavelength grid (see the module docstring).
+
+    ``icdf_size`` is the number K of entries of each inverse-CDF sampling table.
+    """
     wavelengths = params.wavelengths.values
-    host_complex = params.host.refractive_index.at(wavelengths)
-    host_index = host_complex.real
-    cos_theta = DEFAULT_COS_THETA
+    host_index = params.host.refractive_index.at(wavelengths).real
+    cos_theta = cos_theta_grid(params.phase_samples)
+    structure_fraction = params.total_volume_fraction if params.dependent_scattering == "percus-yevick" else None
     mu_s = np.zeros(len(wavelengths))
     mu_a = np.full(len(wavelengths), float(params.host.absorption_per_mm))
     weighted_phase = np.zeros((len(wavelengths), len(cos_theta)))
     for species in params.particles:
-        contribution = species_scattering(species, wavelengths, host_index, cos_theta, params.dependent_scattering)
+        contribution = species_scattering(species, wavelengths, host_index, cos_theta, structure_fraction)
         mu_s += contribution.mu_s
         mu_a += contribution.mu_a
         weighted_phase += contribution.mu_s[:, None] * contribution.phase
     if params.dye is not None:
         mu_a += dye_absorption_coefficient(params.dye, wavelengths)
-    if np.any(mu_s > 0):
-        phase = np.where(mu_s[:, None] > 0, weighted_phase / np.where(mu_s > 0, mu_s, 1.0)[:, None], 1.0 / (4 * np.pi))
-    else:
-        phase = np.full_like(weighted_phase, 1.0 / (4.0 * np.pi))
+    scattering = mu_s > 0
+    # Where nothing scatters the phase function is never used; an isotropic one keeps the tables valid.
+    phase = np.full_like(weighted_phase, 1.0 / (4.0 * np.pi))
+    phase[scattering] = weighted_phase[scattering] / mu_s[scattering, None]
     mu_t = mu_s + mu_a
     albedo = np.divide(mu_s, mu_t, out=np.zeros_like(mu_s), where=mu_t > 0)
     return MediumOptics(
@@ -90,9 +99,5 @@ def medium_optics(params: MediumParameters, *, icdf_size: int = DEFAULT_ICDF_SIZ
         cos_theta=cos_theta,
         phase=phase,
         phase_icdf=phase_inverse_cdf(cos_theta, phase, icdf_size),
+        dependent_scattering=params.dependent_scattering,
     )
-
-
-def default_optics() -> MediumOptics:
-    """Optics of the paper's red cotton (the default preset)."""
-    return medium_optics(load_preset(DEFAULT_PRESET))

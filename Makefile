@@ -25,7 +25,7 @@ $(STAMP): requirements.txt scripts/setup_env.py
 	@echo "environment ready: $(VENV)"
 
 demo: setup
-	$(PY) -m precompute demo --out $(OUT)
+	$(PY) scripts/run_demo.py --out $(OUT)
 
 test: setup
 	$(PY) -m pytest

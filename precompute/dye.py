@@ -21,8 +21,8 @@ def dye_absorption_coefficient(dye: Dye, wavelengths_nm: np.ndarray) -> np.ndarr
     if wavelengths_nm.min() < table[0] or wavelengths_nm.max() > table[-1]:
         raise ParameterError(
             "dye.spectrum_csv wavelengths",
-            (table[0], table[-1]),
-            f"a range covering the simulation's {wavelengths_nm.min()}–{wavelengths_nm.max()} nm",
+            f"tabulated over {table[0]:g}–{table[-1]:g} nm",
+            f"a table covering the simulation's {wavelengths_nm.min():g}–{wavelengths_nm.max():g} nm",
         )
     epsilon = np.interp(wavelengths_nm, table, np.asarray(dye.mass_absorption_cm2_per_g, float))
     concentration_g_per_cm3 = dye.weight_percent / 100.0 * dye.fiber_density_g_per_cm3

@@ -43,7 +43,8 @@ _FOREIGN_TABLES = ("transport", "bake")
 
 
 def _finite(name: str, value, allowed: str = "a finite number") -> float:
-    if isinstance(value, bool):
+    # Text and booleans are not numbers even where float() would take them.
+    if isinstance(value, (bool, str, bytes)):
         raise ParameterError(name, value, allowed)
     try:
         number = float(value)
@@ -62,7 +63,9 @@ def _positive(name: str, value) -> float:
 
 
 def _finite_array(name: str, values, allowed: str = "finite numbers") -> np.ndarray:
-    if isinstance(values, (str, bytes, bool)):
+    if isinstance(values, (str, bytes, bool)) or (
+        isinstance(values, (list, tuple)) and any(isinstance(v, (str, bytes, bool)) for v in values)
+    ):
         raise ParameterError(name, values, allowed)
     try:
         array = np.asarray(values, dtype=float)
@@ -108,7 +111,9 @@ class WavelengthGrid:
     def __post_init__(self):
         if self.values_nm is not None:
             if (self.start_nm, self.stop_nm, self.step_nm) != (None, None, None):
-                raise ParameterError("wavelengths.values_nm", self.values_nm, "either values_nm or start_nm/stop_nm/step_nm, not both")
+                raise ParameterError(
+                    "wavelengths.values_nm", self.values_nm, "either values_nm or start_nm/stop_nm/step_nm, not both"
+                )
             values = _increasing("wavelengths.values_nm", self.values_nm)
             if values[0] <= 0:
                 raise ParameterError("wavelengths.values_nm", self.values_nm, "wavelengths > 0 nm")
@@ -119,7 +124,9 @@ class WavelengthGrid:
         if stop < start:
             raise ParameterError("wavelengths.stop_nm", self.stop_nm, f"≥ start_nm = {start:g}")
         if abs(round((stop - start) / step) * step - (stop - start)) > 1e-6 * step:
-            raise ParameterError("wavelengths.step_nm", self.step_nm, f"a divisor of stop_nm − start_nm = {stop - start:g}")
+            raise ParameterError(
+                "wavelengths.step_nm", self.step_nm, f"a divisor of stop_nm − start_nm = {stop - start:g}"
+            )
 
     @property
     def values(self) -> np.ndarray:
@@ -156,7 +163,9 @@ class RefractiveIndex:
         for part, allowed in (("n", "> 0"), ("k", "≥ 0")):
             values = _finite_array(f"{self.name}.{part}", getattr(self, part))
             if values.ndim > 1 or (values.ndim == 1 and values.shape != table.shape):
-                raise ParameterError(f"{self.name}.{part}", getattr(self, part), f"one number, or {table.size} (one per wavelength)")
+                raise ParameterError(
+                    f"{self.name}.{part}", getattr(self, part), f"one number, or {table.size} (one per wavelength)"
+                )
             if (part == "n" and np.any(values <= 0)) or (part == "k" and np.any(values < 0)):
                 raise ParameterError(f"{self.name}.{part}", getattr(self, part), f"{allowed} at every wavelength")
 
@@ -171,8 +180,18 @@ class RefractiveIndex:
         if self.wavelengths_nm is None:
             return np.full(wavelengths_nm.shape, complex(float(self.n), float(self.k)))
         table = np.asarray(self.wavelengths_nm, float)
-        n = _interpolate(f"{self.name}.wavelengths_nm", table, np.broadcast_to(np.asarray(self.n, float), table.shape), wavelengths_nm)
-        k = _interpolate(f"{self.name}.wavelengths_nm", table, np.broadcast_to(np.asarray(self.k, float), table.shape), wavelengths_nm)
+        n = _interpolate(
+            f"{self.name}.wavelengths_nm",
+            table,
+            np.broadcast_to(np.asarray(self.n, float), table.shape),
+            wavelengths_nm,
+        )
+        k = _interpolate(
+            f"{self.name}.wavelengths_nm",
+            table,
+            np.broadcast_to(np.asarray(self.k, float), table.shape),
+            wavelengths_nm,
+        )
         return n + 1j * k
 
 
@@ -211,7 +230,11 @@ class ParticleSpecies:
             raise ParameterError(f"{label}.volume_fraction", self.volume_fraction, f"(0, {MAX_VOLUME_FRACTION})")
         if self.diameter_nm is not None:
             if self.median_diameter_nm is not None or self.geometric_sigma is not None:
-                raise ParameterError(f"{label}.diameter_nm", self.diameter_nm, "either diameter_nm or median_diameter_nm with geometric_sigma, not both")
+                raise ParameterError(
+                    f"{label}.diameter_nm",
+                    self.diameter_nm,
+                    "either diameter_nm or median_diameter_nm with geometric_sigma, not both",
+                )
             _positive(f"{label}.diameter_nm", self.diameter_nm)
             return
         if self.median_diameter_nm is None or self.geometric_sigma is None:
@@ -219,7 +242,9 @@ class ParticleSpecies:
         _positive(f"{label}.median_diameter_nm", self.median_diameter_nm)
         sigma = _finite(f"{label}.geometric_sigma", self.geometric_sigma, "(1, 2.5]")
         if not 1.0 < sigma <= 2.5:
-            raise ParameterError(f"{label}.geometric_sigma", self.geometric_sigma, "(1, 2.5] (1 is monodisperse: use diameter_nm)")
+            raise ParameterError(
+                f"{label}.geometric_sigma", self.geometric_sigma, "(1, 2.5] (1 is monodisperse: use diameter_nm)"
+            )
 
 
 @dataclass(frozen=True)
@@ -244,9 +269,15 @@ class Dye:
             raise ParameterError("dye.weight_percent", self.weight_percent, "[0, 100)")
         _positive("dye.fiber_density_g_per_cm3", self.fiber_density_g_per_cm3)
         table = _increasing("dye.wavelengths_nm", self.wavelengths_nm)
-        epsilon = _finite_array("dye.mass_absorption_cm2_per_g", self.mass_absorption_cm2_per_g, f"{table.size} finite values ≥ 0")
+        epsilon = _finite_array(
+            "dye.mass_absorption_cm2_per_g", self.mass_absorption_cm2_per_g, f"{table.size} finite values ≥ 0"
+        )
         if epsilon.shape != table.shape:
-            raise ParameterError("dye.mass_absorption_cm2_per_g", f"{epsilon.size} values", f"{table.size} finite values ≥ 0, one per wavelength")
+            raise ParameterError(
+                "dye.mass_absorption_cm2_per_g",
+                f"{epsilon.size} values",
+                f"{table.size} finite values ≥ 0, one per wavelength",
+            )
         if np.any(epsilon < 0):
             raise ParameterError("dye.mass_absorption_cm2_per_g", float(epsilon.min()), "≥ 0 at every wavelength")
 
@@ -273,7 +304,9 @@ class Yarn:
                 raise ParameterError("yarn.semi_axes_mm", self.semi_axes_mm, "absent for a circular cross-section")
             return
         if not isinstance(self.semi_axes_mm, (tuple, list)) or len(self.semi_axes_mm) != 2:
-            raise ParameterError("yarn.semi_axes_mm", self.semi_axes_mm, "two semi-axes in mm for an elliptical cross-section")
+            raise ParameterError(
+                "yarn.semi_axes_mm", self.semi_axes_mm, "two semi-axes in mm for an elliptical cross-section"
+            )
         for axis in self.semi_axes_mm:
             _positive("yarn.semi_axes_mm", axis)
 
@@ -294,7 +327,9 @@ class Host:
         if not isinstance(self.refractive_index, RefractiveIndex):
             raise ParameterError("host.refractive_index", self.refractive_index, "a RefractiveIndex")
         if self.refractive_index.is_absorbing:
-            raise ParameterError("host.refractive_index.k", self.refractive_index.k, "0: give the host's absorption as absorption_per_mm")
+            raise ParameterError(
+                "host.refractive_index.k", self.refractive_index.k, "0: give the host's absorption as absorption_per_mm"
+            )
         value = _finite("host.absorption_per_mm", self.absorption_per_mm, "a finite number ≥ 0")
         if value < 0:
             raise ParameterError("host.absorption_per_mm", self.absorption_per_mm, "a finite number ≥ 0")
@@ -322,8 +357,14 @@ class MediumParameters:
 
     def __post_init__(self):
         if self.dependent_scattering not in DEPENDENT_SCATTERING_MODELS:
-            raise ParameterError("medium.dependent_scattering", self.dependent_scattering, f"one of {DEPENDENT_SCATTERING_MODELS}")
-        if isinstance(self.phase_samples, bool) or not isinstance(self.phase_samples, int) or not 201 <= self.phase_samples <= 200001:
+            raise ParameterError(
+                "medium.dependent_scattering", self.dependent_scattering, f"one of {DEPENDENT_SCATTERING_MODELS}"
+            )
+        if (
+            isinstance(self.phase_samples, bool)
+            or not isinstance(self.phase_samples, int)
+            or not 201 <= self.phase_samples <= 200001
+        ):
             raise ParameterError("medium.phase_samples", self.phase_samples, "an integer in [201, 200001]")
         if not all(isinstance(p, ParticleSpecies) for p in self.particles):
             raise ParameterError("particles", self.particles, "a sequence of ParticleSpecies")
@@ -360,25 +401,29 @@ def read_spectrum_csv(path: str | pathlib.Path, parameter: str) -> tuple[tuple[f
     ``#`` lines are comments and a first row of text is a header.  Missing,
     non-numeric, non-finite or negative values, fewer than two rows and
     wavelengths that do not strictly increase raise :class:`ParameterError`
-    naming ``parameter``, the file and the row.
+    naming ``parameter``, the file and the line.
     """
     path = pathlib.Path(path)
     if not path.is_file():
         raise ParameterError(parameter, str(path), "an existing CSV file")
-    with path.open(newline="") as handle:
-        rows = [row for row in csv.reader(line for line in handle if not line.lstrip().startswith("#")) if row]
     wavelengths, values = [], []
-    for number, row in enumerate(rows, start=1):
-        if number == 1 and not _is_number(row[0]):
-            continue  # header
-        where = f"{parameter} ({path.name}, data row {number})"
+    header_allowed = True
+    for line_number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        row = next(csv.reader([line]))
+        if header_allowed:
+            header_allowed = False
+            if not _is_number(row[0]):
+                continue  # the header row
+        where = f"{parameter} ({path.name}, line {line_number})"
         if len(row) < 2 or not row[0].strip() or not row[1].strip():
-            raise ParameterError(where, row, "two values: wavelength_nm, value")
+            raise ParameterError(where, line, "two values: wavelength_nm, value")
         if not (_is_number(row[0]) and _is_number(row[1])):
-            raise ParameterError(where, row, "numbers")
+            raise ParameterError(where, line, "numbers")
         wavelength, value = float(row[0]), float(row[1])
         if not (math.isfinite(wavelength) and math.isfinite(value)):
-            raise ParameterError(where, row, "finite numbers")
+            raise ParameterError(where, line, "finite numbers")
         if value < 0:
             raise ParameterError(where, value, "a value ≥ 0")
         wavelengths.append(wavelength)
@@ -429,7 +474,9 @@ def _index(spec, name: str, base_dir: pathlib.Path) -> RefractiveIndex:
         _check_keys(spec, {"n", "k", "wavelengths_nm", "csv"}, name)
         if "csv" in spec:
             if set(spec) != {"csv"}:
-                raise ParameterError(f"{name}.csv", spec["csv"], "a CSV of wavelength_nm, n alone, without n, k or wavelengths_nm")
+                raise ParameterError(
+                    f"{name}.csv", spec["csv"], "a CSV of wavelength_nm, n alone, without n, k or wavelengths_nm"
+                )
             wavelengths, n = read_spectrum_csv(_resolve(spec["csv"], f"{name}.csv", base_dir), f"{name}.csv")
             return RefractiveIndex(n=n, wavelengths_nm=wavelengths, name=name)
         if "n" not in spec or "wavelengths_nm" not in spec:
@@ -445,7 +492,11 @@ def _index(spec, name: str, base_dir: pathlib.Path) -> RefractiveIndex:
 
 def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> MediumParameters:
     """Build :class:`MediumParameters` from a preset's TOML content; relative file paths resolve in ``base_dir``."""
-    _check_keys(config, {"name", "description", "wavelengths", "host", "particles", "dye", "yarn", "medium", *_FOREIGN_TABLES}, "preset")
+    _check_keys(
+        config,
+        {"name", "description", "wavelengths", "host", "particles", "dye", "yarn", "medium", *_FOREIGN_TABLES},
+        "preset",
+    )
     wavelengths = _table(config, "wavelengths", "")
     _check_keys(wavelengths, {"start_nm", "stop_nm", "step_nm", "values_nm"}, "wavelengths")
     if "values_nm" in wavelengths and isinstance(wavelengths["values_nm"], list):
@@ -459,7 +510,11 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
         raise ParameterError("particles", particle_specs, "[[particles]] tables")
     particles = []
     for number, spec in enumerate(particle_specs):
-        _check_keys(spec, {"name", "refractive_index", "volume_fraction", "diameter_nm", "median_diameter_nm", "geometric_sigma"}, f"particles[{number}]")
+        _check_keys(
+            spec,
+            {"name", "refractive_index", "volume_fraction", "diameter_nm", "median_diameter_nm", "geometric_sigma"},
+            f"particles[{number}]",
+        )
         name = str(spec.get("name", number))
         if "refractive_index" not in spec:
             raise ParameterError(f"particles[{name}].refractive_index", None, "a number n, [n, k], or a table")
@@ -510,7 +565,9 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
         yarn=Yarn(
             radius_mm=yarn.get("radius_mm", 0.1),
             cross_section=yarn.get("cross_section", "circle"),
-            semi_axes_mm=tuple(yarn["semi_axes_mm"]) if isinstance(yarn.get("semi_axes_mm"), list) else yarn.get("semi_axes_mm"),
+            semi_axes_mm=(
+                tuple(yarn["semi_axes_mm"]) if isinstance(yarn.get("semi_axes_mm"), list) else yarn.get("semi_axes_mm")
+            ),
         ),
         dependent_scattering=medium.get("dependent_scattering", "none"),
         phase_samples=medium.get("phase_samples", DEFAULT_PHASE_SAMPLES),

@@ -2,9 +2,9 @@
 
 Each particle scatters inside the host: the wavelength there is ``λ0 / n_host``
 and the relative index ``m = n_particle / n_host`` (complex for an absorbing
-particle).  Efficiencies and angular intensities come from miepython, which
-writes an absorbing index ``n − ik``; ClothLight writes ``n + ik`` with
-``k ≥ 0`` and converts here.
+particle).  miepython supplies the efficiencies and the Mie coefficients
+``a_n, b_n``; it writes an absorbing index ``n − ik``, ClothLight writes
+``n + ik`` with ``k ≥ 0`` and converts here.
 
 Dense media.  The paper (§6.2) puts 14 % of the volume in particles and treats
 them as independent scatterers.  Optionally the far field of each particle is
@@ -22,21 +22,14 @@ Pedersen, J. Appl. Cryst. 27, 595 (1994)).
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 
+import miepython
 import numpy as np
 
-# miepython's documented switch to its numba kernels (read once, at import): the
-# angular intensities of a 2001-point phase table are ~100× faster, which makes a
-# log-normal size distribution affordable in every bake.  An explicit user
-# setting wins.
-os.environ.setdefault("MIEPYTHON_USE_JIT", "1")
-import miepython  # noqa: E402  (must follow the switch above)
-
-from .errors import ParameterError  # noqa: E402
-from .medium import ParticleSpecies  # noqa: E402
-from .phase import normalize_phase, phase_integral  # noqa: E402
+from .errors import ParameterError
+from .medium import ParticleSpecies
+from .phase import normalize_phase, phase_integral
 
 #: Spacing, in standard deviations of ln d, of the quadrature over a log-normal size distribution.
 LOGNORMAL_STEP = 0.25
@@ -92,12 +85,35 @@ def number_density(species: ParticleSpecies) -> float:
     return species.volume_fraction / float(np.sum(weights * np.pi * diameters**3 / 6.0))
 
 
+def differential_scattering_cross_section(m: complex, x: float, wavenumber: float, cos_theta: np.ndarray) -> np.ndarray:
+    """Unpolarised ``dC_sca/dΩ`` of one sphere (area units of ``1/wavenumber²`` per sr) at ``cos_theta``.
+
+    ``(|S1|² + |S2|²) / 2k²`` with the amplitude functions summed from
+    miepython's coefficients ``a_n, b_n`` over the angular functions ``π_n,
+    τ_n`` (Bohren & Huffman 1983, eqs. 4.47 and 4.74); ``m`` is the relative
+    index (``n − ik``), ``x`` the size parameter in the host, ``k`` the
+    wavenumber in the host.  The sum runs over all angles at once, where
+    miepython's own ``S1_S2`` loops over them in Python.
+    """
+    a, b = miepython.an_bn(m, x, 0)
+    s1 = np.zeros(cos_theta.shape, complex)
+    s2 = np.zeros(cos_theta.shape, complex)
+    pi_previous, pi_n = np.zeros_like(cos_theta), np.ones_like(cos_theta)
+    for n in range(1, len(a) + 1):
+        tau_n = n * cos_theta * pi_n - (n + 1) * pi_previous
+        weight = (2 * n + 1) / (n * (n + 1))
+        s1 += weight * (a[n - 1] * pi_n + b[n - 1] * tau_n)
+        s2 += weight * (a[n - 1] * tau_n + b[n - 1] * pi_n)
+        pi_previous, pi_n = pi_n, ((2 * n + 1) * cos_theta * pi_n - (n + 1) * pi_previous) / n
+    return (np.abs(s1) ** 2 + np.abs(s2) ** 2) / (2.0 * wavenumber**2)
+
+
 def percus_yevick_structure_factor(q_times_d, volume_fraction: float) -> np.ndarray:
     """Hard-sphere structure factor ``S(q)`` in the Percus–Yevick approximation.
 
     ``S = 1 / (1 + 24 f G(x)/x)`` with ``x = q·d`` (``d`` the sphere diameter,
     ``q`` the scattering vector, 1/nm) and ``f`` the volume fraction (closed form
-    of Kinning & Thomas, Macromolecules 17, 1712 (1984), eq. A2).  ``S(0) =
+    of Kinning & Thomas, Macromolecules 17, 1712 (1984)).  ``S(0) =
     (1 − f)⁴ / (1 + 2f)²`` is the hard-sphere compressibility; ``S → 1`` for
     ``x → ∞``.
     """
@@ -163,16 +179,17 @@ def species_scattering(
         c_abs = 0.0
         differential = np.zeros(len(cos_theta))  # ⟨dC_sca/dΩ⟩, nm²/sr
         corrected = np.zeros(len(cos_theta)) if structure_volume_fraction is not None else None
+        wavenumber = 2.0 * np.pi * n_host / wavelength  # in the host, 1/nm
         for diameter, weight, area in zip(diameters, weights, areas):
             qext, qsca, _, _ = miepython.efficiencies(m, diameter, wavelength, n_env=n_host)
             c_sca += weight * qsca * area
-            c_abs += weight * (qext - qsca) * area
-            # norm="qsca": the unpolarised intensity integrates to Q_sca over 4π.
-            i_par, i_per = miepython.intensities(m, diameter, wavelength, cos_theta, n_env=n_host, norm="qsca")
-            term = weight * area * 0.5 * (i_par + i_per)
+            if n_p.imag > 0:  # for a real index Q_ext − Q_sca is rounding noise, which may be negative
+                c_abs += weight * (qext - qsca) * area
+            x = wavenumber * diameter / 2.0
+            term = weight * differential_scattering_cross_section(m / n_host, x, wavenumber, cos_theta)
             differential += term
             if corrected is not None:
-                q_times_d = 2.0 * (2.0 * np.pi * n_host / wavelength) * sin_half * diameter
+                q_times_d = 2.0 * wavenumber * sin_half * diameter
                 corrected += term * percus_yevick_structure_factor(q_times_d, structure_volume_fraction)
         mu_a[index] = density_per_nm3 * c_abs * 1e6  # 1/nm → 1/mm
         if c_sca <= 0.0:

@@ -81,7 +81,9 @@ def phase_inverse_cdf(cos_theta: np.ndarray, phase: np.ndarray, n_samples: int =
     cos_theta = np.asarray(cos_theta, float)
     phase = np.asarray(phase, float)
     if cos_theta.ndim != 1 or phase.shape[-1] != cos_theta.size or np.any(np.diff(cos_theta) <= 0):
-        raise ParameterError("cos_theta", cos_theta.shape, f"strictly increasing, one value per phase sample ({phase.shape[-1]})")
+        raise ParameterError(
+            "cos_theta", cos_theta.shape, f"strictly increasing, one value per phase sample ({phase.shape[-1]})"
+        )
     if not np.all(np.isfinite(phase)) or np.any(phase < 0):
         raise ParameterError("phase", "negative or non-finite values", "finite values ≥ 0")
     flat = phase.reshape(-1, phase.shape[-1])
@@ -104,4 +106,3 @@ def sample_inverse_cdf(icdf: np.ndarray, u) -> np.ndarray:
     k = np.minimum(position.astype(int), len(icdf) - 2)
     frac = position - k
     return icdf[k] * (1.0 - frac) + icdf[k + 1] * frac
-

@@ -76,7 +76,9 @@ def plot_medium_optics(
         axes[1, 1].plot(optics.cos_theta, optics.phase[row] * 4.0 * np.pi, color=f"C{colour}", label=label)
         if comparison is not None:
             theta_c = np.degrees(np.arccos(np.clip(comparison.cos_theta, -1.0, 1.0)))
-            axes[1, 0].semilogy(theta_c, comparison.phase[row], "--", color=f"C{colour}", label=f"{label} {comparison_label}")
+            axes[1, 0].semilogy(
+                theta_c, comparison.phase[row], "--", color=f"C{colour}", label=f"{label} {comparison_label}"
+            )
     axes[1, 0].set(xlabel="scattering angle θ (deg)", ylabel="p(θ) (1/sr)", title="phase function", xlim=(0, 180))
     axes[1, 1].set(xlabel="cos θ", ylabel="4π p(cos θ)", title=f"phase function ({main_label}), linear", xlim=(-1, 1))
     for axis in axes[1, :2]:
@@ -89,7 +91,16 @@ def plot_medium_optics(
         for row in rows
     ]
     summary.append(f"boundary index {optics.boundary_index:.4f}")
-    axes[1, 2].text(0.0, 1.0, "\n".join(summary), va="top", ha="left", fontsize=9, family="monospace", transform=axes[1, 2].transAxes)
+    axes[1, 2].text(
+        0.0,
+        1.0,
+        "\n".join(summary),
+        va="top",
+        ha="left",
+        fontsize=9,
+        family="monospace",
+        transform=axes[1, 2].transAxes,
+    )
     figure.suptitle(title or "medium optics")
     figure.savefig(path, dpi=110)
     return path

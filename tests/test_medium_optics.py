@@ -14,8 +14,16 @@ from scipy import stats
 from scipy.integrate import quad
 
 from precompute.__main__ import main
-from precompute.medium import DATA_DIR, Host, MediumParameters, ParticleSpecies, RefractiveIndex, WavelengthGrid, preset_names
-from precompute.mie import percus_yevick_structure_factor
+from precompute.medium import (
+    DATA_DIR,
+    Host,
+    MediumParameters,
+    ParticleSpecies,
+    RefractiveIndex,
+    WavelengthGrid,
+    preset_names,
+)
+from precompute.mie import differential_scattering_cross_section, percus_yevick_structure_factor
 from precompute.optics import MediumOptics, load_preset, medium_optics
 from precompute.phase import (
     asymmetry_parameter,
@@ -116,7 +124,9 @@ def test_red_cotton_is_red(red_cotton):
 
 
 def test_dye_csv_is_the_documented_band_model():
-    spec = importlib.util.spec_from_file_location("make_red_dye_spectrum", REPO / "scripts" / "make_red_dye_spectrum.py")
+    spec = importlib.util.spec_from_file_location(
+        "make_red_dye_spectrum", REPO / "scripts" / "make_red_dye_spectrum.py"
+    )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     with (DATA_DIR / "red_dye_band_model.csv").open() as handle:
@@ -145,6 +155,18 @@ def test_table_g_matches_mie_g(red_cotton):
     for row, wavelength in enumerate(red_cotton.wavelengths_nm):
         _, _, _, g = miepython.efficiencies(complex(1.61), 150.0, wavelength, n_env=1.557)
         assert red_cotton.g[row] == pytest.approx(g, abs=1e-5)
+
+
+@pytest.mark.parametrize(
+    "m, x", [(1.61 / 1.557, 1.8), (1.8 / 1.557 - 0.05j, 2.5), (2.55 / 1.6, 6.0), (1.0 / 1.557, 4.0)]
+)
+def test_differential_cross_section_matches_miepython_intensities(m, x):
+    # miepython's own (per-angle) amplitude code: the unpolarised intensity with norm="qsca"
+    # integrates to Q_sca, so dC/dΩ = that × πa²; with k = 1 the area is π x².
+    mu = np.linspace(-1.0, 1.0, 257)
+    i_par, i_per = miepython.intensities(m, 2 * x, 2 * math.pi, mu, norm="qsca")
+    expected = 0.5 * (i_par + i_per) * math.pi * x**2
+    np.testing.assert_allclose(differential_scattering_cross_section(complex(m), x, 1.0, mu), expected, rtol=1e-10)
 
 
 def test_size_parameter_and_index_are_taken_in_the_host():
@@ -239,7 +261,9 @@ def test_log_normal_rayleigh_moments():
     # For Rayleigh particles C_sca ∝ d⁶, so μs = f ⟨C⟩/⟨V⟩ grows by ⟨d⁶⟩/(⟨d³⟩ d_g³) = exp(13.5 ln²σ_g).
     sigma = 1.5
     mono = medium_optics(medium(species(diameter=2.0, fraction=0.01), wavelengths=(600.0,)))
-    broad = medium_optics(medium(species(median_diameter_nm=2.0, geometric_sigma=sigma, fraction=0.01), wavelengths=(600.0,)))
+    broad = medium_optics(
+        medium(species(median_diameter_nm=2.0, geometric_sigma=sigma, fraction=0.01), wavelengths=(600.0,))
+    )
     assert broad.mu_s[0] / mono.mu_s[0] == pytest.approx(math.exp(13.5 * math.log(sigma) ** 2), rel=5e-3)
 
 
@@ -251,7 +275,9 @@ def test_tabulated_host_index_is_interpolated():
     optics = medium_optics(params)
     np.testing.assert_allclose(optics.host_index, 1.56 - 0.01 * (np.array(PAPER_WAVELENGTHS) - 380.0) / 360.0)
     assert optics.boundary_index == pytest.approx(np.mean(optics.host_index))
-    assert optics.mu_s[1] == pytest.approx(medium_optics(medium(species(), host_index=optics.host_index[1])).mu_s[1], rel=1e-12)
+    assert optics.mu_s[1] == pytest.approx(
+        medium_optics(medium(species(), host_index=optics.host_index[1])).mu_s[1], rel=1e-12
+    )
 
 
 def test_index_matched_particles_do_not_scatter():

@@ -27,9 +27,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     source = parser.add_mutually_exclusive_group()
-    source.add_argument("--preset", metavar="NAME", help=f"a shipped preset: {', '.join(preset_names())} (default {DEFAULT_PRESET})")
+    source.add_argument(
+        "--preset", metavar="NAME", help=f"a shipped preset: {', '.join(preset_names())} (default {DEFAULT_PRESET})"
+    )
     source.add_argument("--config", metavar="PATH", help="a preset TOML file")
-    parser.add_argument("--percus-yevick", action="store_true", help="report the Percus–Yevick (dependent scattering) optics")
+    parser.add_argument(
+        "--percus-yevick", action="store_true", help="report the Percus–Yevick (dependent scattering) optics"
+    )
     parser.add_argument("--plot", metavar="PNG", help="also write a plot of the optics to this PNG file")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.set_defaults(func=run)
@@ -55,14 +59,15 @@ def _report(params: MediumParameters, optics: MediumOptics, independent: MediumO
         "g": optics.g.tolist(),
         "host_index": optics.host_index.tolist(),
         "percus_yevick_factor": {
-            "mu_s": _ratio(corrected.mu_s, independent.mu_s).tolist(),
-            "g": _ratio(corrected.g, independent.g).tolist(),
+            "mu_s": _ratio(corrected.mu_s, independent.mu_s),
+            "g": _ratio(corrected.g, independent.g),
         },
     }
 
 
-def _ratio(numerator: np.ndarray, denominator: np.ndarray) -> np.ndarray:
-    return np.divide(numerator, denominator, out=np.full_like(numerator, np.nan), where=denominator != 0)
+def _ratio(numerator: np.ndarray, denominator: np.ndarray) -> list[float | None]:
+    """Element-wise ratio; ``None`` (JSON null) where the denominator is 0."""
+    return [float(n / d) if d != 0 else None for n, d in zip(numerator, denominator)]
 
 
 def _print_table(report: dict) -> None:
@@ -70,17 +75,28 @@ def _print_table(report: dict) -> None:
     print(f"medium {report['preset']}: {report['description']}")
     print(f"scattering model: {'independent (as in the paper)' if model == 'none' else model}")
     print(f"boundary index {report['boundary_index']:.4f}, yarn radius {report['yarn_radius_mm']:g} mm")
-    header = f"{'λ nm':>7} {'μs 1/mm':>11} {'μa 1/mm':>11} {'μt 1/mm':>11} {'albedo':>8} {'g':>7} {'PY μs×':>7} {'PY g×':>7}"
+    header = (
+        f"{'λ nm':>7} {'μs 1/mm':>11} {'μa 1/mm':>11} {'μt 1/mm':>11} {'albedo':>8} {'g':>7} {'PY μs×':>7} {'PY g×':>7}"
+    )
     print(header)
     print("-" * len(header))
     factors = report["percus_yevick_factor"]
     for row in zip(
-        report["wavelengths_nm"], report["mu_s_per_mm"], report["mu_a_per_mm"], report["mu_t_per_mm"],
-        report["albedo"], report["g"], factors["mu_s"], factors["g"],
+        report["wavelengths_nm"],
+        report["mu_s_per_mm"],
+        report["mu_a_per_mm"],
+        report["mu_t_per_mm"],
+        report["albedo"],
+        report["g"],
+        factors["mu_s"],
+        factors["g"],
     ):
-        wl, mu_s, mu_a, mu_t, albedo, g, f_s, f_g = row
+        wl, mu_s, mu_a, mu_t, albedo, g, f_s, f_g = (np.nan if v is None else v for v in row)
         print(f"{wl:7.1f} {mu_s:11.4g} {mu_a:11.4g} {mu_t:11.4g} {albedo:8.4f} {g:7.4f} {f_s:7.3f} {f_g:7.3f}")
-    f_s, f_g = np.array(factors["mu_s"]), np.array(factors["g"])
+    f_s, f_g = (np.array(factors[key], dtype=float) for key in ("mu_s", "g"))
+    if np.all(np.isnan(f_s)):
+        print("Percus–Yevick vs independent: nothing scatters")
+        return
     print(
         f"Percus–Yevick vs independent: μs × {np.nanmin(f_s):.3f}–{np.nanmax(f_s):.3f}, "
         f"g × {np.nanmin(f_g):.3f}–{np.nanmax(f_g):.3f} over the grid"
@@ -98,7 +114,13 @@ def run(args: argparse.Namespace) -> int:
         from ..plots_optics import plot_medium_optics  # matplotlib only when a plot is asked for
 
         other_label = "independent" if other.dependent_scattering == "none" else other.dependent_scattering
-        path = plot_medium_optics(optics, args.plot, title=f"{params.name}: {params.description}", comparison=other, comparison_label=other_label)
+        path = plot_medium_optics(
+            optics,
+            args.plot,
+            title=f"{params.name}: {params.description}",
+            comparison=other,
+            comparison_label=other_label,
+        )
         report["plot"] = str(path)
     if args.json:
         json.dump(report, sys.stdout, indent=1)

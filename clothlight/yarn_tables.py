@@ -41,3 +41,28 @@ class YarnTableFiles:
             if not path.is_file():
                 raise FileNotFoundError(f"ClothLight table {name} is missing: {path}")
             object.__setattr__(self, name, path)
+
+
+def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:
+    """The table files of a bake folder (``python -m precompute bake --out`` or a cache entry).
+
+    Reads the bake's ``summary.json`` (plain JSON, so it works inside Blender without
+    OpenEXR bindings) and refuses a folder that is not a complete bake.
+    """
+    import json
+
+    folder = pathlib.Path(folder).resolve()
+    summary_path = folder / "summary.json"
+    if not summary_path.is_file():
+        raise FileNotFoundError(f"{folder} is not a ClothLight bake: no summary.json")
+    summary = json.loads(summary_path.read_text())
+    if not str(summary.get("schema", "")).startswith("clothlight-table/"):
+        raise ValueError(f"{summary_path}: not a ClothLight bake summary (schema {summary.get('schema')!r})")
+    return YarnTableFiles(
+        brdf_path=folder / "brdf.exr",
+        lobe_path=folder / "lobes.exr",
+        incidence_resolution=int(summary["incidence_resolution"]),
+        exit_resolution=int(summary["exit_resolution"]),
+        lobe_count=int(summary["lobe_count"]),
+        host_index=float(summary["host_index"]),
+    )

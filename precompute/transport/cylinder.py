@@ -112,6 +112,10 @@ class YarnTransport:
     def exit_grid(self) -> AngularGrid:
         return AngularGrid("hemisphere", self.grids.angular_resolution)
 
+    def counted_albedo_rel_stderr(self) -> np.ndarray:
+        """``albedo_rel_stderr`` where the error target applies (see ALBEDO_FLOOR), 0 elsewhere."""
+        return np.where(_counted(self.exit_fraction), self.albedo_rel_stderr, 0.0)
+
     @property
     def cell_area_mm2(self) -> float:
         return self.grids.cell_length_mm(self.geometry.radius_mm) ** 2

@@ -2,9 +2,7 @@
 
 1. Medium optics of the paper's red cotton: a table, JSON and a plot.
 2. The Monte-Carlo bake of its yarn BRDF tables (cached: a second run is instant).
-3. Plots of the baked tables (in-plane curves, polar plots, albedo spectra, colour swatches).
-4. The virtual gonioreflectometer in Blender: the woven sample under the paper's sweep, the yarn
-   material against the paper's baseline, with plots and a report.
+3. Plots of the baked tables (in-plane curves, exit maps, albedo spectra, colour swatches).
 
 Each step runs the same public command a user would type; the script stops at the first failure
 and finally prints where every output is.
@@ -49,13 +47,10 @@ def main() -> None:
     bake = json.loads(step("2. bake", [python, "-m", "precompute", "bake", "--preset", args.preset,
                                        "--out", str(out / "bake"), "--json"]))
     step("3. table plots", [python, "-m", "precompute", "plot", bake["brdf_table"], "--out", str(out / "plots")])
-    step("4. validation", [python, "-m", "clothlight.validate", "--tables", str(out / "bake"),
-                           "--out", str(out / "validation")])
 
     print("\n== outputs ==")
     for path in sorted(p for p in out.rglob("*") if p.is_file()):
         print(path)
-    print(f"\nreport: {out / 'validation' / 'report.md'}")
 
 
 if __name__ == "__main__":

@@ -1,0 +1,73 @@
+"""One code path for a validation sweep: the operator, ``python -m clothlight.validate`` and a real
+Blender (``blender -b -P scripts/validate_blender.py -- …``) all call :func:`run_validation`."""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+from collections.abc import Callable
+
+import bpy
+
+from ..materials import SUN_MODE, build_baseline_material, build_yarn_material
+from ..yarn_tables import yarn_tables_from_bake
+from .measure import run_sweep
+from .measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
+from .report import plot_sweeps, write_json, write_markdown
+from .rig import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, RigSettings, build_rig
+
+
+def run_validation(out_dir, *, tables_dir=None, settings: RigSettings = RigSettings(),
+                   incidences=DEFAULT_INCIDENCES_DEG, views=DEFAULT_VIEWS_DEG, measurement_csv=None,
+                   mode: str = SUN_MODE, progress: Callable[[float], None] | None = None,
+                   cancel: Callable[[], bool] | None = None) -> dict:
+    """Sweep the yarn material (if ``tables_dir`` is a bake) and the paper's baseline; write
+    ``results.json``, ``sweeps.png`` and ``report.md`` into ``out_dir``; return the results."""
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    scene = bpy.context.scene
+    sample, sun, camera = build_rig(settings, scene)
+    materials = {"baseline (Lambert 0.6/π red + Cook–Torrance m = 0.8)": build_baseline_material(mode=mode)}
+    if tables_dir is not None:
+        materials = {"ClothLight yarn BRDF": build_yarn_material(yarn_tables_from_bake(tables_dir), mode=mode), **materials}
+    curves = {}
+    for index, (label, material) in enumerate(materials.items()):
+        def share(done, index=index):
+            if progress is not None:
+                progress((index + done) / len(materials))
+
+        curves[label] = run_sweep(scene, sample, sun, camera, material, settings, incidences, views,
+                                  out_dir / "renders", share, cancel)
+    measurement = read_measurement(measurement_csv) if measurement_csv else None
+    results = {
+        "sample": f"{settings.weave.warp_count}×{settings.weave.weft_count} yarns, spacing {settings.weave.spacing_mm} mm, "
+                  f"patch {settings.patch_mm} mm, {settings.resolution}² px, {settings.samples} spp",
+        "units": {"brdf_rgb": "1/sr (cloth BRDF, calibrated)", "rgb_sum": "sum of linear RGB over cloth pixels",
+                  "angles": "degrees; negative θv on the light's side"},
+        "settings": dataclasses.asdict(settings) | {"weave": {"spacing_mm": settings.weave.spacing_mm}},
+        "curves": {label: [dataclasses.asdict(v) for v in views_] for label, views_ in curves.items()},
+        "table1_ratios": {},
+        "metrics": {},
+    }
+    for label, views_ in curves.items():
+        normal = next((v for v in views_ if v.theta_i_deg == 0 and v.theta_v_deg == 0), None)
+        if normal is not None and normal.brdf_rgb[0] > 0:
+            r, g, b = normal.brdf_rgb
+            results["table1_ratios"][label] = {"B/R": b / r, "G/R": g / r}
+    if measurement is not None:
+        for label, views_ in curves.items():
+            model, measured = [], []
+            for theta_i in incidences:
+                x, y = measurement.in_plane(theta_i)
+                for v in views_:
+                    if v.theta_i_deg == theta_i and len(x) and abs(x - v.theta_v_deg).min() < 0.5:
+                        measured.append(y[abs(x - v.theta_v_deg).argmin()][:3])
+                        model.append(v.brdf_rgb)
+            if model:
+                results["metrics"][label] = {"rms": rms_error(model, measured),
+                                             "relative_rms": relative_rms_error(model, measured),
+                                             "shape_correlation": shape_correlation(model, measured)}
+    plot_sweeps(out_dir / "sweeps.png", curves, incidences, measurement)
+    write_json(out_dir / "results.json", results)
+    write_markdown(out_dir / "report.md", results, "sweeps.png")
+    return results

@@ -32,7 +32,8 @@ class ViewMeasurement:
     rgb_sum: list[float]
     cloth_pixels: int
     brdf_rgb: list[float]
-    paper_value_rgb: list[float] = field(default_factory=list)
+    paper_sum_over_cos_rgb: list[float] = field(default_factory=list)
+    paper_normalised_rgb: list[float] = field(default_factory=list)
 
 
 def measure_view(scene, pixels: np.ndarray, theta_i: float, theta_v: float) -> ViewMeasurement:

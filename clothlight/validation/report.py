@@ -21,8 +21,8 @@ def write_json(path, results: dict) -> pathlib.Path:
     return pathlib.Path(path)
 
 
-def plot_sweeps(path, curves: dict, incidences, measurement=None) -> pathlib.Path:
-    """Red-channel BRDF vs signed view angle, one panel per incidence, one line per material."""
+def plot_sweeps(path, curves: dict, incidences, measurement=None, quantity: str = "brdf_rgb") -> pathlib.Path:
+    """Red-channel BRDF (``quantity``) vs signed view angle, one panel per incidence, one line per material."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -33,7 +33,8 @@ def plot_sweeps(path, curves: dict, incidences, measurement=None) -> pathlib.Pat
     fig, axes = plt.subplots(rows, columns, figsize=(5.5 * columns, 3.8 * rows), squeeze=False)
     for ax, theta_i in zip(axes.ravel(), incidences):
         for label, views in curves.items():
-            points = [(v.theta_v_deg, v.brdf_rgb[0]) for v in views if v.theta_i_deg == theta_i]
+            points = [(v.theta_v_deg, getattr(v, quantity)[0]) for v in views
+                      if v.theta_i_deg == theta_i and getattr(v, quantity)]
             if points:
                 x, y = zip(*points)
                 ax.plot(x, y, marker="o", ms=3, label=label)
@@ -43,7 +44,7 @@ def plot_sweeps(path, curves: dict, incidences, measurement=None) -> pathlib.Pat
                 ax.plot(x, y[:, 0], "k--", marker="s", ms=3, label="measurement")
         ax.set_title(f"θi = {theta_i:g}°")
         ax.set_xlabel("θv (deg); negative: the light's side")
-        ax.set_ylabel("cloth BRDF, red (1/sr)")
+        ax.set_ylabel("cloth BRDF, red (1/sr)" + (", paper-normalised" if quantity != "brdf_rgb" else ""))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     for ax in axes.ravel()[len(incidences):]:
@@ -64,10 +65,12 @@ def write_markdown(path, results: dict, plot_name: str) -> pathlib.Path:
         lines.append(f"| {name} | {ratios['B/R']:.4g} | {ratios['G/R']:.4g} |")
     lines += ["| real red cotton (paper) | 0.08 | 0.011 |", ""]
     if results.get("metrics"):
-        lines += ["## Against the measurement", "", "| material | RMS (1/sr) | relative RMS | shape correlation |",
-                  "| --- | --- | --- | --- |"]
+        lines += ["## Against the measurement", "", "![paper-normalised](sweeps_paper_normalised.png)", "",
+                  "| material | RMS (1/sr) | relative RMS | relative RMS, paper-normalised | shape correlation |",
+                  "| --- | --- | --- | --- | --- |"]
         for name, m in results["metrics"].items():
-            lines.append(f"| {name} | {m['rms']:.4g} | {m['relative_rms']:.3g} | {m['shape_correlation']:.3f} |")
+            lines.append(f"| {name} | {m['rms']:.4g} | {m['relative_rms']:.3g} | "
+                         f"{m['paper_normalised_relative_rms']:.3g} | {m['shape_correlation']:.3f} |")
         lines.append("")
     lines += ["## Cloth BRDF, red channel (1/sr)", "", "| θi | θv | " + " | ".join(results["curves"]) + " |",
               "| --- | --- | " + " | ".join("---" for _ in results["curves"]) + " |"]

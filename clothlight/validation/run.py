@@ -55,19 +55,40 @@ def run_validation(out_dir, *, tables_dir=None, settings: RigSettings = RigSetti
             r, g, b = normal.brdf_rgb
             results["table1_ratios"][label] = {"B/R": b / r, "G/R": g / r}
     if measurement is not None:
+        _paper_normalise(curves, measurement)
         for label, views_ in curves.items():
-            model, measured = [], []
+            model, measured, normalised = [], [], []
             for theta_i in incidences:
                 x, y = measurement.in_plane(theta_i)
                 for v in views_:
                     if v.theta_i_deg == theta_i and len(x) and abs(x - v.theta_v_deg).min() < 0.5:
                         measured.append(y[abs(x - v.theta_v_deg).argmin()][:3])
                         model.append(v.brdf_rgb)
+                        normalised.append(v.paper_normalised_rgb)
             if model:
                 results["metrics"][label] = {"rms": rms_error(model, measured),
                                              "relative_rms": relative_rms_error(model, measured),
-                                             "shape_correlation": shape_correlation(model, measured)}
+                                             "shape_correlation": shape_correlation(model, measured),
+                                             "paper_normalised_relative_rms": relative_rms_error(normalised, measured)}
+        results["curves"] = {label: [dataclasses.asdict(v) for v in views_] for label, views_ in curves.items()}
+        plot_sweeps(out_dir / "sweeps_paper_normalised.png", curves, incidences, measurement, "paper_normalised_rgb")
     plot_sweeps(out_dir / "sweeps.png", curves, incidences, measurement)
     write_json(out_dir / "results.json", results)
     write_markdown(out_dir / "report.md", results, "sweeps.png")
     return results
+
+
+def _paper_normalise(curves, measurement) -> None:
+    """The paper's §4 step 5: scale each material's curves by the one factor that makes its
+    normal-incidence, normal-view red value equal the measured one."""
+    x, y = measurement.in_plane(0.0)
+    if not len(x) or abs(x).min() > 0.5:
+        return
+    target = y[abs(x).argmin()][0]
+    for views_ in curves.values():
+        normal = next((v for v in views_ if v.theta_i_deg == 0 and v.theta_v_deg == 0), None)
+        if normal is None or normal.brdf_rgb[0] <= 0:
+            continue
+        factor = target / normal.brdf_rgb[0]
+        for v in views_:
+            v.paper_normalised_rgb = [factor * c for c in v.brdf_rgb]

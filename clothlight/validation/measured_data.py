@@ -58,8 +58,17 @@ def read_measurement(path: str | pathlib.Path) -> Measurement:
 
 def parse_measurement(text: str) -> Measurement:
     """Validate measurement CSV text; :class:`MeasurementFormatError` names the first bad row."""
-    rows = [(number, row) for number, row in enumerate(csv.reader(io.StringIO(text)), start=1)
-            if row and not row[0].lstrip().startswith("#")]
+    rows = []
+    reader = csv.reader(io.StringIO(text, newline=""))
+    while True:
+        try:
+            row = next(reader)
+        except StopIteration:
+            break
+        except csv.Error as exc:
+            raise MeasurementFormatError(f"row {reader.line_num}: unreadable CSV ({exc})") from None
+        if row and not row[0].lstrip().startswith("#"):
+            rows.append((reader.line_num, row))
     if not rows:
         raise MeasurementFormatError("empty measurement: no header row")
     header_number, header = rows[0]

@@ -9,12 +9,15 @@ from collections.abc import Callable
 
 import bpy
 
-from ..materials import SUN_MODE, build_baseline_material, build_yarn_material
+from mathutils import Vector
+
+from ..materials import SUN_MODE, build_baseline_material, build_yarn_material, sync_sun
+from ..measurement_render import render_to_array
 from ..yarn_tables import yarn_tables_from_bake
 from .measure import run_sweep
 from .measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
 from .report import plot_sweeps, write_json, write_markdown
-from .rig import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, RigSettings, build_rig
+from .rig import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, RigSettings, aim, build_rig, set_view
 
 
 def run_validation(out_dir, *, tables_dir=None, settings: RigSettings = RigSettings(),
@@ -72,6 +75,10 @@ def run_validation(out_dir, *, tables_dir=None, settings: RigSettings = RigSetti
                                              "paper_normalised_relative_rms": relative_rms_error(normalised, measured)}
         results["curves"] = {label: [dataclasses.asdict(v) for v in views_] for label, views_ in curves.items()}
         plot_sweeps(out_dir / "sweeps_paper_normalised.png", curves, incidences, measurement, "paper_normalised_rgb")
+    if tables_dir is not None:
+        material = materials["ClothLight yarn BRDF"]
+        results["front_back_rgb"] = render_front_back(scene, sample, sun, camera, material, settings,
+                                                      out_dir / "swatches_front_back.png")
     plot_sweeps(out_dir / "sweeps.png", curves, incidences, measurement)
     write_json(out_dir / "results.json", results)
     write_markdown(out_dir / "report.md", results, "sweeps.png")
@@ -92,3 +99,36 @@ def _paper_normalise(curves, measurement) -> None:
         factor = target / normal.brdf_rgb[0]
         for v in views_:
             v.paper_normalised_rgb = [factor * c for c in v.brdf_rgb]
+
+
+def render_front_back(scene, sample, sun, camera, material, settings: RigSettings, path) -> dict:
+    """The sample seen from the front under a white sun in front of it and behind it (paper
+    Figures 9–10); writes both renders side by side as a PNG and returns their mean RGB."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    sample.data.materials.clear()
+    sample.data.materials.append(material)
+    set_view(camera, settings, 0.0)
+    images, means = {}, {}
+    for label, direction in (("front", Vector((0.0, 0.0, 1.0))), ("behind", Vector((0.0, 0.0, -1.0)))):
+        aim(sun, direction)
+        scene.view_layers[0].update()
+        sync_sun(material, sun)
+        pixels = render_to_array(scene, pathlib.Path(path).with_name(f"swatch_{label}.exr"))
+        images[label] = pixels[..., :3]
+        means[label] = pixels[..., :3].mean(axis=(0, 1)).tolist()
+    brightest = max(float(np.max(m)) for m in means.values()) or 1.0
+    fig, axes = plt.subplots(1, 2, figsize=(6, 3.2))
+    for ax, (label, image) in zip(axes, images.items()):
+        shown = np.clip(image / max(float(np.percentile(image, 99)), 1e-12), 0, 1)
+        ax.imshow(np.where(shown <= 0.0031308, 12.92 * shown, 1.055 * shown ** (1 / 2.4) - 0.055))
+        ax.set_title(f"sun {label}; relative brightness {max(means[label]) / brightest:.2f}", fontsize=8)
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return means

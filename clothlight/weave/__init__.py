@@ -1,25 +1,42 @@
-"""Procedural woven cloth samples (paper §3.1; other weaves and yarn shapes, §7). No Blender needed.
+"""Procedural woven cloth samples (paper §3.1, Figure 1; other weaves and elliptical yarns, §7).
 
-    >>> from clothlight.weave import WeaveParameters, weave_pattern, build_woven_mesh
-    >>> mesh = build_woven_mesh(WeaveParameters(interlacing=weave_pattern("twill_2_1")))
+Pure Python and numpy: no Blender needed (trimesh only for export and checks).  Lengths are in
+millimetres throughout; the cloth lies in the x-y plane with its normal +z, warps along x.
+
+    >>> from clothlight.weave import WeaveParameters, build_woven_mesh
+    >>> mesh = build_woven_mesh(WeaveParameters(interlacing="twill_2_1", warp_count=6, weft_count=6))
+    >>> mesh.vertices.shape[1], mesh.faces.shape[1]
+    (3, 3)
 """
 
+from .clearance import crossing_gaps, minimum_gap
 from .errors import WeaveParameterError
-from .geometry import WovenMesh, build_woven_mesh, minimum_clearance
+from .export import export_mesh, to_trimesh
+from .geometry import WovenMesh, build_woven_mesh
 from .params import WeaveParameters
-from .patterns import BUILT_IN, basket, plain, satin, twill, validate_interlacing, weave_pattern
+from .patterns import BUILT_IN, basket, plain, satin, satin_moves, twill, validate_interlacing, weave_pattern
+from .wif import WeavingDraft, format_wif, parse_wif, read_wif, write_wif
 
 __all__ = [
     "BUILT_IN",
     "WeaveParameterError",
     "WeaveParameters",
+    "WeavingDraft",
     "WovenMesh",
     "basket",
     "build_woven_mesh",
-    "minimum_clearance",
+    "crossing_gaps",
+    "export_mesh",
+    "format_wif",
+    "minimum_gap",
+    "parse_wif",
     "plain",
+    "read_wif",
     "satin",
+    "satin_moves",
+    "to_trimesh",
     "twill",
     "validate_interlacing",
     "weave_pattern",
+    "write_wif",
 ]

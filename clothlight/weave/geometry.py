@@ -1,31 +1,58 @@
 """Woven yarn geometry: crimped centrelines swept into closed, watertight tubes.
 
-Coordinates are millimetres; the cloth lies in the x-y plane with its macroscopic normal +z.
-Warp yarns run along x, weft yarns along y.  A yarn's centreline passes ``crimp`` above the
-mid-plane where it goes over a crossing and as far below where it goes under, blended between
-neighbouring crossings by a half cosine (zero slope at every crossing, so the path is smooth).
-Every centreline is planar, so the frame (tangent; ``binormal`` in the cloth plane; ``normal``
-up) is exact and has no twist: there is no seam where the sweep would otherwise rotate.
+Layout (mm): the cloth lies in the x-y plane around the origin, its macroscopic normal is +z.
+Warp ends run along +x; end ``j`` lies at y = (warp_count/2 − j − ½)·spacing, so seen from +z
+with the warp pointing up the ends are numbered left to right.  Weft picks run along −y; pick
+``i`` lies at x = (i + ½ − weft_count/2)·spacing, numbered from the bottom up.  A face-side
+(+z) view therefore shows the drawdown as :mod:`.patterns` defines it.
+
+Each centreline is planar (see :mod:`.centerline`), so the sweep frame is exact and fixed: the
+tangent T, a binormal B in the cloth plane that never changes (+y for warps, +x for wefts) and
+the normal N = T × B, which tilts with the crimp but never rotates about the yarn axis.  A ring
+vertex at angle φ sits at  centre + a·cos φ·B + b·sin φ·N  (semi-axes a, b), so corresponding
+vertices of neighbouring rings stay on the same side of the yarn: no twist, no seam.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from .centerline import over_grid, ring_positions, unit_height
 from .params import WeaveParameters
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class WovenMesh:
-    """Triangle mesh of a woven sample with the per-vertex data the shaders need.
+    """Triangle mesh of a woven sample with the per-vertex data ClothLight's shaders read.
 
-    vertices (V, 3) mm; faces (F, 3) vertex indices, outward-facing;
-    uv (V, 2): u = arc length along the yarn axis, mm; v = position around the circumference, [0, 1);
-    tangent (V, 3): unit yarn axis; cloth_normal (V, 3): the cloth's macroscopic normal (+z);
-    yarn_id (V,), is_warp (V,) per vertex; yarn_faces: (start, stop) face range of every yarn.
+    Attributes
+    ----------
+    vertices
+        (V, 3) float64, mm.
+    faces
+        (F, 3) vertex indices (int32; int64 past 2³¹ vertices), counter-clockwise seen from
+        outside: normals point out.
+    uv
+        (V, 2) float64: u = arc length along the yarn's centreline from its start, mm (it grows
+        along ``tangent``); v = angle around the cross-section / 2π in [0, 1): 0 on the +B side,
+        0.25 on top (towards the cloth normal), 0.5 on the −B side, 0.75 underneath.  Cap
+        centres carry v = 0.  Per face corner, with the seam closed, see :meth:`corner_uv`.
+    tangent
+        (V, 3) float64: unit yarn axis at the vertex's ring (the centreline tangent).
+    cloth_normal
+        (V, 3) float64: the cloth's macroscopic normal, +z.
+    yarn_id
+        (V,) int32: warp ends 0 … warp_count − 1, then picks warp_count … warp_count + weft_count − 1.
+    is_warp
+        (V,) bool.
+    yarn_faces
+        (start, stop) face range of every yarn, in yarn_id order.
+    centerlines
+        Every yarn's centreline at its rings, (n, 3) mm, in yarn_id order.
+    segments_around
+        Vertices per ring.
     """
 
     vertices: np.ndarray
@@ -37,132 +64,154 @@ class WovenMesh:
     is_warp: np.ndarray
     yarn_faces: tuple[tuple[int, int], ...]
     centerlines: tuple[np.ndarray, ...]
+    segments_around: int
+
+    def corner_uv(self) -> np.ndarray:
+        """(F, 3, 2) UV per face corner; faces across the v seam get v = 1 instead of 0 where
+        they close the ring, so v runs monotonically over every face (what a UV map needs)."""
+        corners = self.uv[self.faces]
+        v = corners[..., 1]
+        last = (self.segments_around - 1) / self.segments_around
+        v[(v == 0.0) & (v.max(axis=1, keepdims=True) >= last - 1e-12)] = 1.0
+        return corners
+
+    def edge_topology(self):
+        """Edges (E, 2) of the whole mesh, each once, and the edge of every face corner (F, 3),
+        corner k's edge joining it to corner k + 1: what Blender stores, without a search."""
+        edges, corner_edges, templates = [], [], {}
+        edge_offset = 0
+        for start, stop in self.yarn_faces:
+            rings = (stop - start) // (2 * self.segments_around)
+            if rings not in templates:
+                templates[rings] = _tube_edges(rings, self.segments_around)
+            tube_edges, tube_corners = templates[rings]
+            edges.append(tube_edges + self.faces[start].min())   # a tube's first face starts at its first vertex
+            corner_edges.append(tube_corners + edge_offset)
+            edge_offset += len(tube_edges)
+        index_type = self.faces.dtype
+        return np.concatenate(edges).astype(index_type), np.concatenate(corner_edges).astype(index_type)
 
     def yarn_mesh(self, yarn: int):
-        """One yarn as a trimesh.Trimesh (for checks and export)."""
-        import trimesh
+        """One yarn as a ``trimesh.Trimesh`` (for checks and export)."""
+        from .export import to_trimesh
 
-        start, stop = self.yarn_faces[yarn]
-        faces = self.faces[start:stop]
-        used = np.unique(faces)
-        remap = np.full(len(self.vertices), -1)
-        remap[used] = np.arange(len(used))
-        return trimesh.Trimesh(self.vertices[used], remap[faces], process=False)
+        return to_trimesh(self, yarn)
 
     def to_trimesh(self):
-        import trimesh
+        """The whole sample as one ``trimesh.Trimesh`` (vertices shared, nothing merged)."""
+        from .export import to_trimesh
 
-        return trimesh.Trimesh(self.vertices, self.faces, process=False)
-
-
-def _crossing_signs(params: WeaveParameters, warp: bool, index: int) -> np.ndarray:
-    """+1 where yarn ``index`` passes over its crossings, −1 under, along its length."""
-    matrix = params.interlacing
-    rows, cols = matrix.shape
-    if warp:
-        over = np.array([matrix[i % rows, index % cols] for i in range(params.weft_count)])
-    else:
-        over = ~np.array([matrix[index % rows, j % cols] for j in range(params.warp_count)])
-    return np.where(over, 1.0, -1.0)
+        return to_trimesh(self)
 
 
-def _centerline(signs: np.ndarray, spacing: float, amplitude: float, segments: int):
-    """Axial coordinate, height and slope of a crimped centreline over ``len(signs)`` crossings."""
-    count = len(signs)
-    start = -count * spacing / 2.0
-    s = np.linspace(start, -start, count * segments + 1)
-    crossing = (s - start) / spacing - 0.5  # crossing k sits at crossing == k
-    k = np.clip(np.floor(crossing).astype(int), 0, max(count - 2, 0))
-    t = np.clip(crossing - k, 0.0, 1.0)
-    if count == 1:
-        return s, np.full_like(s, amplitude * signs[0]), np.zeros_like(s)
-    a, b = signs[k], signs[k + 1]
-    height = amplitude * (0.5 * (a + b) + 0.5 * (a - b) * np.cos(np.pi * t))
-    slope = amplitude * 0.5 * (a - b) * (-np.pi / spacing) * np.sin(np.pi * t)
-    slope = np.where((crossing < 0) | (crossing > count - 1), 0.0, slope)
-    return s, height, slope
-
-
-def _tube(center, tangent, binormal, semi_axes, around):
-    """Vertices, outward faces (with end caps) and per-vertex v of an elliptical tube."""
-    n = len(center)
-    normal = np.cross(tangent, binormal)
-    phi = 2.0 * np.pi * np.arange(around) / around
-    width, thickness = semi_axes
-    ring = (center[:, None, :] + width * np.cos(phi)[None, :, None] * binormal[:, None, :]
-            + thickness * np.sin(phi)[None, :, None] * normal[:, None, :])
-    vertices = np.vstack([ring.reshape(-1, 3), center[0], center[-1]])
-    i, m = np.meshgrid(np.arange(n - 1), np.arange(around), indexing="ij")
+def _tube_faces(rings: int, around: int) -> np.ndarray:
+    """Outward faces of one tube of ``rings`` rings: sides, then the start and end caps, whose
+    centres are vertices rings·around and rings·around + 1."""
+    i, m = np.meshgrid(np.arange(rings - 1), np.arange(around), indexing="ij")
     here, nxt = i * around + m, i * around + (m + 1) % around
-    up, up_next = here + around, nxt + around
-    side = np.concatenate([np.stack([here, nxt, up], -1).reshape(-1, 3),
-                           np.stack([nxt, up_next, up], -1).reshape(-1, 3)])
-    first, last = n * around, n * around + 1
+    side = np.concatenate([np.stack([here, nxt, here + around], -1).reshape(-1, 3),
+                           np.stack([nxt, nxt + around, here + around], -1).reshape(-1, 3)])
     m = np.arange(around)
-    start_cap = np.stack([np.full(around, first), (m + 1) % around, m], -1)
-    end_cap = np.stack([np.full(around, last), (n - 1) * around + m, (n - 1) * around + (m + 1) % around], -1)
-    v = np.concatenate([np.tile(phi / (2.0 * np.pi), n), [0.0, 0.0]])
-    return vertices, np.vstack([side, start_cap, end_cap]), v
+    start = np.stack([np.full(around, rings * around), (m + 1) % around, m], -1)
+    last = (rings - 1) * around
+    end = np.stack([np.full(around, rings * around + 1), last + m, last + (m + 1) % around], -1)
+    return np.concatenate([side, start, end])
+
+
+def _tube_edges(rings: int, around: int):
+    """Edges (E, 2) of one tube laid out as :func:`_tube_faces`, and the edge of every face
+    corner (F, 3): corner k's edge joins it to corner k + 1 (Blender's ``corner_edge``)."""
+    m = np.arange(around)
+    ring = np.arange(rings)[:, None] * around + m                     # ring edge (i, k): k → k+1
+    ring_edges = np.stack([ring, ring - m + (m + 1) % around], -1).reshape(-1, 2)
+    lower = ring[:-1]
+    along_edges = np.stack([lower, lower + around], -1).reshape(-1, 2)  # (i, k) → (i+1, k)
+    diagonal_edges = np.stack([lower - m + (m + 1) % around, lower + around], -1).reshape(-1, 2)
+    spokes = np.concatenate([np.stack([np.full(around, rings * around), m], -1),
+                             np.stack([np.full(around, rings * around + 1), (rings - 1) * around + m], -1)])
+    edges = np.concatenate([ring_edges, along_edges, diagonal_edges, spokes])
+    n_ring, n_along = rings * around, (rings - 1) * around
+    i, k = np.meshgrid(np.arange(rings - 1), m, indexing="ij")
+    ring_id = lambda i, k: i * around + k % around                   # noqa: E731
+    along_id = lambda i, k: n_ring + i * around + k % around         # noqa: E731
+    diagonal_id = n_ring + n_along + i * around + k
+    first = np.stack([ring_id(i, k), diagonal_id, along_id(i, k)], -1).reshape(-1, 3)
+    second = np.stack([along_id(i, k + 1), ring_id(i + 1, k), diagonal_id], -1).reshape(-1, 3)
+    spoke = n_ring + 2 * n_along
+    start = np.stack([spoke + (m + 1) % around, ring_id(0, m), spoke + m], -1)
+    end = np.stack([spoke + around + m, ring_id(rings - 1, m), spoke + around + (m + 1) % around], -1)
+    return edges, np.concatenate([first, second, start, end])
+
+
+def _family(params: WeaveParameters, warp: bool):
+    """Vertices (Y, n·around + 2, 3), centrelines (Y, n, 3), tangents (Y, n, 3) of all warps or
+    all wefts."""
+    p = params.spacing_mm
+    over = over_grid(params.interlacing, params.warp_count, params.weft_count)
+    signs = np.where(over.T if warp else ~over, 1.0, -1.0)          # (yarns, crossings)
+    yarns, crossings = signs.shape
+    s = ring_positions(crossings, p, params.segments_per_crossing)
+    height, slope = unit_height(signs, (s - (0.5 - crossings / 2.0) * p) / p)
+    amplitude = params.crimp_amplitudes_mm[0 if warp else 1]
+    z, dz = amplitude * height, amplitude * slope / p
+    across = (yarns / 2.0 - np.arange(yarns) - 0.5) * p if warp else (np.arange(yarns) + 0.5 - yarns / 2.0) * p
+    shape = z.shape
+    if warp:
+        center = np.stack([np.broadcast_to(s, shape), np.broadcast_to(across[:, None], shape), z], -1)
+        tangent = np.stack([np.ones(shape), np.zeros(shape), dz], -1)
+        binormal = np.array([0.0, 1.0, 0.0])
+    else:
+        center = np.stack([np.broadcast_to(across[:, None], shape), np.broadcast_to(-s, shape), z], -1)
+        tangent = np.stack([np.zeros(shape), -np.ones(shape), dz], -1)
+        binormal = np.array([1.0, 0.0, 0.0])
+    tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
+    normal = np.cross(tangent, binormal)
+    width, thickness = params.cross_section_mm
+    phi = 2.0 * np.pi * np.arange(params.segments_around) / params.segments_around
+    ring = (center[:, :, None, :] + (width * np.cos(phi))[:, None] * binormal
+            + (thickness * np.sin(phi))[None, None, :, None] * normal[:, :, None, :])
+    vertices = np.concatenate([ring.reshape(yarns, -1, 3), center[:, :1], center[:, -1:]], axis=1)
+    return vertices, center, tangent
 
 
 def build_woven_mesh(params: WeaveParameters = WeaveParameters()) -> WovenMesh:
-    """Sweep every warp and weft yarn of ``params`` into one mesh (see the module docstring)."""
-    spacing, amplitude = params.spacing_mm, params.crimp_amplitude
-    pieces = []
-    offset = 0
-    yarn_faces = []
-    centerlines = []
-    yarns = [(True, j) for j in range(params.warp_count)] + [(False, i) for i in range(params.weft_count)]
-    for yarn_id, (warp, index) in enumerate(yarns):
-        signs = _crossing_signs(params, warp, index)
-        s, height, slope = _centerline(signs, spacing, amplitude, params.segments_per_crossing)
-        across = (index + 0.5) * spacing - (params.warp_count if warp else params.weft_count) * spacing / 2.0
-        if warp:
-            center = np.stack([s, np.full_like(s, across), height], -1)
-            tangent = np.stack([np.ones_like(s), np.zeros_like(s), slope], -1)
-            binormal = np.tile([0.0, 1.0, 0.0], (len(s), 1))
-        else:
-            center = np.stack([np.full_like(s, across), s, height], -1)
-            tangent = np.stack([np.zeros_like(s), np.ones_like(s), slope], -1)
-            binormal = np.tile([-1.0, 0.0, 0.0], (len(s), 1))
-        tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
-        vertices, faces, v = _tube(center, tangent, binormal, params.semi_axes_mm, params.segments_around)
-        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(center, axis=0), axis=1))])
-        u = np.concatenate([np.repeat(arc, params.segments_around), [arc[0], arc[-1]]])
-        vertex_tangent = np.vstack([np.repeat(tangent, params.segments_around, axis=0), tangent[0], tangent[-1]])
-        pieces.append((vertices, faces + offset, np.stack([u, v], -1), vertex_tangent, yarn_id, warp))
-        start = sum(len(p[1]) for p in pieces[:-1])
-        yarn_faces.append((start, start + len(faces)))
-        centerlines.append(center)
-        offset += len(vertices)
-    vertices = np.vstack([p[0] for p in pieces])
-    counts = [len(p[0]) for p in pieces]
+    """Sweep every warp and weft yarn of ``params`` into one mesh (layout: module docstring)."""
+    around = params.segments_around
+    parts = [_family(params, warp) for warp in (True, False)]
+    per_yarn = [part[0].shape[1] for part in parts]
+    total = sum(part[0].shape[0] * count for part, count in zip(parts, per_yarn))
+    index_type = np.int32 if total < 2**31 else np.int64
+    vertices, faces, uv, tangent, yarn_faces, centerlines = [], [], [], [], [], []
+    offset = face_offset = 0
+    for (vertex, center, axis), count in zip(parts, per_yarn):
+        yarns, rings = center.shape[:2]
+        template = _tube_faces(rings, around).astype(index_type)
+        starts = offset + count * np.arange(yarns, dtype=index_type)
+        faces.append((template[None] + starts[:, None, None]).reshape(-1, 3))
+        yarn_faces += [(face_offset + n * len(template), face_offset + (n + 1) * len(template)) for n in range(yarns)]
+        vertices.append(vertex.reshape(-1, 3))
+        arc = np.concatenate([np.zeros((yarns, 1)),
+                              np.cumsum(np.linalg.norm(np.diff(center, axis=1), axis=-1), axis=1)], axis=1)
+        u = np.concatenate([np.repeat(arc, around, axis=1), arc[:, :1], arc[:, -1:]], axis=1)
+        v = np.concatenate([np.tile(np.arange(around) / around, rings), [0.0, 0.0]])
+        uv.append(np.stack([u, np.broadcast_to(v, u.shape)], -1).reshape(-1, 2))
+        ring_tangent = np.repeat(axis, around, axis=1)
+        tangent.append(np.concatenate([ring_tangent, axis[:, :1], axis[:, -1:]], axis=1).reshape(-1, 3))
+        centerlines += list(center)
+        offset += yarns * count
+        face_offset += yarns * len(template)
+    vertex_count = offset
+    yarn_sizes = [part[0].shape[0] for part in parts]
     return WovenMesh(
-        vertices=vertices,
-        faces=np.vstack([p[1] for p in pieces]).astype(np.int64),
-        uv=np.vstack([p[2] for p in pieces]),
-        tangent=np.vstack([p[3] for p in pieces]),
-        cloth_normal=np.tile([0.0, 0.0, 1.0], (len(vertices), 1)),
-        yarn_id=np.repeat([p[4] for p in pieces], counts).astype(np.int32),
-        is_warp=np.repeat([p[5] for p in pieces], counts).astype(bool),
+        vertices=np.concatenate(vertices),
+        faces=np.concatenate(faces),
+        uv=np.concatenate(uv),
+        tangent=np.concatenate(tangent),
+        cloth_normal=np.broadcast_to(np.array([0.0, 0.0, 1.0]), (vertex_count, 3)).copy(),
+        yarn_id=np.repeat(np.arange(sum(yarn_sizes), dtype=np.int32),
+                          np.repeat(per_yarn, yarn_sizes)),
+        is_warp=np.repeat([True, False], [yarn_sizes[0] * per_yarn[0], yarn_sizes[1] * per_yarn[1]]),
         yarn_faces=tuple(yarn_faces),
         centerlines=tuple(centerlines),
+        segments_around=around,
     )
-
-
-def minimum_clearance(mesh: WovenMesh, params: WeaveParameters) -> float:
-    """Smallest distance between the centrelines of crossing yarns minus the sum of their
-    half-thicknesses, mm: negative means the tubes intersect (exact for round yarns,
-    conservative for elliptical ones, whose larger semi-axis is used)."""
-    radius = max(params.semi_axes_mm)
-    warps = mesh.centerlines[: params.warp_count]
-    wefts = mesh.centerlines[params.warp_count:]
-    worst = math.inf
-    for warp in warps:
-        for weft in wefts:
-            # only the neighbourhood of their crossing can come close
-            near_warp = warp[np.abs(warp[:, 0] - weft[0, 0]) < 1.5 * params.spacing_mm]
-            near_weft = weft[np.abs(weft[:, 1] - warp[0, 1]) < 1.5 * params.spacing_mm]
-            d = np.linalg.norm(near_warp[:, None, :] - near_weft[None, :, :], axis=-1).min()
-            worst = min(worst, d - 2.0 * radius)
-    return worst

@@ -1,93 +1,269 @@
-"""Parameters of a woven sample, with units.
+"""Parameters of a woven sample, with units, checked so that the yarns cannot intersect.
 
-Default: a plain weave like the paper's measured red cotton (§3.1, Figure 1), with round yarns
-of the red-cotton preset's radius (0.1 mm) at 0.5 mm spacing.  The paper gives no yarn spacing;
-0.5 mm (20 ends/cm) is a coarse shirting, chosen so round yarns do not intersect where they bend
-between crossings (a tighter weave needs flatter, elliptical yarns, as real cloth has).
+Default: a plain weave like the paper's measured red cotton (§3.1, Figure 1) with round yarns
+(§3.2: "a cylinder with a circle in its base") of radius 0.1 mm, the red-cotton preset's radius
+(Peirce's diameter for an Ne 20 cotton yarn, see precompute/presets/red_cotton.toml).  The paper
+gives no thread spacing; 0.5 mm (20 threads/cm, a medium-weight cotton sheeting) is assumed.
+
+Yarns keep their cross-section everywhere (the paper's rigid cylinders), so they need room to
+change sides: round yarns of 0.1 mm cannot pass over and under each other closer than about
+0.40 mm, and a flat elliptical yarn (``semi_axes_mm``, §7) must bend down within the width of
+the yarn it crosses, which limits how wide it can be (e.g. 0.17 mm × 0.047 mm at 0.5 mm).  Every
+set of parameters is checked against the exact tubes (:mod:`.clearance`), and a refusal names
+the largest cross-section of the same shape that fits.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from numbers import Integral, Real
 
 import numpy as np
 
+from .centerline import crimp_percent, max_curvature
+from .clearance import crossing_gaps
 from .errors import WeaveParameterError
-from .patterns import plain, validate_interlacing
+from .patterns import plain, validate_interlacing, weave_pattern
 
-#: Vertical clearance added to the crimp so yarns touching at a crossing do not share surface.
+#: Radius of a round yarn when neither ``yarn_radius_mm`` nor ``semi_axes_mm`` is given, mm.
+DEFAULT_YARN_RADIUS_MM = 0.1
+#: Derived crimp amplitude over the yarn's half-thickness: the 2 % keeps crossing yarns from
+#: sharing surface (coincident faces render as noise).
 CROSSING_CLEARANCE = 0.02
 
 
-@dataclass(frozen=True)
+def _is_integer(value) -> bool:
+    return isinstance(value, Integral) and not isinstance(value, bool)
+
+
+def _is_length(value) -> bool:
+    return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+
+
+@dataclass(frozen=True, eq=False)
 class WeaveParameters:
-    """A woven sample.
+    """A woven sample.  Coordinates: mm, cloth in the x-y plane, macroscopic normal +z, warp
+    yarns along x, weft yarns along y (see :mod:`.geometry`).
 
     Attributes
     ----------
     interlacing
-        Boolean matrix, True where a warp passes over a weft (rows: wefts, columns: warps).
+        Boolean matrix, True where a warp passes over a weft (rows: picks, columns: ends; see
+        :mod:`.patterns`), or a built-in pattern name (``weave_pattern``).  Repeats over the sample.
     warp_count, weft_count
-        Number of warp (along x) and weft (along y) yarns in the sample.
+        Number of warp and weft yarns in the sample (≥ 1).
     spacing_mm
-        Centre-to-centre distance of neighbouring yarns, mm (the same for warp and weft).
+        Centre-to-centre distance of neighbouring yarns, warp and weft alike, mm.
+    yarn_radius_mm
+        Radius of a round yarn, mm.  Give this or ``semi_axes_mm``; neither: 0.1 mm.
     semi_axes_mm
-        Yarn cross-section semi-axes (in the cloth plane, across it), mm; equal for round yarns.
+        Elliptical cross-section (paper §7): semi-axis in the cloth plane, semi-axis across it, mm.
     crimp_amplitude_mm
-        Height of a yarn centreline above (below) the cloth's mid-plane where it passes over
-        (under) a crossing, mm.  None: derived from the interlacing and the yarn thickness, the
-        least that keeps crossing yarns apart.
+        Height of a yarn's centreline above (below) the cloth's mid-plane where it passes over
+        (under) a crossing, mm: one value for both systems or (warp, weft).  None: derived, the
+        least that clears the crossing yarns, (1 + CROSSING_CLEARANCE) × the half-thickness for
+        both; the interlacing then decides where each yarn is up or down, hence its crimp
+        percentage (:attr:`crimp_percent`).
     segments_per_crossing, segments_around
-        Tessellation along a yarn between neighbouring crossings, and around its cross-section.
+        Tessellation: segments along a yarn per spacing (≥ 2), and around its cross-section (≥ 3).
+        Near the clearance limit more segments along may be needed, so that the mesh's chords
+        do not cut into the crossing yarns; a refusal says how many.
     """
 
     interlacing: np.ndarray = field(default_factory=plain)
     warp_count: int = 8
     weft_count: int = 8
     spacing_mm: float = 0.5
-    semi_axes_mm: tuple[float, float] = (0.1, 0.1)
-    crimp_amplitude_mm: float | None = None
+    yarn_radius_mm: float | None = None
+    semi_axes_mm: tuple[float, float] | None = None
+    crimp_amplitude_mm: float | tuple[float, float] | None = None
     segments_per_crossing: int = 8
     segments_around: int = 12
 
     def __post_init__(self):
-        object.__setattr__(self, "interlacing", validate_interlacing(self.interlacing))
+        matrix = weave_pattern(self.interlacing) if isinstance(self.interlacing, str) else self.interlacing
+        matrix = validate_interlacing(matrix)
+        matrix.flags.writeable = False
+        object.__setattr__(self, "interlacing", matrix)
         for name in ("warp_count", "weft_count"):
             value = getattr(self, name)
-            if not isinstance(value, (int, np.integer)) or value < 1:
+            if not _is_integer(value) or value < 1:
                 raise WeaveParameterError(name, value, "an integer ≥ 1")
         for name, low in (("segments_per_crossing", 2), ("segments_around", 3)):
             value = getattr(self, name)
-            if not isinstance(value, (int, np.integer)) or value < low:
+            if not _is_integer(value) or value < low:
                 raise WeaveParameterError(name, value, f"an integer ≥ {low}")
-        if not (isinstance(self.spacing_mm, (int, float)) and math.isfinite(self.spacing_mm) and self.spacing_mm > 0):
-            raise WeaveParameterError("spacing_mm", self.spacing_mm, "> 0")
-        if len(self.semi_axes_mm) != 2 or not all(math.isfinite(a) and a > 0 for a in self.semi_axes_mm):
-            raise WeaveParameterError("semi_axes_mm", self.semi_axes_mm, "two lengths > 0 (mm)")
-        width, thickness = self.semi_axes_mm
-        if 2.0 * width >= self.spacing_mm:
-            raise WeaveParameterError("semi_axes_mm", self.semi_axes_mm,
-                                      f"a width 2·{width} below spacing_mm = {self.spacing_mm}: neighbouring yarns would intersect")
-        amplitude = self.crimp_amplitude
-        if amplitude < thickness * (1.0 + CROSSING_CLEARANCE) - 1e-12:
-            raise WeaveParameterError("crimp_amplitude_mm", self.crimp_amplitude_mm,
-                                      f"≥ {thickness * (1 + CROSSING_CLEARANCE):.4g} mm (the yarn thickness): crossing yarns would intersect")
-        # Where a yarn changes sides it passes between two crossing yarns: round yarns need room
-        # for that bend (centre-line curvature against the crossing yarn's radius).
-        if self.spacing_mm < math.pi * math.sqrt(2.0) * amplitude * max(1.0, width / thickness) ** 0.5:
-            raise WeaveParameterError("spacing_mm", self.spacing_mm,
-                                      f"≥ {math.pi * math.sqrt(2) * amplitude:.4g} mm for a crimp of {amplitude:.4g} mm: "
-                                      "yarns would cut through the yarns they pass between")
+        if not _is_length(self.spacing_mm):
+            raise WeaveParameterError("spacing_mm", self.spacing_mm, "a finite length > 0 (mm)")
+        self._check_cross_section()
+        self._check_crimp()
+        self._check_clearance()
+
+    # -- derived quantities ---------------------------------------------------------------
 
     @property
-    def crimp_amplitude(self) -> float:
-        """Crimp amplitude in mm (derived unless given)."""
-        if self.crimp_amplitude_mm is not None:
-            return float(self.crimp_amplitude_mm)
-        return self.semi_axes_mm[1] * (1.0 + CROSSING_CLEARANCE)
+    def cross_section_mm(self) -> tuple[float, float]:
+        """Semi-axes (in the cloth plane, across it) of the yarn cross-section, mm."""
+        if self.semi_axes_mm is not None:
+            return float(self.semi_axes_mm[0]), float(self.semi_axes_mm[1])
+        radius = DEFAULT_YARN_RADIUS_MM if self.yarn_radius_mm is None else float(self.yarn_radius_mm)
+        return radius, radius
+
+    @property
+    def crimp_amplitudes_mm(self) -> tuple[float, float]:
+        """Warp and weft crimp amplitudes, mm (derived unless given)."""
+        if self.crimp_amplitude_mm is None:
+            derived = self.cross_section_mm[1] * (1.0 + CROSSING_CLEARANCE)
+            return derived, derived
+        if isinstance(self.crimp_amplitude_mm, Real):
+            return float(self.crimp_amplitude_mm), float(self.crimp_amplitude_mm)
+        return float(self.crimp_amplitude_mm[0]), float(self.crimp_amplitude_mm[1])
+
+    @property
+    def crimp_percent(self) -> tuple[float, float]:
+        """Mean warp and weft crimp, percent: how much longer a yarn is than the cloth it spans."""
+        return crimp_percent(self.interlacing, self.spacing_mm, self.crimp_amplitudes_mm)
+
+    @property
+    def minimum_gap_mm(self) -> float:
+        """Smallest vertical gap between the exact tubes of crossing yarns anywhere in the weave,
+        mm (> 0; the mesh's gap at this tessellation, also checked, can be a little smaller)."""
+        return float(crossing_gaps(self.interlacing, self.spacing_mm, self.cross_section_mm,
+                                   self.crimp_amplitudes_mm).min())
 
     @property
     def sample_size_mm(self) -> tuple[float, float]:
-        """Extent of the sample along x (warp direction) and y (weft direction), mm."""
+        """Extent of the sample along x (the warp direction) and y (the weft direction), mm."""
         return self.weft_count * self.spacing_mm, self.warp_count * self.spacing_mm
+
+    @classmethod
+    def for_sample_size(cls, sample_size_mm: tuple[float, float], **kwargs) -> "WeaveParameters":
+        """Parameters whose sample measures ``sample_size_mm`` (along x, along y), mm: the yarn
+        counts follow from the spacing, which must divide the size (nothing is rounded)."""
+        spacing = kwargs.get("spacing_mm", cls.spacing_mm)
+        if not _is_length(spacing):
+            raise WeaveParameterError("spacing_mm", spacing, "a finite length > 0 (mm)")
+        try:
+            along_x, along_y = sample_size_mm
+        except (TypeError, ValueError):
+            raise WeaveParameterError("sample_size_mm", sample_size_mm, "two lengths (along x, along y), mm") from None
+        counts = []
+        for size in (along_x, along_y):
+            count = round(size / spacing) if _is_length(size) else 0
+            if count < 1 or abs(count * spacing - size) > 1e-9 * max(size, spacing):
+                near = max(1, count) * spacing
+                raise WeaveParameterError("sample_size_mm", sample_size_mm,
+                                          f"whole multiples of spacing_mm = {spacing:g} mm (e.g. {near:g})")
+            counts.append(count)
+        for name in ("warp_count", "weft_count"):
+            if name in kwargs:
+                raise WeaveParameterError(name, kwargs[name], "absent: sample_size_mm sets it")
+        return cls(weft_count=counts[0], warp_count=counts[1], **kwargs)
+
+    # -- checks ----------------------------------------------------------------------------
+
+    @property
+    def _cross_section_name(self) -> str:
+        return "semi_axes_mm" if self.semi_axes_mm is not None else "yarn_radius_mm"
+
+    @property
+    def _cross_section_value(self):
+        if self.semi_axes_mm is not None:
+            return self.semi_axes_mm
+        return self.yarn_radius_mm if self.yarn_radius_mm is not None else DEFAULT_YARN_RADIUS_MM
+
+    def _check_cross_section(self):
+        if self.semi_axes_mm is not None:
+            if self.yarn_radius_mm is not None:
+                raise WeaveParameterError("semi_axes_mm", self.semi_axes_mm,
+                                          f"None when yarn_radius_mm (= {self.yarn_radius_mm!r}) is given: "
+                                          "one or the other")
+            axes = self.semi_axes_mm
+            if isinstance(axes, str) or not hasattr(axes, "__len__") or len(axes) != 2 \
+                    or not all(_is_length(a) for a in axes):
+                raise WeaveParameterError("semi_axes_mm", axes, "two finite lengths > 0 (mm)")
+        elif self.yarn_radius_mm is not None and not _is_length(self.yarn_radius_mm):
+            raise WeaveParameterError("yarn_radius_mm", self.yarn_radius_mm, "a finite length > 0 (mm)")
+        width = self.cross_section_mm[0]
+        if 2.0 * width >= self.spacing_mm:
+            raise WeaveParameterError(self._cross_section_name, self._cross_section_value,
+                                      f"a width 2·{width:g} mm below spacing_mm = {self.spacing_mm:g} mm: "
+                                      "neighbouring parallel yarns would intersect")
+
+    def _check_crimp(self):
+        value = self.crimp_amplitude_mm
+        if value is not None:
+            single = isinstance(value, Real) and not isinstance(value, bool)
+            pair = (value,) if single else value
+            shaped = single or (not isinstance(value, str) and hasattr(value, "__len__") and len(value) == 2)
+            if not shaped or not all(isinstance(h, Real) and not isinstance(h, bool) and math.isfinite(h) and h >= 0
+                                     for h in pair):
+                raise WeaveParameterError("crimp_amplitude_mm", value,
+                                          "None, a length ≥ 0 or (warp, weft) lengths ≥ 0 (mm)")
+        thickness = self.cross_section_mm[1]
+        least = 2.0 * thickness * (1.0 + CROSSING_CLEARANCE)
+        if sum(self.crimp_amplitudes_mm) < least - 1e-12:
+            raise WeaveParameterError("crimp_amplitude_mm", value,
+                                      f"warp + weft amplitudes ≥ {least:.4g} mm (the two yarns' thickness "
+                                      f"and {CROSSING_CLEARANCE:.0%}): crossing yarns would intersect")
+
+    def _problem(self, semi_axes, amplitudes, segments) -> tuple[str, str] | None:
+        """Why yarns of this cross-section and crimp would intersect — ("fold" | "tubes" | "mesh",
+        explanation) — or None if they clear, as exact tubes and as meshes of ``segments``."""
+        curvature = max_curvature(max(amplitudes), self.spacing_mm)
+        if semi_axes[1] * curvature >= 1.0:
+            return "fold", (f"a crimp of {max(amplitudes):.4g} mm over spacing_mm = {self.spacing_mm:g} mm bends "
+                            f"the centreline to a radius of {1 / curvature:.4g} mm, below the half-thickness "
+                            f"{semi_axes[1]:.4g} mm: the tube would fold onto itself")
+        for kind, tessellation, what in (("tubes", None, "the yarns"), ("mesh", segments, "their triangle meshes")):
+            gap = float(crossing_gaps(self.interlacing, self.spacing_mm, semi_axes, amplitudes, tessellation).min())
+            if gap <= 0.0:
+                return kind, (f"{what} would cut into the yarns they cross (vertical gap {gap:.3g} mm "
+                              f"at spacing_mm = {self.spacing_mm:g} mm)")
+        return None
+
+    def _check_clearance(self):
+        axes, amplitudes = self.cross_section_mm, self.crimp_amplitudes_mm
+        problem = self._problem(axes, amplitudes, self.segments_per_crossing)
+        if problem is None:
+            return
+        kind, explanation = problem
+        derived = axes[1] * (1.0 + CROSSING_CLEARANCE)
+        if self.crimp_amplitude_mm is not None and \
+                self._problem(axes, (derived, derived), self.segments_per_crossing) is None:
+            raise WeaveParameterError("crimp_amplitude_mm", self.crimp_amplitude_mm,
+                                      f"a flatter crimp, e.g. the derived {derived:.4g} mm: {explanation}")
+        if kind == "mesh":
+            finer = self._finest_needed(axes, amplitudes)
+            if finer is not None:
+                raise WeaveParameterError("segments_per_crossing", self.segments_per_crossing,
+                                          f"≥ {finer} for this weave: {explanation}")
+        # printed rounded down, so that the size offered does fit
+        scale = float(f"{self._largest_clear_scale() * (1 - 5e-4):.3g}")
+        largest = (f"{axes[0] * scale:.4g} mm" if self.semi_axes_mm is None
+                   else f"({axes[0] * scale:.4g}, {axes[1] * scale:.4g}) mm or another shape that clears")
+        raise WeaveParameterError(self._cross_section_name, self._cross_section_value,
+                                  f"at most {largest} with the derived crimp: {explanation}")
+
+    def _finest_needed(self, semi_axes, amplitudes, most: int = 128) -> int | None:
+        """Fewest segments per spacing (up to ``most``) whose mesh clears, by bisection (chords
+        shorten, and stand less proud, as the count grows)."""
+        if self._problem(semi_axes, amplitudes, most) is not None:
+            return None
+        low, high = self.segments_per_crossing, most
+        while high - low > 1:
+            middle = (low + high) // 2
+            low, high = (low, middle) if self._problem(semi_axes, amplitudes, middle) is None else (middle, high)
+        return high
+
+    def _largest_clear_scale(self) -> float:
+        """Largest factor on the cross-section (derived crimp) for which yarns clear, by bisection."""
+        width, thickness = self.cross_section_mm
+        low, high = 0.0, 1.0
+        for _ in range(24):
+            scale = 0.5 * (low + high)
+            h = thickness * scale * (1.0 + CROSSING_CLEARANCE)
+            fits = self._problem((width * scale, thickness * scale), (h, h), self.segments_per_crossing) is None
+            low, high = (scale, high) if fits else (low, scale)
+        return low

@@ -1,8 +1,8 @@
 """ClothLight add-on: woven cloth samples, yarn-BRDF materials and a virtual gonioreflectometer.
 
-Core logic (weave geometry, table reading) is importable without Blender;
-the Blender-facing modules (preferences, properties, operators, ui) are
-registered here, in order, and unregistered in reverse.
+Core logic (weave geometry, table reading, background bake jobs) is importable
+without Blender; the Blender-facing modules are registered here, in order, and
+unregistered in reverse.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import importlib
 
 # Modules holding Blender classes, in registration order.
-_BLENDER_MODULES = ("preferences", "operators", "ui")
+_BLENDER_MODULES = ("preferences", "properties", "preset_menus", "operators", "validation.operator", "ui", "sun_link")
 
 
 def _modules():

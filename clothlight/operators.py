@@ -1,10 +1,441 @@
-"""Operators of the ClothLight add-on.  Each reports errors through Blender's report system."""
+"""Operators of the ClothLight add-on: Build Sample, Bake Tables, Apply Material, Set Up Cycles.
+
+Each reports errors through Blender's report system (bad input names the parameter; unexpected
+failures print their traceback to the console and report one line).  Build Sample and Apply
+Material edit the scene and are undoable; neither leaves unused data blocks behind.  Bake Tables
+runs the bake in a child process (:mod:`.jobs`): in the interface it is modal, with a progress
+bar in the status bar and Esc (or the panel's Cancel button) to stop it; in background mode
+(``blender -b``, or Blender as a Python module) ``execute()`` runs the same bake to the end.
+The validation operator, ``clothlight.validate``, lives in :mod:`.validation.operator`.
+"""
 
 from __future__ import annotations
 
+import hashlib
+import json
+import pathlib
+import sys
+import traceback
+
 import bpy
 
+from . import preferences
+from .jobs import (
+    PACKAGE_ROOT,
+    BakeCancelled,
+    BakeFailed,
+    BakeJob,
+    BakeRequest,
+    missing_bake_dependencies,
+    preset_request,
+)
+from .materials import GENERAL_MODE, SUN_MODE, build_yarn_material, shader_node, sync_sun
+from .mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
+from .properties import ParameterError, millimetre_scale
 from .render_setup import use_cycles_osl_on_cpu
+from .sun_link import SUN_PROPERTY
+from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
+from .weave import WeaveParameterError
+from .yarn_tables import yarn_tables_from_bake
+
+#: Tables baked when the extension was built, one folder per shipped preset (scripts/build_extension.py).
+PREBAKED_DIR = PACKAGE_ROOT / "prebaked"
+#: File of a pre-baked folder holding the BakeRequest it was baked from.
+REQUEST_FILE = "request.json"
+
+
+def _unexpected(operator, error: Exception, what: str):
+    """Report an unexpected failure in one line; its traceback goes to the console."""
+    traceback.print_exception(error, file=sys.stderr)
+    operator.report({"ERROR"}, f"{what} failed: {type(error).__name__}: {error} (details in the console)")
+    return {"CANCELLED"}
+
+
+# -- tables -------------------------------------------------------------------------------------
+
+
+def prebaked_tables(request: BakeRequest) -> pathlib.Path | None:
+    """The shipped tables baked from exactly ``request``, or None."""
+    folder = PREBAKED_DIR / request.preset
+    try:
+        if BakeRequest.from_json((folder / REQUEST_FILE).read_text()) == request:
+            return folder
+    except (OSError, ValueError, TypeError):
+        pass
+    return None
+
+
+def bake_unavailable_reason() -> str | None:
+    """Why Bake Tables cannot run in this Blender, or None."""
+    missing = missing_bake_dependencies()
+    if not missing:
+        return None
+    return (f"Bake unavailable: {', '.join(missing)} not installed (this build of the extension bundles no "
+            "wheels for this platform). Pre-baked tables of the shipped presets still work")
+
+
+def tables_for(medium) -> tuple[pathlib.Path, str | None]:
+    """The table folder Apply Material uses for ``medium`` settings, and a warning (or None).
+
+    The folder in ``medium.tables_dir`` (set by Bake Tables or by hand), else the pre-baked tables
+    of an unchanged shipped preset.  Raises LookupError when there are none.
+    """
+    request = medium.request()
+    if medium.tables_dir:
+        warning = None
+        if medium.tables_request and medium.tables_request != request.to_json():
+            warning = "The tables were baked from other settings than the panel's: bake again to use them"
+        return pathlib.Path(bpy.path.abspath(medium.tables_dir)), warning
+    shipped = prebaked_tables(request)
+    if shipped is not None:
+        return shipped, None
+    reason = bake_unavailable_reason()
+    raise LookupError("No tables for these settings yet: " + (reason if reason else "press Bake Tables"))
+
+
+def material_name(medium, mode: str) -> str:
+    """One material per set of tables and mode, so re-applying updates it everywhere it is used."""
+    if medium.tables_dir and not medium.tables_request:
+        label = pathlib.Path(bpy.path.abspath(medium.tables_dir)).name or "Tables"
+    else:
+        request = medium.request()
+        label = bpy.path.display_name(request.preset)
+        if request != preset_request(request.preset):
+            label += " " + hashlib.sha256(request.to_json().encode()).hexdigest()[:6]
+    return f"ClothLight {label}" + (" Sun" if mode == SUN_MODE else "")
+
+
+# -- Build Sample --------------------------------------------------------------------------------
+
+
+def is_sample(obj) -> bool:
+    return obj is not None and obj.type == "MESH" and WEAVE_PROPERTY in obj
+
+
+def _free_name(base: str) -> str:
+    if base not in bpy.data.objects:
+        return base
+    index = 1
+    while f"{base}.{index:03d}" in bpy.data.objects:
+        index += 1
+    return f"{base}.{index:03d}"
+
+
+class CLOTHLIGHT_OT_build_sample(bpy.types.Operator):
+    """Build a woven sample from the weave settings (rebuilds the active sample in place, keeping its material)"""
+
+    bl_idname = "clothlight.build_sample"
+    bl_label = "Build Sample"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.mode != "OBJECT":
+            cls.poll_message_set("Switch to Object Mode")
+            return False
+        return context.scene is not None
+
+    def execute(self, context):
+        settings = context.scene.clothlight
+        weave = settings.weave
+        try:
+            params = weave.parameters()
+        except WeaveParameterError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        active = context.active_object
+        rebuild = active if is_sample(active) and active.name in context.view_layer.objects else None
+        try:
+            obj = build_sample_object(params, name=rebuild.name if rebuild else _free_name(DEFAULT_NAME),
+                                      collection=None if rebuild else context.collection)
+        except WeaveParameterError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        except Exception as error:  # noqa: BLE001
+            return _unexpected(self, error, "Build Sample")
+        if rebuild is None:
+            obj.location = context.scene.cursor.location
+            scale = millimetre_scale(context.scene) if weave.real_world_size else 1.0
+            obj.scale = (scale, scale, scale)
+            for selected in context.selected_objects:
+                selected.select_set(False)
+            obj.select_set(True)
+            context.view_layer.objects.active = obj
+        width, height = params.sample_size_mm
+        self.report({"INFO"}, f"{obj.name}: {params.warp_count} ends × {params.weft_count} picks, "
+                              f"{width:g} × {height:g} mm, {len(obj.data.polygons)} triangles")
+        medium_radius = settings.medium.yarn_radius_mm
+        if abs(weave.yarn_thickness_mm - medium_radius) > 1e-4 or weave.cross_section != "ROUND":
+            self.report({"WARNING"}, f"The yarn tables are baked for round yarns of radius {medium_radius:.3g} mm; "
+                                     "this sample's yarns differ")
+        return {"FINISHED"}
+
+
+# -- Apply Material ------------------------------------------------------------------------------
+
+
+def scene_sun(context, settings):
+    if settings.sun is not None:
+        return settings.sun
+    return next((obj for obj in context.scene.objects if obj.type == "LIGHT" and obj.data.type == "SUN"), None)
+
+
+def _targets(context):
+    objects = [obj for obj in context.selected_objects if obj.type == "MESH"]
+    if context.active_object is not None and context.active_object.type == "MESH" \
+            and context.active_object not in objects:
+        objects.append(context.active_object)
+    return objects
+
+
+def remove_if_unused(material) -> None:
+    """Delete a ClothLight material nothing uses any more (no orphan data blocks)."""
+    if material is not None and "clothlight_shader" in material and material.users == 0:
+        bpy.data.materials.remove(material)
+
+
+class CLOTHLIGHT_OT_apply_material(bpy.types.Operator):
+    """Give the selected ClothLight samples the yarn material made from the baked tables of the medium settings"""
+
+    bl_idname = "clothlight.apply_material"
+    bl_label = "Apply Material"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if not any(CLOTH_NORMAL in obj.data.attributes for obj in _targets(context)):
+            cls.poll_message_set("Select a ClothLight sample (a mesh with the yarn attributes)")
+            return False
+        return True
+
+    def execute(self, context):
+        settings = context.scene.clothlight
+        medium = settings.medium
+        mode = SUN_MODE if settings.material_mode == "SUN" else GENERAL_MODE
+        targets = [obj for obj in _targets(context)
+                   if CLOTH_NORMAL in obj.data.attributes and YARN_TANGENT in obj.data.attributes]
+        if not targets:
+            self.report({"ERROR"}, "No ClothLight sample selected: the yarn material needs the "
+                                   f"'{CLOTH_NORMAL}' and '{YARN_TANGENT}' attributes of a built sample")
+            return {"CANCELLED"}
+        sun = scene_sun(context, settings) if mode == SUN_MODE else None
+        if mode == SUN_MODE and sun is None:
+            self.report({"ERROR"}, "Sun mode needs a sun lamp: add one or pick it in the Material panel")
+            return {"CANCELLED"}
+        try:
+            folder, warning = tables_for(medium)
+            tables = yarn_tables_from_bake(folder)
+            name = material_name(medium, mode)
+            # Script nodes compile only when the scene renders with Cycles and OSL.
+            render_note = use_cycles_osl_on_cpu(context.scene)
+            material = build_yarn_material(tables, name, mode=mode)
+        except (LookupError, FileNotFoundError, ValueError, ParameterError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        except Exception as error:  # noqa: BLE001
+            return _unexpected(self, error, "Apply Material")
+        if sun is not None:
+            material[SUN_PROPERTY] = sun
+            sync_sun(material, sun)
+        elif SUN_PROPERTY in material:
+            del material[SUN_PROPERTY]
+        replaced = set()
+        for obj in targets:
+            slots = obj.data.materials
+            if not len(slots):
+                slots.append(material)
+            for index in range(len(slots)):
+                if slots[index] is not material:
+                    replaced.add(slots[index])
+                    slots[index] = material
+        for old in replaced:
+            remove_if_unused(old)
+        if warning:
+            self.report({"WARNING"}, warning)
+        if "already set" not in render_note:
+            self.report({"INFO"}, render_note.split(". ")[0])
+        self.report({"INFO"}, f"{material.name} on {len(targets)} object(s), tables {folder}")
+        return {"FINISHED"}
+
+
+# -- Bake Tables ---------------------------------------------------------------------------------
+
+
+class _RunningBake:
+    """The one bake the interface is running (None when idle); the panel draws its progress."""
+
+    job: BakeJob | None = None
+    scene_name: str = ""
+
+
+def running_bake() -> BakeJob | None:
+    return _RunningBake.job
+
+
+def _job_for(context, request: BakeRequest) -> BakeJob:
+    prefs = preferences.preferences(context)
+    threads = prefs.threads if prefs is not None and prefs.threads > 0 else None
+    return BakeJob(request, cache_dir=preferences.cache_directory(context), threads=threads,
+                   numba_cache_dir=preferences.numba_cache_directory())
+
+
+def _ratios_text(outcome) -> str:
+    ratios = outcome.table1_ratios
+    if not ratios:
+        return ""
+    return (f"; B/R {ratios['B/R']:.3g}, G/R {ratios['G/R']:.3g} at normal incidence and view "
+            "(the paper's real red cotton: 0.08, 0.011)")
+
+
+def _redraw_panels(context) -> None:
+    """Redraw where the bake's progress shows (panels do not redraw on their own)."""
+    for window in context.window_manager.windows:
+        for area in window.screen.areas:
+            if area.type in {"VIEW_3D", "PROPERTIES"}:
+                area.tag_redraw()
+
+
+class CLOTHLIGHT_OT_bake_tables(bpy.types.Operator):
+    """Bake the yarn's BRDF tables from the medium settings (Monte-Carlo light transport in a background
+    process; cached, so an unchanged medium is instant). Esc cancels"""
+
+    bl_idname = "clothlight.bake_tables"
+    bl_label = "Bake Tables"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if _RunningBake.job is not None:
+            cls.poll_message_set("A bake is running")
+            return False
+        reason = bake_unavailable_reason()
+        if reason:
+            cls.poll_message_set(reason)
+            return False
+        return context.scene is not None
+
+    def _start(self, context) -> BakeJob | None:
+        try:
+            request = context.scene.clothlight.medium.request()
+            job = _job_for(context, request)
+        except (ParameterError, ValueError, OSError) as error:
+            self.report({"ERROR"}, str(error))
+            return None
+        return job
+
+    def _finish(self, scene, job: BakeJob):
+        if isinstance(job.error, BakeCancelled):
+            self.report({"WARNING"}, str(job.error))
+            return {"CANCELLED"}
+        if isinstance(job.error, BakeFailed):
+            if not job.error.bad_input and job.error.log:
+                print(job.error.log, file=sys.stderr)
+            self.report({"ERROR"}, f"Bake failed: {job.error}")
+            return {"CANCELLED"}
+        outcome = job.outcome
+        medium = scene.clothlight.medium
+        medium.tables_dir = str(outcome.folder)
+        medium.tables_request = job.request.to_json()
+        how = "found in the cache" if outcome.cache_hit else f"baked in {outcome.seconds:.0f} s"
+        self.report({"INFO"}, f"Tables {how}: {outcome.folder}{_ratios_text(outcome)}")
+        return {"FINISHED"}
+
+    def execute(self, context):
+        job = self._start(context)
+        if job is None:
+            return {"CANCELLED"}
+        shown = [-1]
+
+        def progress(fraction):
+            percent = int(fraction * 100)
+            if percent // 10 != shown[0] // 10:
+                shown[0] = percent
+                print(f"ClothLight bake: {percent} %", flush=True)
+
+        try:
+            job.wait(on_progress=progress)
+        except (BakeFailed, BakeCancelled):
+            pass  # job.error says which; _finish reports it
+        return self._finish(context.scene, job)
+
+    def invoke(self, context, event):
+        if bpy.app.background:
+            return self.execute(context)
+        return self._start_modal(context)
+
+    def _start_modal(self, context):
+        """Start the child and the timer that polls it; ``modal()`` takes it from there."""
+        job = self._start(context)
+        if job is None:
+            return {"CANCELLED"}
+        try:
+            job.start()
+        except (BakeFailed, OSError) as error:
+            self.report({"ERROR"}, f"Bake could not start: {error}")
+            return {"CANCELLED"}
+        _RunningBake.job, _RunningBake.scene_name = job, context.scene.name
+        self._workspace = context.workspace
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.2, window=context.window)
+        wm.modal_handler_add(self)
+        self._show(context)
+        return {"RUNNING_MODAL"}
+
+    def _show(self, context) -> None:
+        job = _RunningBake.job
+
+        def draw_status(header, _context):
+            row = header.layout.row(align=True)
+            state = "Cancelling" if job.cancelling else "Baking ClothLight tables"
+            row.progress(factor=job.progress, type="BAR", text=f"{state}: {job.progress:.0%}")
+            row.label(text="Esc to cancel", icon="EVENT_ESC")
+
+        self._workspace.status_text_set(draw_status)
+        _redraw_panels(context)
+
+    def modal(self, context, event):
+        job = _RunningBake.job
+        if event.type == "ESC" and event.value == "PRESS":
+            job.cancel()
+            return {"RUNNING_MODAL"}
+        if event.type != "TIMER":  # any timer's tick will do: polling the child is cheap
+            return {"PASS_THROUGH"}
+        if not job.poll():
+            self._show(context)
+            return {"PASS_THROUGH"}
+        context.window_manager.event_timer_remove(self._timer)
+        self._workspace.status_text_set(None)
+        _RunningBake.job = None
+        scene = bpy.data.scenes.get(_RunningBake.scene_name) or context.scene
+        result = self._finish(scene, job)
+        _redraw_panels(context)
+        return result
+
+    def cancel(self, context):
+        # Blender ends the operator (file load, quit): stop the child too.
+        if _RunningBake.job is not None:
+            _RunningBake.job.cancel()
+            _RunningBake.job = None
+        self._workspace.status_text_set(None)
+
+
+class CLOTHLIGHT_OT_cancel_bake(bpy.types.Operator):
+    """Stop the running bake; no table is written"""
+
+    bl_idname = "clothlight.cancel_bake"
+    bl_label = "Cancel Bake"
+    bl_options = {"INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return _RunningBake.job is not None
+
+    def execute(self, context):
+        _RunningBake.job.cancel()
+        return {"FINISHED"}
+
+
+# -- Set Up Cycles -------------------------------------------------------------------------------
 
 
 class CLOTHLIGHT_OT_setup_render(bpy.types.Operator):
@@ -19,7 +450,35 @@ class CLOTHLIGHT_OT_setup_render(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (CLOTHLIGHT_OT_setup_render,)
+def material_summary(material) -> dict | None:
+    """What the panels show about a ClothLight material: shader, mode, tables and sun."""
+    node = shader_node(material) if material is not None else None
+    if node is None:
+        return None
+    info = {"shader": material.get("clothlight_shader", node.script.name),
+            "mode": "Sun (exact)" if node.inputs["SunMode"].default_value else "General"}
+    if "Table" in node.inputs:
+        table = pathlib.Path(bpy.path.abspath(node.inputs["Table"].default_value))
+        info["tables"] = str(table.parent)
+        try:
+            summary = json.loads((table.parent / "summary.json").read_text())
+            info["medium"] = summary.get("medium", {}).get("name", "")
+            info["table1"] = summary.get("table1_ratios_normal", {})
+        except (OSError, ValueError):
+            info["missing"] = True
+    sun = material.get(SUN_PROPERTY)
+    if sun is not None:
+        info["sun"] = sun.name
+    return info
+
+
+CLASSES = (
+    CLOTHLIGHT_OT_build_sample,
+    CLOTHLIGHT_OT_bake_tables,
+    CLOTHLIGHT_OT_cancel_bake,
+    CLOTHLIGHT_OT_apply_material,
+    CLOTHLIGHT_OT_setup_render,
+)
 
 
 def register() -> None:
@@ -28,5 +487,8 @@ def register() -> None:
 
 
 def unregister() -> None:
+    if _RunningBake.job is not None:
+        _RunningBake.job.cancel()
+        _RunningBake.job = None
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

@@ -1,23 +1,238 @@
-"""ClothLight panels: the 3D View sidebar's "Cloth" tab."""
+"""ClothLight panels: the 3D View sidebar's "Cloth" tab, and the Material properties of a ClothLight material.
+
+Sidebar (N panel → Cloth): ClothLight (render set-up) with sub-panels Woven Sample, Yarn Medium
+(with Bake Settings and Grids), Material and Validation, in the order of the work.  The weave and
+medium panels carry their preset menus in the header, as Blender's own panels do.
+"""
 
 from __future__ import annotations
 
 import bpy
 
+from . import operators
+from .materials import shader_node
+from .preset_menus import CLOTHLIGHT_PT_medium_presets, CLOTHLIGHT_PT_weave_presets
 
-class CLOTHLIGHT_PT_main(bpy.types.Panel):
-    bl_label = "ClothLight"
-    bl_idname = "CLOTHLIGHT_PT_main"
+
+def _engine_ready(scene) -> bool:
+    return scene.render.engine == "CYCLES" and scene.cycles.shading_system and scene.cycles.device == "CPU"
+
+
+class _SidebarPanel:
     bl_space_type = "VIEW_3D"
     bl_region_type = "UI"
     bl_category = "Cloth"
 
+
+class CLOTHLIGHT_PT_main(_SidebarPanel, bpy.types.Panel):
+    bl_label = "ClothLight"
+    bl_idname = "CLOTHLIGHT_PT_main"
+
     def draw(self, context):
         layout = self.layout
+        if _engine_ready(context.scene):
+            layout.label(text="Cycles, OSL on the CPU", icon="CHECKMARK")
+        else:
+            layout.label(text="ClothLight renders in Cycles with OSL on the CPU", icon="INFO")
         layout.operator("clothlight.setup_render", icon="SHADING_RENDERED")
 
 
-CLASSES = (CLOTHLIGHT_PT_main,)
+class CLOTHLIGHT_PT_sample(_SidebarPanel, bpy.types.Panel):
+    bl_label = "Woven Sample"
+    bl_parent_id = "CLOTHLIGHT_PT_main"
+
+    def draw_header_preset(self, _context):
+        CLOTHLIGHT_PT_weave_presets.draw_panel_header(self.layout)
+
+    def draw(self, context):
+        weave = context.scene.clothlight.weave
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(weave, "pattern")
+        if weave.pattern == "CUSTOM":
+            layout.prop(weave, "custom_draft")
+        elif weave.pattern == "WIF":
+            layout.prop(weave, "wif_path")
+        col = layout.column(align=True)
+        col.prop(weave, "warp_count")
+        col.prop(weave, "weft_count")
+        layout.prop(weave, "spacing_mm")
+        layout.prop(weave, "cross_section")
+        col = layout.column(align=True)
+        if weave.cross_section == "ROUND":
+            col.prop(weave, "yarn_radius_mm")
+        else:
+            col.prop(weave, "half_width_mm")
+            col.prop(weave, "half_thickness_mm")
+        layout.prop(weave, "auto_crimp")
+        if not weave.auto_crimp:
+            col = layout.column(align=True)
+            col.prop(weave, "crimp_warp_mm")
+            col.prop(weave, "crimp_weft_mm")
+        col = layout.column(align=True)
+        col.prop(weave, "segments_per_crossing")
+        col.prop(weave, "segments_around")
+        layout.prop(weave, "real_world_size")
+        rebuild = operators.is_sample(context.active_object)
+        layout.operator("clothlight.build_sample", text="Rebuild Sample" if rebuild else "Build Sample",
+                        icon="FILE_REFRESH" if rebuild else "MESH_GRID")
+
+
+class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
+    bl_label = "Yarn Medium"
+    bl_parent_id = "CLOTHLIGHT_PT_main"
+
+    def draw_header_preset(self, _context):
+        CLOTHLIGHT_PT_medium_presets.draw_panel_header(self.layout)
+
+    def draw(self, context):
+        medium = context.scene.clothlight.medium
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(medium, "base")
+        keys = medium.exposed_keys()
+        col = layout.column(align=True)
+        for prop in ("dye_weight_percent", "particle_diameter_nm", "particle_volume_fraction", "yarn_radius_mm"):
+            if prop in keys:
+                col.prop(medium, prop)
+        if "dye_weight_percent" not in keys:
+            layout.label(text="This medium is undyed", icon="INFO")
+
+        job = operators.running_bake()
+        if job is not None:
+            row = layout.row(align=True)
+            row.progress(factor=job.progress, type="BAR", text=f"Baking: {job.progress:.0%}")
+            row.operator("clothlight.cancel_bake", text="", icon="CANCEL")
+        else:
+            reason = operators.bake_unavailable_reason()
+            layout.operator("clothlight.bake_tables", icon="RENDER_STILL")
+            if reason:
+                layout.label(text="Bake unavailable here: pre-baked presets only", icon="ERROR")
+        layout.prop(medium, "tables_dir")
+        if medium.tables_dir and medium.tables_request and medium.tables_request != medium.request().to_json():
+            layout.label(text="Settings changed since the bake", icon="ERROR")
+        elif not medium.tables_dir and operators.prebaked_tables(medium.request()) is not None:
+            layout.label(text="Pre-baked tables of this preset", icon="CHECKMARK")
+
+
+class CLOTHLIGHT_PT_bake_settings(_SidebarPanel, bpy.types.Panel):
+    bl_label = "Bake Settings"
+    bl_parent_id = "CLOTHLIGHT_PT_medium"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        medium = context.scene.clothlight.medium
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(medium, "budget")
+        layout.prop(medium, "target_error" if medium.budget == "TARGET_ERROR" else "paths_per_cell")
+        layout.prop(medium, "seed")
+
+
+class CLOTHLIGHT_PT_bake_grids(_SidebarPanel, bpy.types.Panel):
+    bl_label = "Grids"
+    bl_parent_id = "CLOTHLIGHT_PT_bake_settings"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        medium = context.scene.clothlight.medium
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        col = layout.column(align=True)
+        for prop in ("n_around", "n_along", "angular_resolution", "incidence_resolution"):
+            col.prop(medium, prop)
+
+
+def _draw_material_info(layout, material) -> None:
+    info = operators.material_summary(material)
+    if info is None:
+        return
+    col = layout.column(align=True)
+    col.label(text=f"{material.name}: {info['mode']} lighting", icon="MATERIAL")
+    if "tables" in info:
+        if info.get("missing"):
+            col.label(text=f"Tables missing: {info['tables']}", icon="ERROR")
+        else:
+            col.label(text=f"Medium: {info.get('medium') or '—'}")
+            ratios = info.get("table1")
+            if ratios:
+                col.label(text=f"B/R {ratios['B/R']:.3g}, G/R {ratios['G/R']:.3g} at normal incidence and view")
+    if "sun" in info:
+        col.label(text=f"Follows the sun '{info['sun']}'", icon="LIGHT_SUN")
+
+
+class CLOTHLIGHT_PT_material(_SidebarPanel, bpy.types.Panel):
+    bl_label = "Material"
+    bl_parent_id = "CLOTHLIGHT_PT_main"
+
+    def draw(self, context):
+        settings = context.scene.clothlight
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(settings, "material_mode")
+        if settings.material_mode == "SUN":
+            layout.prop(settings, "sun")
+        layout.operator("clothlight.apply_material", icon="MATERIAL")
+        obj = context.active_object
+        if obj is not None and obj.active_material is not None:
+            _draw_material_info(layout, obj.active_material)
+
+
+class CLOTHLIGHT_PT_validation(_SidebarPanel, bpy.types.Panel):
+    bl_label = "Validation"
+    bl_parent_id = "CLOTHLIGHT_PT_main"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.label(text="Virtual gonioreflectometer (paper §4)")
+        layout.operator("clothlight.validate", icon="GRAPH")
+        folder = context.window_manager.get("clothlight_validation_dir")
+        if folder:
+            layout.label(text=f"Last report: {folder}", icon="FILE_TEXT")
+
+
+class CLOTHLIGHT_PT_material_properties(bpy.types.Panel):
+    """The ClothLight section of the Material properties, for ClothLight materials."""
+
+    bl_label = "ClothLight"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context):
+        material = context.material
+        return material is not None and shader_node(material) is not None
+
+    def draw(self, context):
+        settings = context.scene.clothlight
+        layout = self.layout
+        _draw_material_info(layout, context.material)
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(settings, "material_mode")
+        if settings.material_mode == "SUN":
+            layout.prop(settings, "sun")
+        layout.prop(settings.medium, "base")
+        layout.operator("clothlight.apply_material", text="Re-Apply Material", icon="FILE_REFRESH")
+
+
+CLASSES = (
+    CLOTHLIGHT_PT_main,
+    CLOTHLIGHT_PT_sample,
+    CLOTHLIGHT_PT_medium,
+    CLOTHLIGHT_PT_bake_settings,
+    CLOTHLIGHT_PT_bake_grids,
+    CLOTHLIGHT_PT_material,
+    CLOTHLIGHT_PT_validation,
+    CLOTHLIGHT_PT_material_properties,
+)
 
 
 def register() -> None:

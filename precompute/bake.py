@@ -1,9 +1,39 @@
 """Bake a yarn: medium optics → Monte-Carlo transport → yarn BRDF → RGB tables, cached.
 
-One call turns a preset (plus overrides) into the files the shaders read
-(docs/table-spec.md): ``brdf.exr`` (ρ atlas, 1/sr), ``lobes.exr`` (closure
-weights for general lighting), ``spectral.npz`` (the spectral ρ and albedo, so
-another illuminant or observer is a recomputation) and ``summary.json``.
+:func:`bake` turns a preset (a shipped name, a TOML path, its parsed content
+or :class:`~precompute.medium.MediumParameters`) plus ``key=value`` overrides
+into the files the shaders read (docs/table-spec.md) and reports the paper's
+Table 1 ratios B/R and G/R at normal incidence and view.
+
+It runs in two cached stages (:mod:`precompute.cache`):
+
+``spectral``
+    the simulation: optics (paper §3.3), transport and the yarn BRDF by eq. (5)
+    (§5.3), kept spectrally in ``spectral.npz``.  Keyed by the medium, the
+    ``[transport]`` settings and a digest of the physics code.
+``tables``
+    the colour conversion (:mod:`precompute.color`, ``[bake]`` settings) and
+    the OpenEXR tables.  Keyed by the spectral key, the ``[bake]`` settings,
+    the table schema and a digest of this stage's code.
+
+So a second bake of the same inputs is a cache hit that runs nothing, and a
+bake for another illuminant or observer recomputes colour without simulating
+again.
+
+Preset TOML tables owned here (defaults merged when absent)::
+
+    [transport]
+    n_around = 16              # spatial cells around the yarn (the paper: 16 × 8 = 128)
+    n_along = 8                # spatial cells along the yarn, even
+    angular_resolution = 12    # N of the N × N hemisphere grids of the BSSRDF (the paper: 144 cells)
+    incidence_resolution = 12  # N_i of the N_i × N_i sphere grid of incidence of the tables
+    target_rel_stderr = 0.01   # relative standard error of every cell's albedo to reach, or
+    # paths_per_cell = 20000   # a fixed path budget per incidence cell instead
+    seed = 0
+
+    [bake]
+    illuminant = "D65"         # colour-science illuminant name, see precompute/color.py
+    observer = "CIE 1931 2 Degree Standard Observer"
 """
 
 from __future__ import annotations
@@ -11,102 +41,463 @@ from __future__ import annotations
 import copy
 import dataclasses
 import json
+import os
 import pathlib
+import secrets
+import shutil
 import time
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 
+import numba
 import numpy as np
 
 from . import __version__
-from .cache import cache_key, default_cache_dir, lookup, store
+from .cache import canonical_json, cache_key, default_cache_dir, lookup, source_digest, store
 from .closure_fit import closure_lobe_directions, fit_closure_weights
-from .color import channel_ratios, clip_to_gamut, spectral_to_rgb
+from .color import (
+    DEFAULT_ILLUMINANT,
+    DEFAULT_OBSERVER,
+    RGB_SPACE,
+    channel_ratios,
+    clip_to_gamut,
+    spectral_stderr_to_rgb,
+    spectral_to_rgb,
+    spectral_weights,
+    white_balance_factors,
+)
 from .errors import ParameterError
-from .medium import DEFAULT_PRESET, load_preset_config, medium_from_dict
+from .grids import AngularGrid
+from .medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from .optics import medium_optics
 from .table_layout import brdf_atlas, interpolate_rho, lobe_atlas
 from .tables import SCHEMA, write_table
 from .transport import TransportGrids, YarnGeometry, simulate_yarn, yarn_brdf
 
-#: Transport and table settings of a bake, overridable in a preset's [transport] table.
 TRANSPORT_DEFAULTS = {
     "n_around": 16,
     "n_along": 8,
     "angular_resolution": 12,
     "incidence_resolution": 12,
-    "target_rel_stderr": 0.01,
     "paths_per_cell": None,
+    "target_rel_stderr": 0.01,
     "seed": 0,
+}
+BAKE_DEFAULTS = {"illuminant": DEFAULT_ILLUMINANT, "observer": DEFAULT_OBSERVER}
+#: Version of the spectral stage's file (spectral.npz); bump when its content changes meaning.
+SPECTRAL_FORMAT = "clothlight-spectral/1"
+#: Code the result of each stage depends on (paths relative to precompute/), digested into its key.
+PACKAGE_DIR = pathlib.Path(__file__).resolve().parent
+SPECTRAL_SOURCES = (
+    "medium.py", "optics.py", "mie.py", "dye.py", "phase.py", "grids.py",
+    *sorted(str(p.relative_to(PACKAGE_DIR)) for p in (PACKAGE_DIR / "transport").glob("*.py")),
+)
+TABLE_SOURCES = ("color.py", "tables.py", "table_layout.py", "closure_fit.py", "bake.py")
+#: The files of a bake folder, written in this order (summary.json last).
+TABLE_FILES = {
+    "brdf": "brdf.exr",
+    "brdf_stderr": "brdf_stderr.exr",
+    "albedo": "albedo.exr",
+    "closure_lobes": "lobes.exr",
+}
+SPECTRAL_FILE = "spectral.npz"
+SUMMARY_FILE = "summary.json"
+UNITS = {
+    "rho": "1/sr: exit radiance L_o per irradiance E_perp of a parallel beam (plane facing the beam)",
+    "brdf_stderr": "1/sr: upper bound of the standard error of rho",
+    "albedo": "1: hemispherical albedo, integral of rho cos(theta_o) over the exit hemisphere",
+    "closure_lobes": "1: weight of the clamped-cosine lobe max(0, m_k . w_i)/pi, see docs/table-spec.md",
+    "wavelengths": "nm (vacuum)",
+    "lengths": "mm (suffix _mm), nm (suffix _nm)",
+    "mu_s, mu_a": "1/mm",
+    "dye": "weight_percent: % of fibre weight; mass_absorption_cm2_per_g: napierian, cm^2/g",
+    "grids": "n_around, n_along: spatial cells; angular_resolution, incidence_resolution, exit_resolution: "
+    "N of an N x N equal-solid-angle grid",
+    "paths": "paths traced per incidence cell of the transport",
+    "seconds": "s",
 }
 
 
 @dataclasses.dataclass(frozen=True)
+class BakeConfiguration:
+    """Everything a bake is made from: the medium, the ``[transport]`` and the ``[bake]`` settings."""
+
+    medium: MediumParameters
+    transport: dict
+    colour: dict
+
+
+@dataclasses.dataclass(frozen=True)
 class BakeResult:
-    """Where a bake's files are and what it measured."""
+    """Where a bake's files are and what it measured.
+
+    ``cache_hit``: the tables came from the cache; ``simulated``: this call ran
+    the Monte-Carlo transport.  ``summary`` is the bake's summary.json plus the
+    file paths and these two flags.
+    """
 
     folder: pathlib.Path
     cache_hit: bool
+    simulated: bool
     summary: dict
+
+    def table(self, kind: str) -> pathlib.Path:
+        """Path of the table of ``kind`` (a key of :data:`TABLE_FILES`)."""
+        return self.folder / TABLE_FILES[kind]
 
     @property
     def brdf_table(self) -> pathlib.Path:
-        return self.folder / "brdf.exr"
+        return self.table("brdf")
 
     @property
     def lobe_table(self) -> pathlib.Path:
-        return self.folder / "lobes.exr"
+        return self.table("closure_lobes")
+
+    @property
+    def spectral_file(self) -> pathlib.Path:
+        return self.folder / SPECTRAL_FILE
+
+    @property
+    def blue_red(self) -> float | None:
+        """B/R of the table at normal incidence and view (paper Table 1; real red cotton 0.08); None if R = 0."""
+        return self.summary["table1_ratios_normal"]["B/R"]
+
+    @property
+    def green_red(self) -> float | None:
+        """G/R of the table at normal incidence and view (paper Table 1; real red cotton 0.011); None if R = 0."""
+        return self.summary["table1_ratios_normal"]["G/R"]
+
+
+# ---- configuration ------------------------------------------------------------------------------
 
 
 def parse_override(text: str) -> tuple[list[str], object]:
-    """``"dye.weight_percent=2"`` → (["dye", "weight_percent"], 2.0); values are TOML literals."""
-    if "=" not in text:
-        raise ParameterError("--set", text, "key=value, e.g. dye.weight_percent=2")
-    key, raw = text.split("=", 1)
+    """``"dye.weight_percent=2"`` → (["dye", "weight_percent"], 2); values are TOML literals, else strings."""
+    key, separator, raw = text.partition("=")
+    path = key.strip().split(".")
+    if not separator or not all(part.strip() for part in path):
+        raise ParameterError("--set", text, "key=value with a dotted key, e.g. dye.weight_percent=2")
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
-        value = raw
-    return key.strip().split("."), value
+        value = raw.strip()
+    return [part.strip() for part in path], value
 
 
-def apply_overrides(config: dict, overrides: list[str]) -> dict:
-    """A copy of a preset's TOML content with ``key=value`` overrides applied (lists by index)."""
+def apply_overrides(config: dict, overrides: Sequence[str] | Mapping[str, object]) -> dict:
+    """A copy of a preset's TOML content with overrides applied.
+
+    ``overrides``: ``"key=value"`` strings or a mapping of dotted keys to values;
+    a numeric part indexes an array of tables (``particles.0.diameter_nm``).
+    """
     config = copy.deepcopy(config)
-    for text in overrides:
-        path, value = parse_override(text)
+    items = (
+        [(key.split("."), value) for key, value in overrides.items()]
+        if isinstance(overrides, Mapping)
+        else [parse_override(text) for text in overrides]
+    )
+    for path, value in items:
         node = config
-        for part in path[:-1]:
+        for depth, part in enumerate(path[:-1]):
+            name = ".".join(path[: depth + 1])
             if isinstance(node, list):
                 if not part.isdigit() or int(part) >= len(node):
-                    raise ParameterError(f"--set {'.'.join(path)}", part, f"an index below {len(node)}")
+                    raise ParameterError(name, part, f"an index below {len(node)}")
                 node = node[int(part)]
             else:
                 node = node.setdefault(part, {})
+                if not isinstance(node, (dict, list)):
+                    raise ParameterError(name, node, "a TOML table to set keys in")
+        if isinstance(node, list):
+            raise ParameterError(".".join(path), value, "a key of one table of the array, e.g. particles.0.name")
         node[path[-1]] = value
     return config
 
 
-def bake_settings(config: dict, *, seed=None, paths_per_cell=None, target_rel_stderr=None) -> dict:
-    """Transport settings of a bake: defaults ← preset [transport] ← explicit arguments."""
-    settings = dict(TRANSPORT_DEFAULTS)
-    unknown = set(config.get("transport", {})) - set(settings)
+def _settings(config: dict, table: str, defaults: dict) -> dict:
+    given = config.get(table, {})
+    if not isinstance(given, dict):
+        raise ParameterError(table, given, "a TOML table")
+    unknown = sorted(set(given) - set(defaults))
     if unknown:
-        name = sorted(unknown)[0]
-        raise ParameterError(f"transport.{name}", config["transport"][name], f"one of {sorted(settings)}")
-    settings.update(config.get("transport", {}))
+        raise ParameterError(f"{table}.{unknown[0]}", given[unknown[0]], f"one of the keys {sorted(defaults)}")
+    return {**defaults, **given}
+
+
+def _integer(name: str, value, low: int, high: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low or (high and value > high):
+        raise ParameterError(name, value, f"an integer in [{low}, {high}]" if high else f"an integer ≥ {low}")
+    return int(value)
+
+
+def transport_settings(config: dict, *, seed=None, paths_per_cell=None, target_rel_stderr=None) -> dict:
+    """The ``[transport]`` settings: defaults ← the preset's table ← explicit arguments, validated.
+
+    An explicit ``paths_per_cell`` or ``target_rel_stderr`` replaces the preset's budget of either kind.
+    """
+    settings = _settings(config, "transport", TRANSPORT_DEFAULTS)
     if seed is not None:
-        settings["seed"] = int(seed)
+        settings["seed"] = seed
+    if paths_per_cell is not None and target_rel_stderr is not None:
+        raise ParameterError("paths_per_cell / target_rel_stderr", (paths_per_cell, target_rel_stderr), "one of them")
     if paths_per_cell is not None:
-        settings.update(paths_per_cell=int(paths_per_cell), target_rel_stderr=None)
+        settings.update(paths_per_cell=paths_per_cell, target_rel_stderr=None)
     elif target_rel_stderr is not None:
-        settings.update(target_rel_stderr=float(target_rel_stderr), paths_per_cell=None)
+        settings.update(target_rel_stderr=target_rel_stderr, paths_per_cell=None)
+    elif settings["paths_per_cell"] is not None and "target_rel_stderr" not in config.get("transport", {}):
+        settings["target_rel_stderr"] = None  # the preset chose a fixed budget
+    if (settings["paths_per_cell"] is None) == (settings["target_rel_stderr"] is None):
+        raise ParameterError(
+            "transport.paths_per_cell / transport.target_rel_stderr",
+            (settings["paths_per_cell"], settings["target_rel_stderr"]),
+            "exactly one of them",
+        )
+    if settings["paths_per_cell"] is not None:
+        settings["paths_per_cell"] = _integer("transport.paths_per_cell", settings["paths_per_cell"], 2)
+    else:
+        error = settings["target_rel_stderr"]
+        if isinstance(error, bool) or not isinstance(error, (int, float)) or not 0 < error < 1:
+            raise ParameterError("transport.target_rel_stderr", error, "a number in (0, 1)")
+        settings["target_rel_stderr"] = float(error)
+    settings["seed"] = _integer("transport.seed", settings["seed"], 0, 2**63 - 1)
+    for name in ("n_around", "n_along", "angular_resolution"):
+        settings[name] = _integer(f"transport.{name}", settings[name], 1)
+    settings["incidence_resolution"] = _integer("transport.incidence_resolution", settings["incidence_resolution"], 2)
+    try:
+        TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
+    except ParameterError as exc:  # name the parameter as the preset spells it
+        raise ParameterError(f"transport.{exc.name.split('.')[-1]}", exc.value, exc.allowed) from None
     return settings
 
 
+def bake_configuration(
+    preset_or_params: str | pathlib.Path | Mapping | MediumParameters = DEFAULT_PRESET,
+    overrides: Sequence[str] | Mapping[str, object] = (),
+    *,
+    seed: int | None = None,
+    paths_per_cell: int | None = None,
+    target_rel_stderr: float | None = None,
+) -> BakeConfiguration:
+    """The validated inputs of a bake (see :func:`bake`)."""
+    if isinstance(preset_or_params, MediumParameters):
+        config = apply_overrides({}, overrides)
+        foreign = sorted(set(config) - {"transport", "bake"})
+        if foreign:
+            raise ParameterError(
+                f"--set {foreign[0]}", config[foreign[0]], "transport.* or bake.* keys when baking MediumParameters"
+            )
+        medium = preset_or_params
+    else:
+        if isinstance(preset_or_params, Mapping):
+            config, base_dir = dict(preset_or_params), PRESET_DIR
+        else:
+            config, base_dir = load_preset_config(preset_or_params)
+        config = apply_overrides(config, overrides)
+        medium = medium_from_dict(config, base_dir)
+    if medium.yarn.cross_section != "circle":
+        raise ParameterError(
+            "yarn.cross_section", medium.yarn.cross_section, "'circle' (the transport traces circular yarns)"
+        )
+    settings = transport_settings(config, seed=seed, paths_per_cell=paths_per_cell, target_rel_stderr=target_rel_stderr)
+    colour = _settings(config, "bake", BAKE_DEFAULTS)
+    # Checks the illuminant, the observer and that the wavelengths lie where colour is defined,
+    # before any simulation.
+    spectral_weights(medium.wavelengths.values, colour["illuminant"], colour["observer"])
+    return BakeConfiguration(medium, settings, colour)
+
+
+# ---- the two stages -----------------------------------------------------------------------------
+
+
+def spectral_inputs(configuration: BakeConfiguration) -> dict:
+    """What the spectral stage's result depends on: the key of its cache entry hashes this."""
+    return {
+        "format": SPECTRAL_FORMAT,
+        "code_version": __version__,
+        "code_digest": source_digest(PACKAGE_DIR, SPECTRAL_SOURCES),
+        "medium": configuration.medium.to_dict(),
+        "transport": configuration.transport,
+    }
+
+
+def table_inputs(spectral_key: str, configuration: BakeConfiguration) -> dict:
+    """What the tables depend on beyond the spectral result."""
+    return {
+        "schema": SCHEMA,
+        "code_version": __version__,
+        "code_digest": source_digest(PACKAGE_DIR, TABLE_SOURCES),
+        "spectral_key": spectral_key,
+        "colour": configuration.colour,
+    }
+
+
+def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads, progress) -> Callable:
+    """The writer of a spectral cache entry: optics → transport → yarn BRDF → spectral.npz."""
+
+    def write(folder: pathlib.Path) -> None:
+        settings = configuration.transport
+        start = time.perf_counter()
+        optics = medium_optics(configuration.medium)
+        geometry = YarnGeometry(configuration.medium.yarn.radius_mm, optics.boundary_index)
+        grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
+        optics_seconds = time.perf_counter() - start
+
+        def transport_progress(fraction: float) -> None:
+            if progress is not None:
+                progress(0.9 * fraction)  # the BRDF integration and the tables take the last tenth
+
+        transport = simulate_yarn(
+            optics, geometry, grids,
+            paths_per_cell=settings["paths_per_cell"], target_rel_stderr=settings["target_rel_stderr"],
+            seed=settings["seed"], threads=threads, progress=transport_progress,
+        )
+        brdf_start = time.perf_counter()
+        brdf = yarn_brdf(transport, settings["incidence_resolution"])
+        record = {
+            **inputs,
+            "key": key,
+            "host_index": optics.boundary_index,
+            "incidence_resolution": brdf.incidence_grid.resolution,
+            "exit_resolution": brdf.exit_grid.resolution,
+            "paths": {
+                "per_incidence_cell": transport.paths_per_cell.tolist(),
+                "total": int(transport.paths_per_cell.sum()),
+                "min": int(transport.paths_per_cell.min()),
+                "max": int(transport.paths_per_cell.max()),
+                "scattering_events": int(transport.events),
+                "albedo_rel_stderr_max": float(transport.counted_albedo_rel_stderr().max()),
+                "lost_fraction_max": float(transport.lost_fraction.max()),
+            },
+            "seconds": {
+                "optics": optics_seconds,
+                "transport": transport.wall_seconds,
+                "brdf": time.perf_counter() - brdf_start,
+            },
+        }
+        np.savez_compressed(
+            folder / SPECTRAL_FILE,
+            metadata=np.array(json.dumps(record, allow_nan=False)),
+            wavelengths_nm=brdf.wavelengths_nm,
+            rho=brdf.rho.astype(np.float32),
+            rho_stderr=brdf.rho_stderr.astype(np.float32),
+            hemispherical_albedo=brdf.hemispherical_albedo(),
+            specular=transport.specular,
+            exit_fraction=transport.exit_fraction,
+            absorbed_fraction=transport.absorbed_fraction,
+            albedo_rel_stderr=transport.albedo_rel_stderr,
+            paths_per_cell=transport.paths_per_cell,
+            mu_s=optics.mu_s,
+            mu_a=optics.mu_a,
+            g=optics.g,
+        )
+
+    return write
+
+
+def load_spectral(path: str | pathlib.Path) -> tuple[dict, dict]:
+    """The arrays and the metadata of a ``spectral.npz`` (see :func:`_simulate`)."""
+    with np.load(path, allow_pickle=False) as data:
+        arrays = {name: data[name] for name in data.files if name != "metadata"}
+        metadata = json.loads(str(data["metadata"]))
+    return arrays, metadata
+
+
+def _normal_rgb(atlas: np.ndarray, incidence_resolution: int) -> np.ndarray:
+    """ρ at normal incidence and normal view, interpolated as the shader does."""
+    normal = np.array([0.0, 0.0, 1.0])
+    return interpolate_rho(atlas, incidence_resolution, normal, normal)
+
+
+def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_folder: pathlib.Path) -> Callable:
+    """The writer of a tables cache entry: spectral.npz → RGB → OpenEXR tables and summary.json."""
+
+    def write(folder: pathlib.Path) -> None:
+        start = time.perf_counter()
+        arrays, spectral = load_spectral(spectral_folder / SPECTRAL_FILE)
+        colour = configuration.colour
+        wavelengths = arrays["wavelengths_nm"]
+        n_i, n_o = spectral["incidence_resolution"], spectral["exit_resolution"]
+
+        def to_rgb(values):
+            return spectral_to_rgb(values, wavelengths, colour["illuminant"], colour["observer"])
+
+        rho_unclipped = to_rgb(arrays["rho"])
+        rho, clipped_share = clip_to_gamut(rho_unclipped)
+        stderr = spectral_stderr_to_rgb(arrays["rho_stderr"], wavelengths, colour["illuminant"], colour["observer"])
+        albedo, _ = clip_to_gamut(to_rgb(arrays["hemispherical_albedo"]))
+        weights, fit_error = fit_closure_weights(rho, AngularGrid("sphere", n_i))
+        lobes = closure_lobe_directions()
+        rho_normal = _normal_rgb(brdf_atlas(rho), n_i)
+        rho_normal_unclipped = _normal_rgb(brdf_atlas(rho_unclipped), n_i)
+        header = {
+            "code_version": __version__,
+            "code_digest": {"spectral": spectral["code_digest"], "tables": inputs["code_digest"]},
+            "cache_key": key,
+            "spectral_key": spectral["key"],
+            "medium": spectral["medium"],
+            "transport": spectral["transport"],
+            "paths": spectral["paths"],
+            "colour": {
+                **colour,
+                "rgb_space": f"linear {RGB_SPACE} (Blender scene linear)",
+                "white_balance_factors": white_balance_factors(
+                    wavelengths, colour["illuminant"], colour["observer"]
+                ).tolist(),
+                "gamut_clipping_max_relative": clipped_share,
+            },
+            "units": UNITS,
+            "host_index": spectral["host_index"],
+            "wavelengths_nm": wavelengths.tolist(),
+        }
+        layout = {"incidence_resolution": n_i, "exit_resolution": n_o}
+        images = {
+            "brdf": brdf_atlas(rho),
+            "brdf_stderr": brdf_atlas(stderr),
+            "albedo": albedo.reshape(n_i, n_i, 3),
+            "closure_lobes": lobe_atlas(weights),
+        }
+        for kind, image in images.items():
+            extra = {"lobe_count": len(lobes)} if kind == "closure_lobes" else {}
+            metadata = {**header, "table": kind, "layout": {**layout, **extra}}
+            if kind == "closure_lobes":
+                metadata["lobe_directions"] = lobes.tolist()
+            write_table(folder / TABLE_FILES[kind], image, metadata)
+        _link_or_copy(spectral_folder / SPECTRAL_FILE, folder / SPECTRAL_FILE)
+        summary = {
+            **header,
+            "schema": SCHEMA,
+            "spectral_format": SPECTRAL_FORMAT,
+            "files": {**TABLE_FILES, "spectral": SPECTRAL_FILE},
+            "incidence_resolution": n_i,
+            "exit_resolution": n_o,
+            "lobe_count": len(lobes),
+            "rho_normal_rgb": rho_normal.tolist(),
+            "table1_ratios_normal": _json_ratios(rho_normal),
+            "table1_ratios_normal_unclipped": _json_ratios(rho_normal_unclipped),
+            "table1_ratios_paper_real_red_cotton": {"B/R": 0.08, "G/R": 0.011},
+            "closure_fit_relative_rms_median": float(np.median(fit_error)),
+            "seconds": {**spectral["seconds"], "tables": time.perf_counter() - start},
+        }
+        (folder / SUMMARY_FILE).write_text(json.dumps(json.loads(canonical_json(summary)), indent=1))
+
+    return write
+
+
+def _json_ratios(rgb) -> dict:
+    """B/R and G/R, None where undefined (R = 0: a yarn black at normal incidence and view)."""
+    return {name: value if np.isfinite(value) else None for name, value in channel_ratios(rgb).items()}
+
+
+def _link_or_copy(source: pathlib.Path, target: pathlib.Path) -> None:
+    try:
+        os.link(source, target)
+    except OSError:
+        shutil.copy2(source, target)
+
+
 def bake(
-    preset: str | pathlib.Path = DEFAULT_PRESET,
-    overrides: list[str] = (),
+    preset_or_params: str | pathlib.Path | Mapping | MediumParameters = DEFAULT_PRESET,
+    overrides: Sequence[str] | Mapping[str, object] = (),
     *,
     seed: int | None = None,
     paths_per_cell: int | None = None,
@@ -115,83 +506,94 @@ def bake(
     cache_dir: str | pathlib.Path | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> BakeResult:
-    """Bake the tables of a preset (name or TOML path) with ``key=value`` overrides, or reuse the cache."""
-    config, base_dir = load_preset_config(preset)
-    config = apply_overrides(config, list(overrides))
-    params = medium_from_dict(config, base_dir)
-    settings = bake_settings(config, seed=seed, paths_per_cell=paths_per_cell, target_rel_stderr=target_rel_stderr)
-    grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
-    inputs = {
-        "schema": SCHEMA,
-        "code_version": __version__,
-        "medium": params.to_dict(),
-        "transport": settings,
+    """Bake (or find in the cache) the tables of a yarn.
+
+    Parameters
+    ----------
+    preset_or_params
+        A shipped preset's name, a preset TOML path, a preset's parsed TOML
+        content, or :class:`~precompute.medium.MediumParameters` (then only
+        ``transport.*`` and ``bake.*`` overrides apply).
+    overrides
+        ``"key=value"`` strings (values are TOML literals) or a mapping of
+        dotted keys, e.g. ``dye.weight_percent=2``, ``transport.seed=3``.
+    seed, paths_per_cell, target_rel_stderr
+        Override the ``[transport]`` seed and path budget (paths per incidence
+        cell, or the relative standard error of every cell's albedo).
+    threads
+        CPU threads of the transport (default: all); the result does not depend on it.
+    cache_dir
+        Cache folder (default :func:`precompute.cache.default_cache_dir`).
+    progress
+        Called with the completed fraction in [0, 1].
+    """
+    started = time.perf_counter()
+    if threads is not None:
+        _integer("threads", threads, 1, numba.config.NUMBA_NUM_THREADS)
+    configuration = bake_configuration(
+        preset_or_params, overrides, seed=seed, paths_per_cell=paths_per_cell, target_rel_stderr=target_rel_stderr
+    )
+    cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    spectral_in = spectral_inputs(configuration)
+    spectral_key = cache_key(spectral_in)
+    tables_in = table_inputs(spectral_key, configuration)
+    tables_key = cache_key(tables_in)
+
+    folder = lookup(cache_dir, "tables", tables_key)
+    cache_hit = folder is not None
+    simulated = False
+    if not cache_hit:
+        spectral_folder = lookup(cache_dir, "spectral", spectral_key)
+        if spectral_folder is None:
+            simulate = _simulate(configuration, spectral_in, spectral_key, threads, progress)
+            spectral_folder, _ = store(cache_dir, "spectral", spectral_key, spectral_in, simulate)
+            simulated = True
+        write_tables = _tables(configuration, tables_in, tables_key, spectral_folder)
+        folder, _ = store(cache_dir, "tables", tables_key, tables_in, write_tables)
+    if progress is not None:
+        progress(1.0)
+    summary = json.loads((folder / SUMMARY_FILE).read_text())
+    summary.update(
+        folder=str(folder),
+        brdf_table=str(folder / TABLE_FILES["brdf"]),
+        lobe_table=str(folder / TABLE_FILES["closure_lobes"]),
+        cache_hit=cache_hit,
+        simulated=simulated,
+        call_seconds=time.perf_counter() - started,
+    )
+    return BakeResult(folder, cache_hit, simulated, summary)
+
+
+def export_bake(result: BakeResult, out_dir: str | pathlib.Path) -> dict:
+    """Copy a bake's files into ``out_dir``, each atomically, summary.json last; the summary with the new paths."""
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    for name in [*TABLE_FILES.values(), SPECTRAL_FILE, SUMMARY_FILE]:
+        temporary = out_dir / f".{name}.{os.getpid()}.{secrets.token_hex(4)}.partial"
+        try:
+            shutil.copy2(result.folder / name, temporary)
+            os.replace(temporary, out_dir / name)
+        finally:
+            temporary.unlink(missing_ok=True)
+    return {
+        **result.summary,
+        "folder": str(out_dir),
+        "cache_folder": str(result.folder),
+        "brdf_table": str(out_dir / TABLE_FILES["brdf"]),
+        "lobe_table": str(out_dir / TABLE_FILES["closure_lobes"]),
     }
-    key = cache_key(inputs)
-    cache_dir = pathlib.Path(cache_dir) if cache_dir else default_cache_dir()
-    found = lookup(cache_dir, key)
-    if found is not None:
-        if progress is not None:
-            progress(1.0)
-        return _result(found, cache_hit=True)
-
-    def write(folder: pathlib.Path) -> None:
-        start = time.perf_counter()
-        optics = medium_optics(params)
-        geometry = YarnGeometry(params.yarn.radius_mm, optics.boundary_index)
-        transport = simulate_yarn(
-            optics, geometry, grids,
-            paths_per_cell=settings["paths_per_cell"], target_rel_stderr=settings["target_rel_stderr"],
-            seed=settings["seed"], threads=threads, progress=progress,
-        )
-        brdf = yarn_brdf(transport, settings["incidence_resolution"])
-        rho_rgb_unclipped = spectral_to_rgb(brdf.rho, brdf.wavelengths_nm)
-        rho_rgb, gamut_clipping = clip_to_gamut(rho_rgb_unclipped)
-        weights, fit_error = fit_closure_weights(rho_rgb, brdf.incidence_grid)
-        normal = np.array([0.0, 0.0, 1.0])
-        atlas = brdf_atlas(rho_rgb)
-        rho_normal = interpolate_rho(atlas, brdf.incidence_grid.resolution, normal, normal)
-        summary = {
-            **inputs,
-            "key": key,
-            "incidence_resolution": brdf.incidence_grid.resolution,
-            "exit_resolution": brdf.exit_grid.resolution,
-            "lobe_count": int(weights.shape[1]),
-            "host_index": optics.boundary_index,
-            "units": {"rho": "1/sr (L_o / E_perp)", "radius": "mm", "wavelength": "nm", "mu": "1/mm"},
-            "paths_total": int(transport.paths_per_cell.sum()),
-            "paths_per_cell_min": int(transport.paths_per_cell.min()),
-            "scattering_events": transport.events,
-            "albedo_rel_stderr_max": float(transport.counted_albedo_rel_stderr().max()),
-            "lost_fraction_max": float(transport.lost_fraction.max()),
-            "rho_normal_rgb": rho_normal.tolist(),
-            "table1_ratios_normal": channel_ratios(rho_normal),
-            "table1_ratios_normal_before_gamut_clipping": channel_ratios(
-                interpolate_rho(brdf_atlas(rho_rgb_unclipped), brdf.incidence_grid.resolution, normal, normal)),
-            "gamut_clipping_max_relative": gamut_clipping,
-            "closure_fit_relative_rms_median": float(np.median(fit_error)),
-            "wall_seconds": time.perf_counter() - start,
-        }
-        header = {key_: summary[key_] for key_ in ("schema", "code_version", "medium", "transport", "key", "units")}
-        write_table(folder / "brdf.exr", atlas, {**header, "table": "yarn_brdf",
-                                                  "incidence_resolution": summary["incidence_resolution"],
-                                                  "exit_resolution": summary["exit_resolution"]})
-        write_table(folder / "lobes.exr", lobe_atlas(weights), {**header, "table": "closure_lobes",
-                                                                 "lobe_directions": closure_lobe_directions().tolist(),
-                                                                 "exit_resolution": summary["exit_resolution"]})
-        np.savez_compressed(
-            folder / "spectral.npz", wavelengths_nm=brdf.wavelengths_nm, rho=brdf.rho.astype(np.float32),
-            rho_stderr=brdf.rho_stderr.astype(np.float32), hemispherical_albedo=brdf.hemispherical_albedo(),
-            specular=transport.specular, exit_fraction=transport.exit_fraction,
-            absorbed_fraction=transport.absorbed_fraction,
-        )
-        (folder / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
-
-    return _result(store(cache_dir, key, write), cache_hit=False)
 
 
-def _result(folder: pathlib.Path, cache_hit: bool) -> BakeResult:
-    summary = json.loads((folder / "summary.json").read_text())
-    summary.update(folder=str(folder), brdf_table=str(folder / "brdf.exr"), lobe_table=str(folder / "lobes.exr"),
-                   cache_hit=cache_hit)
-    return BakeResult(folder, cache_hit, summary)
+__all__ = [
+    "BAKE_DEFAULTS",
+    "TRANSPORT_DEFAULTS",
+    "BakeConfiguration",
+    "BakeResult",
+    "apply_overrides",
+    "bake",
+    "bake_configuration",
+    "export_bake",
+    "load_spectral",
+    "parse_override",
+    "transport_settings",
+]

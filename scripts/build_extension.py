@@ -1,20 +1,102 @@
-"""Build the ClothLight extension zip with Blender's own extension tool, then validate it.
+"""Build the ClothLight extension zip(s) with Blender's own extension tool, then validate them.
 
-Runs ``blender_ext.py build`` and ``validate`` from the installed bpy wheel
-(the same code as ``blender --command extension build``).  Prints the zip path.
+    python scripts/build_extension.py --output-dir dist                       # linux-x64, wheels, pre-baked tables
+    python scripts/build_extension.py --platforms linux-x64 windows-x64 macos-arm64 macos-x64
+    python scripts/build_extension.py --no-wheels --prebake none              # add-on only, any platform
 
-    python scripts/build_extension.py --output-dir dist
+What a zip holds, and why:
+
+* the add-on (``clothlight/``, ``osl/``, ``precompute/``), as ``blender_manifest.toml``'s
+  ``[build]`` table selects;
+* **wheels** of what the in-Blender bake imports and Blender does not ship
+  (:data:`clothlight.jobs.BAKE_DEPENDENCIES`: numba, llvmlite, scipy, colour-science,
+  typing-extensions, miepython, OpenEXR, platformdirs), for CPython 3.11 and the zip's platform.
+  Never numpy: all extensions' wheels share one folder that comes before Blender's own
+  site-packages, so a bundled numpy would replace Blender's.  Versions come from
+  ``requirements.txt`` (the one place for pins); a dependency it does not pin (numba's llvmlite,
+  colour-science's typing-extensions) takes the version installed in this environment, which was
+  resolved from ``requirements.txt``.  If one of them has no wheel for a platform, that
+  platform's zip bundles none of them and the add-on there bakes nothing but uses the pre-baked
+  tables (the panel says why);
+* **pre-baked tables** of the shipped medium presets (``prebaked/<preset>/``), baked here by
+  the same worker the add-on runs (cached in the bake's user cache, so only the first build bakes).
+
+Each platform gets its own zip (``clothlight-<version>-<platform>.zip``), its staged manifest
+listing that platform and its wheels, and ``blender_version_max = "5.1.0"`` whenever binary
+wheels are in it (Blender 5.1 moves to Python 3.13).  Downloaded wheels are kept in
+``--wheelhouse`` so later builds work offline.  Prints one zip path per line, last.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import importlib.util
 import pathlib
+import re
+import shutil
 import subprocess
 import sys
+import tempfile
+import time
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
+if str(REPO_ROOT) not in sys.path:  # a script in scripts/: make the repository's packages importable
+    sys.path.insert(0, str(REPO_ROOT))
+
+from clothlight.jobs import BAKE_DEPENDENCIES, BakeJob, preset_request  # noqa: E402
+
+#: pip's platform tags for each Blender platform: Blender 5.0 needs glibc 2.28 on Linux and
+#: runs on macOS 11.2+; scipy's and numba's macOS wheels need macOS 12, which is what a bake
+#: there needs too.
+PLATFORM_TAGS = {
+    "linux-x64": ["manylinux_2_28_x86_64"],
+    "windows-x64": ["win_amd64"],
+    "macos-arm64": ["macosx_12_0_arm64"],
+    "macos-x64": ["macosx_12_0_x86_64"],
+}
+PYTHON_VERSION = "3.11"
+#: Blender versions whose Python (3.11) the bundled binary wheels are built for.
+BLENDER_VERSION_MAX = "5.1.0"
+#: What the stage copy of the source leaves out (the manifest's [build] table filters the rest).
+STAGE_IGNORE = shutil.ignore_patterns(".git", ".venv", "dist", "out", "__pycache__", ".pytest_cache", ".hypothesis",
+                                      "*.oso", "*.pyc", "*.nbi", "*.nbc", "example_blends", "benchmarks", "tests",
+                                      "prebaked", "wheels")
+#: Files of a bake folder the add-on reads (spectral.npz stays behind: it is large and only the bake uses it).
+PREBAKED_FILES = ("brdf.exr", "lobes.exr", "brdf_stderr.exr", "albedo.exr", "summary.json")
+
+
+def _normalise(name: str) -> str:
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def requirement_pins(path: pathlib.Path = REPO_ROOT / "requirements.txt") -> dict[str, str]:
+    """``name==version`` lines of a requirements file, by normalised name."""
+    pins = {}
+    for line in path.read_text().splitlines():
+        line = line.split("#", 1)[0].strip()
+        match = re.fullmatch(r"([A-Za-z0-9][A-Za-z0-9._-]*)\s*==\s*([^\s;]+)", line)
+        if match:
+            pins[_normalise(match.group(1))] = match.group(2)
+    return pins
+
+
+def bundled_versions() -> tuple[dict[str, str], list[str]]:
+    """Version of every bundled distribution, and notes on those requirements.txt does not pin."""
+    pins = requirement_pins()
+    versions, notes = {}, []
+    for dist in BAKE_DEPENDENCIES.values():
+        if _normalise(dist) == "numpy":
+            raise SystemExit("numpy must never be bundled: it would replace Blender's")
+        version = pins.get(_normalise(dist))
+        if version is None:
+            try:
+                version = importlib.metadata.version(dist)
+            except importlib.metadata.PackageNotFoundError:
+                raise SystemExit(f"{dist} is neither pinned in requirements.txt nor installed: run `make setup`") from None
+            notes.append(f"{dist}=={version} (not pinned in requirements.txt: the version installed from it)")
+        versions[dist] = version
+    return versions, notes
 
 
 def blender_extension_tool() -> pathlib.Path:
@@ -27,25 +109,172 @@ def blender_extension_tool() -> pathlib.Path:
     return tools[-1]
 
 
-def build_extension(output_dir: pathlib.Path) -> pathlib.Path:
+# -- wheels --------------------------------------------------------------------------------------
+
+
+def _pip_download(requirement: str, platform: str, dest: pathlib.Path, wheelhouse: pathlib.Path, offline: bool) -> bool:
+    command = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps", "--only-binary=:all:",
+               "--python-version", PYTHON_VERSION, "--implementation", "cp", "--abi", f"cp{PYTHON_VERSION.replace('.', '')}",
+               "--find-links", str(wheelhouse), "--dest", str(dest), requirement]
+    for tag in PLATFORM_TAGS[platform]:
+        command += ["--platform", tag]
+    if offline:
+        command.insert(4, "--no-index")
+    return subprocess.run(command, capture_output=True, text=True).returncode == 0
+
+
+def platform_wheels(platform: str, versions: dict[str, str], wheelhouse: pathlib.Path) -> tuple[list[pathlib.Path], list[str]]:
+    """Wheels of every bundled distribution for ``platform`` (from the wheelhouse, else downloaded
+    into it), and the distributions that have none."""
+    wheelhouse.mkdir(parents=True, exist_ok=True)
+    found, missing = [], []
+    with tempfile.TemporaryDirectory() as scratch:
+        for dist, version in versions.items():
+            dest = pathlib.Path(scratch) / _normalise(dist)
+            requirement = f"{dist}=={version}"
+            if not (_pip_download(requirement, platform, dest, wheelhouse, offline=True)
+                    or _pip_download(requirement, platform, dest, wheelhouse, offline=False)):
+                missing.append(requirement)
+                continue
+            for wheel in dest.glob("*.whl"):
+                kept = wheelhouse / wheel.name
+                if not kept.exists():
+                    shutil.copy2(wheel, kept)
+                found.append(kept)
+    return found, missing
+
+
+# -- pre-baked tables ----------------------------------------------------------------------------
+
+
+def prebake(presets: list[str], stage: pathlib.Path, cache_dir: pathlib.Path | None) -> None:
+    """Bake each preset's default tables (or find them in the cache) into ``stage/prebaked/<preset>``."""
+    from clothlight.addon import import_precompute
+
+    cache_dir = cache_dir or import_precompute("cache").default_cache_dir()
+    for name in presets:
+        request = preset_request(name)
+        started = time.perf_counter()
+        job = BakeJob(request, cache_dir=cache_dir)
+        shown = [-1]
+
+        def progress(fraction, name=name):
+            if int(fraction * 10) != shown[0]:
+                shown[0] = int(fraction * 10)
+                print(f"pre-baking {name}: {fraction:.0%}", file=sys.stderr, flush=True)
+
+        try:
+            outcome = job.wait(on_progress=progress)
+        except Exception as error:
+            print(job.log, file=sys.stderr)
+            raise SystemExit(f"pre-baking {name} failed: {error}") from None
+        folder = stage / "prebaked" / name
+        folder.mkdir(parents=True, exist_ok=True)
+        for file_name in PREBAKED_FILES:
+            shutil.copy2(outcome.folder / file_name, folder / file_name)
+        (folder / "request.json").write_text(request.to_json())
+        print(f"pre-baked {name} in {time.perf_counter() - started:.0f} s "
+              f"({'cache hit' if outcome.cache_hit else 'baked'})", file=sys.stderr)
+
+
+# -- manifest and build --------------------------------------------------------------------------
+
+
+def staged_manifest(source: str, platforms: list[str] | None, wheels: list[str], binary: bool) -> str:
+    """``source`` with ``platforms``, ``wheels`` and (for binary wheels) ``blender_version_max`` added
+    as top-level keys (before the first table)."""
+    lines = []
+    if platforms:
+        lines.append("platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]")
+    if wheels:
+        lines.append("wheels = [\n" + "".join(f'  "./wheels/{w}",\n' for w in wheels) + "]")
+    if binary:
+        lines.append(f'blender_version_max = "{BLENDER_VERSION_MAX}"')
+    for key in ("platforms", "wheels", "blender_version_max"):
+        if re.search(rf"^{key}\s*=", source, re.MULTILINE):
+            raise SystemExit(f"blender_manifest.toml must not set {key}: the build script writes it")
+    table = re.search(r"^\[", source, re.MULTILINE)
+    cut = table.start() if table else len(source)
+    added = "# Written by scripts/build_extension.py\n" + "\n".join(lines) + "\n\n" if lines else ""
+    return source[:cut] + added + source[cut:]
+
+
+def _run_tool(tool: pathlib.Path, *args: str) -> None:
+    result = subprocess.run([sys.executable, str(tool), *args], capture_output=True, text=True)
+    if result.returncode != 0:
+        raise SystemExit(f"blender_ext.py {args[0]} failed:\n{result.stdout}{result.stderr}")
+
+
+def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = ("linux-x64",),
+                    prebake_presets: list[str] = (), wheelhouse: pathlib.Path | None = None,
+                    cache_dir: pathlib.Path | None = None) -> list[pathlib.Path]:
+    """Build and validate one zip per platform (one universal zip without wheels when ``platforms``
+    is None); return their paths."""
     output_dir.mkdir(parents=True, exist_ok=True)
     tool = blender_extension_tool()
-    before = set(output_dir.glob("*.zip"))
-    subprocess.run(
-        [sys.executable, str(tool), "build", "--source-dir", str(REPO_ROOT), "--output-dir", str(output_dir)],
-        check=True,
-    )
-    built = sorted(set(output_dir.glob("*.zip")) - before) or sorted(output_dir.glob("clothlight-*.zip"))
-    zip_path = max(built, key=lambda p: p.stat().st_mtime)
-    subprocess.run([sys.executable, str(tool), "validate", str(zip_path)], check=True)
-    return zip_path
+    manifest_source = (REPO_ROOT / "blender_manifest.toml").read_text()
+    zips = []
+    with tempfile.TemporaryDirectory(prefix="clothlight-stage-") as scratch:
+        stage = pathlib.Path(scratch) / "clothlight"
+        shutil.copytree(REPO_ROOT, stage, ignore=STAGE_IGNORE)
+        if prebake_presets:
+            prebake(list(prebake_presets), stage, cache_dir)
+        version = re.search(r'^version\s*=\s*"([^"]+)"', manifest_source, re.MULTILINE).group(1)
+        if platforms is None:
+            (stage / "blender_manifest.toml").write_text(staged_manifest(manifest_source, None, [], False))
+            zip_path = output_dir / f"clothlight-{version}.zip"
+            _run_tool(tool, "build", "--source-dir", str(stage), "--output-filepath", str(zip_path))
+            _run_tool(tool, "validate", str(zip_path))
+            return [zip_path]
+        versions, notes = bundled_versions()
+        for note in notes:
+            print(f"note: {note}", file=sys.stderr)
+        for platform in platforms:
+            wheels, missing = platform_wheels(platform, versions, wheelhouse)
+            if missing:
+                print(f"warning: {platform}: no wheel for {', '.join(missing)}; its zip bundles no wheels, so "
+                      "Bake is unavailable there and the pre-baked tables are used", file=sys.stderr)
+                wheels = []
+            wheel_dir = stage / "wheels"
+            shutil.rmtree(wheel_dir, ignore_errors=True)
+            wheel_dir.mkdir()
+            for wheel in wheels:
+                shutil.copy2(wheel, wheel_dir / wheel.name)
+            binary = any(not wheel.name.endswith("-none-any.whl") for wheel in wheels)
+            (stage / "blender_manifest.toml").write_text(
+                staged_manifest(manifest_source, [platform], sorted(w.name for w in wheels), binary))
+            zip_path = output_dir / f"clothlight-{version}-{platform.replace('-', '_')}.zip"
+            _run_tool(tool, "build", "--source-dir", str(stage), "--output-filepath", str(zip_path))
+            _run_tool(tool, "validate", str(zip_path))
+            zips.append(zip_path)
+    return zips
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    from clothlight.addon import import_precompute
+
+    presets = import_precompute("medium").preset_names()
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--output-dir", type=pathlib.Path, default=REPO_ROOT / "dist")
-    args = parser.parse_args()
-    print(build_extension(args.output_dir.resolve()))
+    parser.add_argument("--platforms", nargs="+", choices=[*PLATFORM_TAGS, "all"], default=["linux-x64"],
+                        help="platforms to build a zip for, with their wheels (default: linux-x64)")
+    parser.add_argument("--no-wheels", action="store_true",
+                        help="one zip for every platform, without wheels: no bakes in Blender, pre-baked tables only")
+    parser.add_argument("--prebake", nargs="+", default=["all"], metavar="PRESET",
+                        help=f"presets whose tables to ship: 'all' (default), 'none' or names from {', '.join(presets)}")
+    parser.add_argument("--wheelhouse", type=pathlib.Path,
+                        default=pathlib.Path.home() / ".cache" / "clothlight" / "wheels",
+                        help="folder keeping downloaded wheels between builds (default ~/.cache/clothlight/wheels)")
+    parser.add_argument("--cache-dir", type=pathlib.Path, help="bake cache for the pre-baked tables (default: the user cache)")
+    args = parser.parse_args(argv)
+    chosen = presets if args.prebake == ["all"] else [] if args.prebake == ["none"] else args.prebake
+    unknown = sorted(set(chosen) - set(presets))
+    if unknown:
+        parser.error(f"--prebake: unknown preset {unknown[0]!r}; choose from {', '.join(presets)}, all or none")
+    platforms = None if args.no_wheels else (list(PLATFORM_TAGS) if "all" in args.platforms else args.platforms)
+    for zip_path in build_extension(args.output_dir.resolve(), platforms=platforms, prebake_presets=chosen,
+                                    wheelhouse=args.wheelhouse, cache_dir=args.cache_dir):
+        print(zip_path)
 
 
 if __name__ == "__main__":

@@ -1,67 +1,124 @@
-"""The extension as Blender ships it: built and validated by Blender's own tool, installed into a
-fresh user folder, enabled, and its operators working; unregister/register is clean."""
+"""The extension zip as Blender's tool builds it: the add-on, its pre-baked tables and the wheels an
+in-Blender bake needs for linux-x64, at the versions requirements.txt pins, never numpy, and a manifest
+that Blender's validator accepts.  The installed zip is driven in tests/test_addon_operators.py."""
 
+import importlib.util
+import json
 import pathlib
+import re
 import subprocess
 import sys
+import tomllib
 import zipfile
 
 import pytest
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
-EXTENSION_MODULE = "bl_ext.user_default.clothlight"
+from clothlight.jobs import BAKE_DEPENDENCIES, BakeRequest, preset_request
+
+_spec = importlib.util.spec_from_file_location("build_extension", REPO_ROOT / "scripts" / "build_extension.py")
+build_extension = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(build_extension)
+
+#: The preset the test build pre-bakes (one is enough to test the mechanism; `make extension` bakes all).
+PREBAKED_PRESET = "red_cotton"
 
 
-@pytest.fixture(scope="module")
-def extension_zip(tmp_path_factory):
-    out = tmp_path_factory.mktemp("dist")
+def built_zip(tmp_path_factory) -> pathlib.Path:
+    """The linux-x64 zip, built once per test session (tests/test_addon_operators.py uses it too)."""
+    out = tmp_path_factory.getbasetemp() / "clothlight-dist"
+    existing = sorted(out.glob("clothlight-*-linux_x64.zip"))
+    if existing:
+        return existing[0]
     result = subprocess.run(
-        [sys.executable, str(REPO_ROOT / "scripts" / "build_extension.py"), "--output-dir", str(out)],
-        capture_output=True,
-        text=True,
+        [sys.executable, str(REPO_ROOT / "scripts" / "build_extension.py"), "--output-dir", str(out),
+         "--platforms", "linux-x64", "--prebake", PREBAKED_PRESET],
+        capture_output=True, text=True,
     )
     assert result.returncode == 0, result.stdout + result.stderr
     return pathlib.Path(result.stdout.strip().splitlines()[-1])
 
 
-def test_zip_holds_the_add_on_and_shaders_but_no_dev_files_or_numpy(extension_zip):
+@pytest.fixture(scope="module")
+def extension_zip(tmp_path_factory):
+    return built_zip(tmp_path_factory)
+
+
+def _wheel_name_version(filename: str) -> tuple[str, str]:
+    name, version = filename.split("-")[:2]
+    return re.sub(r"[-_.]+", "-", name).lower(), version
+
+
+def test_zip_holds_the_add_on_shaders_presets_and_prebaked_tables_but_no_dev_files_or_numpy(extension_zip):
     names = zipfile.ZipFile(extension_zip).namelist()
     assert "blender_manifest.toml" in names and "__init__.py" in names
-    assert "clothlight/__init__.py" in names and "osl/clothlight.h" in names
-    assert "precompute/grids.py" in names
-    assert not [n for n in names if n.startswith(("tests/", "benchmarks/", "scripts/", ".git"))]
-    assert not [n for n in names if "numpy" in n.lower() or n.endswith(".oso") or "__pycache__" in n]
+    assert "clothlight/__init__.py" in names and "osl/clothlight.h" in names and "precompute/presets/red_cotton.toml" in names
+    assert any(n.startswith("clothlight/presets/clothlight_weave/") for n in names)
+    assert not [n for n in names if n.startswith(("tests/", "benchmarks/", "scripts/", "example_blends/", ".git"))]
+    assert not [n for n in names if "numpy" in n.lower() or n.endswith((".oso", ".nbi", ".nbc")) or "__pycache__" in n]
+    prebaked = {n.rsplit("/", 1)[-1] for n in names if n.startswith(f"prebaked/{PREBAKED_PRESET}/")}
+    assert {"brdf.exr", "lobes.exr", "summary.json", "request.json"} <= prebaked
+    assert "spectral.npz" not in prebaked
 
 
-@pytest.mark.blender
-def test_installs_enables_and_registers_operators(extension_zip):
-    import bpy
+def test_prebaked_tables_are_the_untouched_preset_bake(extension_zip):
+    with zipfile.ZipFile(extension_zip) as archive:
+        request = BakeRequest.from_json(archive.read(f"prebaked/{PREBAKED_PRESET}/request.json").decode())
+        summary = json.loads(archive.read(f"prebaked/{PREBAKED_PRESET}/summary.json"))
+    assert request == preset_request(PREBAKED_PRESET) and not request.overrides
+    assert summary["schema"].startswith("clothlight-table/")
+    assert summary["transport"]["angular_resolution"] == request.angular_resolution
+    assert summary["transport"]["target_rel_stderr"] == pytest.approx(request.target_rel_stderr)
 
-    bpy.ops.wm.read_homefile(use_empty=True)
-    result = bpy.ops.extensions.package_install_files(
-        filepath=str(extension_zip), repo="user_default", enable_on_install=True
-    )
-    assert result == {"FINISHED"}
-    # The installer reports FINISHED even on a platform mismatch: check the module really loaded.
-    module = sys.modules.get(EXTENSION_MODULE)
-    assert module is not None, f"{EXTENSION_MODULE} was not imported"
-    assert EXTENSION_MODULE in bpy.context.preferences.addons
-    assert hasattr(bpy.types, "CLOTHLIGHT_OT_setup_render")
-    assert hasattr(bpy.types, "CLOTHLIGHT_PT_main")
 
-    scene = bpy.context.scene
-    scene.render.engine = "BLENDER_EEVEE"
-    assert bpy.ops.clothlight.setup_render() == {"FINISHED"}
-    assert scene.render.engine == "CYCLES" and scene.cycles.shading_system and scene.cycles.device == "CPU"
+def test_manifest_lists_linux_wheels_of_every_bake_dependency_at_the_pinned_versions(extension_zip):
+    with zipfile.ZipFile(extension_zip) as archive:
+        manifest = tomllib.loads(archive.read("blender_manifest.toml").decode())
+        names = set(archive.namelist())
+    assert manifest["platforms"] == ["linux-x64"]
+    assert manifest["blender_version_max"] == build_extension.BLENDER_VERSION_MAX
+    wheels = [pathlib.PurePosixPath(w).name for w in manifest["wheels"]]
+    assert all(f"wheels/{w}" in names for w in wheels)
+    bundled = dict(_wheel_name_version(w) for w in wheels)
+    assert set(bundled) == {re.sub(r"[-_.]+", "-", d).lower() for d in BAKE_DEPENDENCIES.values()}
+    assert "numpy" not in bundled
+    pins = build_extension.requirement_pins()
+    for name, version in bundled.items():
+        if name in pins:
+            assert version == pins[name], name
+    for wheel in wheels:
+        platform_tag = wheel[:-4].split("-")[-1]
+        assert platform_tag == "any" or "manylinux" in platform_tag and "x86_64" in platform_tag, wheel
+        assert wheel.split("-")[2] in ("py3", "cp311"), wheel
 
-    prefs = bpy.context.preferences.addons[EXTENSION_MODULE].preferences
-    assert prefs.threads == 0 and prefs.cache_dir == ""
-    cache = pathlib.Path(bpy.utils.extension_path_user(EXTENSION_MODULE, path="cache", create=True))
-    assert cache.is_dir() and not cache.is_relative_to(pathlib.Path(module.__file__).parent)
 
-    for _ in range(2):
-        module.unregister()
-        assert not hasattr(bpy.types, "CLOTHLIGHT_OT_setup_render")
-        module.register()
-        assert hasattr(bpy.types, "CLOTHLIGHT_OT_setup_render")
-    assert bpy.ops.clothlight.setup_render() == {"FINISHED"}
+def test_blender_validator_accepts_the_zip(extension_zip):
+    tool = build_extension.blender_extension_tool()
+    result = subprocess.run([sys.executable, str(tool), "validate", str(extension_zip)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_staged_manifest_adds_top_level_keys_before_the_first_table():
+    source = (REPO_ROOT / "blender_manifest.toml").read_text()
+    staged = tomllib.loads(build_extension.staged_manifest(source, ["windows-x64"], ["a-1-py3-none-any.whl"], False))
+    original = tomllib.loads(source)
+    assert staged["platforms"] == ["windows-x64"] and staged["wheels"] == ["./wheels/a-1-py3-none-any.whl"]
+    assert "blender_version_max" not in staged
+    assert staged["build"] == original["build"] and staged["permissions"] == original["permissions"]
+    with pytest.raises(SystemExit, match="wheels"):
+        build_extension.staged_manifest(source + '\nwheels = []\n', ["linux-x64"], [], False)
+
+
+def test_requirement_pins_read_names_case_and_separator_insensitively(tmp_path):
+    path = tmp_path / "requirements.txt"
+    path.write_text("# comment\nColour_Science==0.4.6  # why\nnumpy==1.26.4\nscipy>=1\n\nOpenEXR == 3.5.3\n")
+    assert build_extension.requirement_pins(path) == {"colour-science": "0.4.6", "numpy": "1.26.4", "openexr": "3.5.3"}
+
+
+def test_every_bundled_distribution_is_pinned_or_resolved_from_requirements():
+    versions, notes = build_extension.bundled_versions()
+    pins = build_extension.requirement_pins()
+    assert set(versions) == set(BAKE_DEPENDENCIES.values())
+    for dist, version in versions.items():
+        pinned = pins.get(re.sub(r"[-_.]+", "-", dist).lower())
+        assert version == pinned if pinned else any(dist in note for note in notes)

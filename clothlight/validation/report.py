@@ -1,82 +1,241 @@
-"""Validation outputs: JSON results, plots like the paper's graphs 1–6, and a Markdown report."""
+"""Validation outputs: JSON results, plots like the paper's graphs 1–6, colour swatches and a
+compact Markdown report linking them.  No Blender needed.
+
+Plots need matplotlib (Agg).  Blender's own Python has none: there the report says the plots were
+skipped, and ``python -m clothlight.validation.report results.json`` redraws them later from the
+JSON in any Python that has it.
+"""
 
 from __future__ import annotations
 
-import dataclasses
 import json
+import math
 import pathlib
+import struct
+import sys
+import zlib
 
 import numpy as np
 
-
-def write_json(path, results: dict) -> pathlib.Path:
-    def plain(value):
-        if dataclasses.is_dataclass(value):
-            return dataclasses.asdict(value)
-        if isinstance(value, np.ndarray):
-            return value.tolist()
-        raise TypeError(type(value).__name__)
-
-    pathlib.Path(path).write_text(json.dumps(results, indent=2, default=plain))
-    return pathlib.Path(path)
+CHANNELS = ("R", "G", "B")
 
 
-def plot_sweeps(path, curves: dict, incidences, measurement=None, quantity: str = "brdf_rgb") -> pathlib.Path:
-    """Red-channel BRDF (``quantity``) vs signed view angle, one panel per incidence, one line per material."""
+def _plain(value):
+    """``value`` with NaN and infinities as None, so the JSON is standard."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def write_json(results: dict, path) -> pathlib.Path:
+    """``results`` as standard JSON (NaN → null)."""
+    path = pathlib.Path(path)
+    path.write_text(json.dumps(_plain(results), indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    return path
+
+
+def srgb_encode(linear) -> np.ndarray:
+    """The sRGB transfer function (IEC 61966-2-1) of linear values in [0, 1]."""
+    linear = np.clip(np.asarray(linear, float), 0.0, 1.0)
+    return np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * linear ** (1.0 / 2.4) - 0.055)
+
+
+def write_png(rgb8: np.ndarray, path) -> pathlib.Path:
+    """Write an (H, W, 3) uint8 image, top row first, as an 8-bit RGB PNG."""
+    height, width, _ = rgb8.shape
+    raw = b"".join(b"\x00" + row.tobytes() for row in np.ascontiguousarray(rgb8, dtype=np.uint8))
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+                     + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+    return path
+
+
+def swatch_exposure(*images) -> float:
+    """One exposure for swatches shown side by side: the brightest one's mean colour gets its
+    largest channel at 0.5, so their relative brightness stays visible."""
+    peak = max(float(np.asarray(image, float)[..., :3].mean(axis=(0, 1)).max()) for image in images)
+    return 0.5 / peak if peak > 0.0 else 1.0
+
+
+def write_swatch_png(pixels: np.ndarray, path, exposure: float) -> pathlib.Path:
+    """A colour swatch (§6.1, Figures 9–10) from a render (H, W, 4) of linear RGB over black,
+    multiplied by ``exposure`` and sRGB-encoded."""
+    exposed = np.asarray(pixels, float)[..., :3] * exposure
+    return write_png(np.round(255.0 * srgb_encode(exposed)).astype(np.uint8), path)
+
+
+def plot_sweeps(results: dict, path, quantity: str = "brdf_rgb") -> pathlib.Path:
+    """Cloth BRDF against signed view angle like the paper's graphs 1–6: one column per incidence,
+    one row per channel, one line per material, the measurement dashed.  ``quantity`` is
+    ``brdf_rgb`` (calibrated) or ``paper_normalised_rgb``."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    columns = min(len(incidences), 2)
-    rows = (len(incidences) + columns - 1) // columns
-    fig, axes = plt.subplots(rows, columns, figsize=(5.5 * columns, 3.8 * rows), squeeze=False)
-    for ax, theta_i in zip(axes.ravel(), incidences):
-        for label, views in curves.items():
-            points = [(v.theta_v_deg, getattr(v, quantity)[0]) for v in views
-                      if v.theta_i_deg == theta_i and getattr(v, quantity)]
-            if points:
-                x, y = zip(*points)
-                ax.plot(x, y, marker="o", ms=3, label=label)
-        if measurement is not None:
-            x, y = measurement.in_plane(theta_i)
-            if len(x):
-                ax.plot(x, y[:, 0], "k--", marker="s", ms=3, label="measurement")
-        ax.set_title(f"θi = {theta_i:g}°")
-        ax.set_xlabel("θv (deg); negative: the light's side")
-        ax.set_ylabel("cloth BRDF, red (1/sr)" + (", paper-normalised" if quantity != "brdf_rgb" else ""))
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    for ax in axes.ravel()[len(incidences):]:
-        ax.axis("off")
+    incidences = results["settings"]["incidences_deg"]
+    measured = (results.get("measurement") or {}).get("in_plane", {})
+    fig, axes = plt.subplots(len(CHANNELS), len(incidences), figsize=(3.4 * len(incidences), 2.6 * len(CHANNELS)),
+                             squeeze=False, sharex=True)
+    for column, theta_i in enumerate(incidences):
+        for row, channel in enumerate(CHANNELS):
+            ax = axes[row, column]
+            for kind, entry in results["materials"].items():
+                points = [(v["theta_v_deg"], v[quantity][row]) for v in entry["views"]
+                          if v["theta_i_deg"] == theta_i and v[quantity]]
+                if points:
+                    x, y = zip(*points)
+                    ax.plot(x, y, marker="o", ms=3, lw=1.2, label=kind)
+            curve = measured.get(f"{theta_i:g}", [])
+            if curve:
+                ax.plot([p[0] for p in curve], [p[1 + row] for p in curve], "k--", marker="s", ms=3, lw=1,
+                        label="measurement")
+            if theta_i > 0:
+                ax.axvline(theta_i, color="0.6", lw=0.8, ls=":")
+            ax.grid(alpha=0.3)
+            ax.tick_params(labelsize=7)
+            if row == 0:
+                ax.set_title(f"θi = {theta_i:g}°", fontsize=9)
+            if column == 0:
+                ax.set_ylabel(f"{channel}: BRDF (1/sr)", fontsize=8)
+            if row == len(CHANNELS) - 1:
+                ax.set_xlabel("θv (deg), negative: light's side", fontsize=8)
+    axes[0, 0].legend(fontsize=7)
+    title = "cloth BRDF, calibrated" if quantity == "brdf_rgb" else "cloth BRDF, the paper's normalisation"
+    fig.suptitle(f"{title} (dotted: mirror direction)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    path = pathlib.Path(path)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
-    return pathlib.Path(path)
+    return path
 
 
-def write_markdown(path, results: dict, plot_name: str) -> pathlib.Path:
-    lines = ["# ClothLight validation sweep", "",
-             f"Sample: {results['sample']}", "",
-             f"![in-plane sweeps]({plot_name})", "",
-             "## Colour at normal incidence and view (paper Table 1)", "",
-             "| material | B/R | G/R |", "| --- | --- | --- |"]
-    for name, ratios in results["table1_ratios"].items():
-        lines.append(f"| {name} | {ratios['B/R']:.4g} | {ratios['G/R']:.4g} |")
-    lines += ["| real red cotton (paper) | 0.08 | 0.011 |", ""]
-    if results.get("metrics"):
-        lines += ["## Against the measurement", "", "![paper-normalised](sweeps_paper_normalised.png)", "",
-                  "| material | RMS (1/sr) | relative RMS | relative RMS, paper-normalised | shape correlation |",
-                  "| --- | --- | --- | --- | --- |"]
-        for name, m in results["metrics"].items():
-            lines.append(f"| {name} | {m['rms']:.4g} | {m['relative_rms']:.3g} | "
-                         f"{m['paper_normalised_relative_rms']:.3g} | {m['shape_correlation']:.3f} |")
+def _plots(results: dict, out_dir: pathlib.Path) -> tuple[list[str], str | None]:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return [], ("matplotlib is not importable in this Python (Blender's has none): plots skipped; "
+                    "redraw them with `python -m clothlight.validation.report results.json`")
+    names = ["sweeps.png"]
+    plot_sweeps(results, out_dir / "sweeps.png")
+    if any(e.get("paper_normalisation_factor") for e in results["materials"].values()):
+        plot_sweeps(results, out_dir / "sweeps_paper_normalised.png", "paper_normalised_rgb")
+        names.append("sweeps_paper_normalised.png")
+    return names, None
+
+
+def _ratio_cell(value) -> str:
+    if isinstance(value, list):
+        return f"{value[0]:g}–{value[1]:g}"
+    return "–" if value is None or not math.isfinite(value) else f"{value:.3g}"
+
+
+def markdown_report(results: dict, plots: list[str], plot_note: str | None) -> str:
+    """The compact report: settings, plots, colour checks, metrics and the per-view table."""
+    s = results["settings"]
+    sample = s["sample"]
+    lines = ["# ClothLight validation: virtual gonioreflectometer", "",
+             f"Sample: {sample['name']}, {sample['size_mm'][0]:.3g} × {sample['size_mm'][1]:.3g} mm, "
+             f"{sample['thickness_mm']:.3g} mm thick; every view frames the same central {s['patch_mm']:g} mm patch. "
+             f"{s['resolution']}² pixels, {s['samples']} samples per pixel, seed {s['seed']}, "
+             f"sun {s['sun_irradiance_w_per_m2']:g} W/m². Sweep time {results['seconds']['total']:.1f} s.", "",
+             "Calibrated cloth BRDF f = Σ L_p a_p / (E cos θi · A cos θv) (1/sr): L_p pixel radiance, a_p pixel "
+             "cross-section, E sun irradiance, A patch area (paper §4, step 5). θv < 0 is the light's side.", ""]
+    lines += [f"![{name}]({name})" for name in plots] + ([f"*{plot_note}*"] if plot_note else []) + [""]
+
+    lines += ["## Colour at normal illumination and view (paper Table 1)", "", "| | B/R | G/R |", "| --- | --- | --- |"]
+    for kind, entry in results["materials"].items():
+        t = entry["table1"] or {}
+        lines.append(f"| {entry['label']} | {_ratio_cell(t.get('B/R'))} | {_ratio_cell(t.get('G/R'))} |")
+    measurement = results.get("measurement")
+    if measurement and measurement["table1"]:
+        t = measurement["table1"]
+        lines.append(f"| measurement (`{pathlib.Path(measurement['path']).name}`) | {_ratio_cell(t['B/R'])} | "
+                     f"{_ratio_cell(t['G/R'])} |")
+    for name, t in results["paper_table1"].items():
+        lines.append(f"| paper: {name} | {_ratio_cell(t['B/R'])} | {_ratio_cell(t['G/R'])} |")
+    lines.append("")
+
+    swatched = {k: e["swatches"] for k, e in results["materials"].items() if e.get("swatches")}
+    if swatched:
+        lines += ["## Lit from the front and from behind (paper §6.1, Figures 9–10)", "",
+                  "Both swatches of a material share one exposure (the brighter one's mean colour has its "
+                  "largest channel at 0.5); L/E is the mean radiance over the irradiance, 1/sr.", "",
+                  "| material | front | back | front L/E (R, G, B) | back L/E (R, G, B) |", "| --- | --- | --- | --- | --- |"]
+        for kind, sw in swatched.items():
+            cells = [f"![{kind} {side}]({sw[side]['png']})" for side in ("front", "back")]
+            levels = [", ".join(f"{c:.3g}" for c in sw[side]["mean_rgb_per_irradiance"]) for side in ("front", "back")]
+            lines.append(f"| {kind} | {cells[0]} | {cells[1]} | {levels[0]} | {levels[1]} |")
         lines.append("")
-    lines += ["## Cloth BRDF, red channel (1/sr)", "", "| θi | θv | " + " | ".join(results["curves"]) + " |",
-              "| --- | --- | " + " | ".join("---" for _ in results["curves"]) + " |"]
-    first = next(iter(results["curves"].values()))
-    for k, view in enumerate(first):
-        values = " | ".join(f"{curve[k]['brdf_rgb'][0]:.4g}" for curve in results["curves"].values())
-        lines.append(f"| {view['theta_i_deg']:g} | {view['theta_v_deg']:g} | {values} |")
-    pathlib.Path(path).write_text("\n".join(lines) + "\n")
-    return pathlib.Path(path)
+
+    if measurement:
+        lines += ["## Against the measurement", "",
+                  f"`{measurement['path']}`: {measurement['direction_pairs']} direction pairs"
+                  + (", spectral (converted to RGB)" if measurement["spectral"] else ", RGB") + ".", ""]
+        if measurement.get("comments"):
+            lines += ["> " + c for c in measurement["comments"]] + [""]
+        lines += ["| material | values | channel | RMS (1/sr) | relative RMS | shape correlation |",
+                  "| --- | --- | --- | --- | --- | --- |"]
+        for kind, entry in results["materials"].items():
+            metrics = entry.get("metrics")
+            if not metrics:
+                lines.append(f"| {kind} | – | – | no view in common with the measurement | | |")
+                continue
+            for quantity, label in (("brdf_rgb", "calibrated"), ("paper_normalised_rgb", "paper-normalised")):
+                for channel in ("R", "RGB"):
+                    m = (metrics.get(quantity) or {}).get(channel)
+                    if m:
+                        lines.append(f"| {kind} | {label} | {channel} | {m['rms']:.4g} | {_ratio_cell(m['relative_rms'])} "
+                                     f"| {_ratio_cell(m['shape_correlation'])} |")
+        factors = ", ".join(f"{k}: {e['paper_normalisation_factor']:.4g}" for k, e in results["materials"].items()
+                            if e.get("paper_normalisation_factor"))
+        lines += ["", f"Paper normalisation coefficients (measured / model ΣRGB at θi = θv = 0): {factors or 'none'}.", ""]
+
+    kinds = list(results["materials"])
+    lines += ["## Cloth BRDF per view (1/sr, R G B)", "",
+              "| θi | θv | " + " | ".join(kinds) + " |", "| --- | --- | " + " | ".join("---" for _ in kinds) + " |"]
+    rows = zip(*(results["materials"][k]["views"] for k in kinds))
+    for views in rows:
+        cells = " | ".join(" ".join(f"{c:.4g}" for c in v["brdf_rgb"]) for v in views)
+        lines.append(f"| {views[0]['theta_i_deg']:g} | {views[0]['theta_v_deg']:g} | {cells} |")
+    lines += ["", "Data: `results.json`. Renders: `renders/`."]
+    return "\n".join(lines) + "\n"
+
+
+def write_report(results: dict, out_dir) -> dict:
+    """Write plots, ``report.md`` and ``results.json`` into ``out_dir``; return their paths
+    (relative to ``out_dir``), which are also stored in the JSON under ``files``."""
+    out_dir = pathlib.Path(out_dir)
+    plots, note = _plots(results, out_dir)
+    files = {"json": "results.json", "report": "report.md", "plots": plots, "plot_note": note}
+    (out_dir / "report.md").write_text(markdown_report(results, plots, note), encoding="utf-8")
+    write_json({**results, "files": files}, out_dir / "results.json")
+    return files
+
+
+def main(argv=None) -> int:
+    """``python -m clothlight.validation.report results.json``: redraw the plots and the report."""
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) != 1:
+        print("usage: python -m clothlight.validation.report RESULTS_JSON", file=sys.stderr)
+        return 2
+    path = pathlib.Path(argv[0])
+    results = json.loads(path.read_text(encoding="utf-8"))
+    files = write_report(results, path.parent)
+    print(f"report: {path.parent / files['report']}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

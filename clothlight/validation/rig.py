@@ -1,103 +1,310 @@
-"""The virtual gonioreflectometer's scene (paper §4): a woven sample, a parallel white light at
-incidence θi and orthographic cameras in the plane of incidence at θv = −60 … 70°.
+"""The virtual gonioreflectometer's Blender scene (paper §4 steps 2–3).
 
-Angles are in the plane of incidence x-z (across the weft, along the warp); negative θv is on the
-light's side.  Every view frames the same central patch, small enough that no sample edge enters
-even at the most oblique view; gaps between yarns stay transparent (alpha 0) and count as
-cloth area that returns no light, as in a real measurement of the cloth.
+A scene of its own, so the user's scene is never touched: a copy of the sample (its mesh copied
+too, so materials can be swapped freely), a sun of known irradiance at incidence θi in the plane
+of incidence x-z, and one orthographic camera moved to each view θv.  Geometry and conventions:
+:mod:`.framing`.
+
+Object mask: the rig scene holds nothing the camera can see but the sample, the film is
+transparent and there is no world, so alpha > 0 marks exactly the cloth pixels (alpha is the
+sample's coverage of the pixel) and the background contributes neither light nor alpha.
+
+Render settings (:func:`clothlight.measurement_render.configure_measurement_render`): Cycles
+on the CPU with OSL, no denoising, no adaptive sampling, a fixed seed, "Standard" view transform,
+32-bit float EXR read back from disk.  The materials run in sun mode: they evaluate the BRDF for
+the sun exactly and emit the reflected radiance, shadowed by other yarns, so the rig needs no
+light bounces (the paper's model has no inter-reflection between yarns, §7).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import pathlib
+from dataclasses import dataclass, field
 
 import bpy
-from mathutils import Vector
+import numpy as np
+from mathutils import Matrix, Vector
 
-from ..measurement_render import configure_measurement_render
+from ..materials import sync_sun
+from ..measurement_render import configure_measurement_render, render_to_array
+from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from ..sample_object import build_sample_object
 from ..weave import WeaveParameters
+from .framing import (
+    DEFAULT_INCIDENCES_DEG,
+    DEFAULT_VIEWS_DEG,
+    ParameterError,
+    SampleBounds,
+    check_angles,
+    check_patch,
+    largest_patch_mm,
+    pixel_aspect,
+    toward_camera,
+    toward_sun,
+)
+from .measure import ViewMeasurement, measure_view
 
-DEFAULT_INCIDENCES_DEG = (0.0, 30.0, 45.0, 60.0)
-DEFAULT_VIEWS_DEG = tuple(float(v) for v in range(-60, 71, 10))
-SUN_IRRADIANCE = 1.0  # W/m² (the scene is in mm, but irradiance is per the lamp's own unit)
-CAMERA_DISTANCE_MM = 50.0
+#: The sample a validation builds when given none: the default plain weave, large enough that a
+#: 2 mm patch (two repeats) keeps its edges out of every default view (see ``framing``).
+VALIDATION_WEAVE = WeaveParameters(warp_count=12, weft_count=12)
+#: Pixels along the patch side, and samples per pixel (benchmarks/bench_validation.py).
+DEFAULT_RESOLUTION = 128
+DEFAULT_SAMPLES = 16
+#: Sun irradiance on a plane facing it, W/m² (any value calibrates out; tests use others).
+DEFAULT_SUN_IRRADIANCE = 1.0
+
+RIG_SCENE = "ClothLight Gonioreflectometer"
+RIG_SAMPLE = "ClothLight Gonioreflectometer Sample"
 
 
 @dataclass(frozen=True)
 class RigSettings:
-    """Sample, framing and render settings of a sweep.
+    """Angles, framing and render settings of a sweep.
 
-    ``patch_mm``: side of the square patch every view frames; ``resolution``: pixels per side;
-    ``samples``: Cycles samples per pixel.
+    Attributes
+    ----------
+    incidences_deg, views_deg
+        Sun zeniths θi in [0, 85] and signed view zeniths θv in [−85, 85], degrees.
+    resolution
+        Pixels along the patch side (the image is resolution × resolution).
+    samples
+        Cycles samples per pixel.
+    seed
+        Cycles' random seed.
+    patch_mm
+        Side of the square patch every view frames, mm; None: the largest whole number of weave
+        repeats (or, for a surface without a weave, the largest patch) that keeps edges out of view.
+    sun_irradiance
+        E, W/m² on a plane facing the sun.
     """
 
-    weave: WeaveParameters = WeaveParameters(warp_count=12, weft_count=12)
-    patch_mm: float = 1.0
-    resolution: int = 48
-    samples: int = 4
+    incidences_deg: tuple[float, ...] = DEFAULT_INCIDENCES_DEG
+    views_deg: tuple[float, ...] = DEFAULT_VIEWS_DEG
+    resolution: int = DEFAULT_RESOLUTION
+    samples: int = DEFAULT_SAMPLES
     seed: int = 0
+    patch_mm: float | None = None
+    sun_irradiance: float = DEFAULT_SUN_IRRADIANCE
 
     def __post_init__(self):
-        half_sample = min(self.weave.sample_size_mm) / 2.0
-        reach = self.patch_mm / 2.0 / math.cos(math.radians(max(abs(v) for v in DEFAULT_VIEWS_DEG)))
-        if reach + self.weave.spacing_mm > half_sample:
-            raise ValueError(
-                f"patch_mm = {self.patch_mm} is too large for a {2 * half_sample} mm sample: oblique views would "
-                f"see its edges (need patch_mm/2/cos 70° + spacing ≤ {half_sample} mm)")
+        incidences, views = check_angles(self.incidences_deg, self.views_deg)
+        object.__setattr__(self, "incidences_deg", incidences)
+        object.__setattr__(self, "views_deg", views)
+        for name, low in (("resolution", 4), ("samples", 1), ("seed", 0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+                raise ParameterError(name, value, f"an integer ≥ {low}")
+        if self.patch_mm is not None and not (isinstance(self.patch_mm, (int, float)) and math.isfinite(self.patch_mm)
+                                              and self.patch_mm > 0):
+            raise ParameterError("patch_mm", self.patch_mm, "None or a length > 0 (mm)")
+        if not (isinstance(self.sun_irradiance, (int, float)) and math.isfinite(self.sun_irradiance)
+                and self.sun_irradiance > 0):
+            raise ParameterError("sun_irradiance", self.sun_irradiance, "> 0 W/m²")
+
+    @property
+    def max_view_deg(self) -> float:
+        return max(abs(v) for v in self.views_deg)
+
+    @property
+    def max_incidence_deg(self) -> float:
+        return max(self.incidences_deg)
 
 
-def direction_in_plane(theta_deg: float) -> Vector:
-    """Unit vector at zenith θ in the x-z plane; negative θ toward −x."""
-    t = math.radians(theta_deg)
-    return Vector((math.sin(t), 0.0, math.cos(t)))
+def sample_bounds(obj) -> SampleBounds:
+    """The extent of a sample object's mesh in its own frame (modifiers ignored), with the weave's
+    spacing as edge band and its repeat as period when it is a ClothLight woven sample."""
+    mesh = obj.data
+    if not isinstance(mesh, bpy.types.Mesh) or not len(mesh.vertices):
+        raise ParameterError("sample", obj.name, "a mesh object with vertices")
+    co = np.empty(3 * len(mesh.vertices))
+    mesh.vertices.foreach_get("co", co)
+    co = co.reshape(-1, 3)
+    low, high = co.min(axis=0), co.max(axis=0)
+    center = tuple(float(c) for c in (low + high) / 2.0)
+    half = (high - low) / 2.0
+    weave = obj.get("clothlight_weave") or {}
+    spacing, interlacing = weave.get("spacing_mm"), weave.get("interlacing")
+    if spacing is None or interlacing is None:
+        return SampleBounds(center, (float(half[0]), float(half[1])), float(half[2]))
+    rows, cols = len(interlacing), len(interlacing[0])
+    return SampleBounds(center, (float(half[0]), float(half[1])), float(half[2]), edge_band=float(spacing),
+                        period=(rows * float(spacing), cols * float(spacing)))
 
 
-def build_rig(settings: RigSettings, scene=None):
-    """Sample, sun and camera in ``scene`` (new empty scene contents); returns (sample, sun, camera)."""
-    scene = scene or bpy.context.scene
-    configure_measurement_render(scene, resolution=(settings.resolution, settings.resolution),
-                                 samples=settings.samples, seed=settings.seed)
-    scene.world = None
-    scene.cycles.max_bounces = 0  # sun-mode materials emit the exact single-bounce radiance
-    scene.unit_settings.system = "METRIC"
-    scene.unit_settings.scale_length = 0.001
-    scene.unit_settings.length_unit = "MILLIMETERS"
-    sample = build_sample_object(settings.weave)
-    sun_data = bpy.data.lights.get("ClothLight Sun") or bpy.data.lights.new("ClothLight Sun", "SUN")
-    sun_data.energy = SUN_IRRADIANCE
-    sun_data.angle = 0.0
-    sun = bpy.data.objects.get("ClothLight Sun") or bpy.data.objects.new("ClothLight Sun", sun_data)
-    if sun.name not in scene.collection.objects:
+def calibration_plane(size_mm: float, name: str = "ClothLight Calibration Plane"):
+    """A flat square of side ``size_mm`` in the x-y plane carrying the attributes ClothLight's
+    shaders read (cloth normal +z, yarn tangent +x): a calibration target whose BRDF is known
+    exactly when it wears the baseline material.  Not linked to any scene."""
+    if not (isinstance(size_mm, (int, float)) and math.isfinite(size_mm) and size_mm > 0):
+        raise ParameterError("size_mm", size_mm, "a length > 0 (mm)")
+    h = size_mm / 2.0
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([(-h, -h, 0.0), (h, -h, 0.0), (h, h, 0.0), (-h, h, 0.0)], [], [(0, 1, 2, 3)])
+    for attribute_name, vector in ((CLOTH_NORMAL, (0.0, 0.0, 1.0)), (YARN_TANGENT, (1.0, 0.0, 0.0))):
+        attribute = mesh.attributes.new(attribute_name, "FLOAT_VECTOR", "POINT")
+        attribute.data.foreach_set("vector", np.tile(vector, 4).astype(np.float32))
+    mesh.update()
+    return bpy.data.objects.new(name, mesh)
+
+
+def _aim(obj, direction, target: Vector, distance: float) -> None:
+    """Put ``obj`` at ``distance`` from ``target`` along ``direction`` with its local +Z along it.
+
+    For directions in the x-z plane the rotation is about y, so the object's local x stays in the
+    plane of incidence and its local y is the world's y (the frame's vertical axis)."""
+    direction = Vector(direction)
+    rotation = Vector((0.0, 0.0, 1.0)).rotation_difference(direction).to_matrix().to_4x4()
+    obj.matrix_world = Matrix.Translation(target + distance * direction) @ rotation
+
+
+@dataclass
+class Rig:
+    """A built rig: its scene and objects, the framed patch, and the state of the sweep."""
+
+    scene: object
+    sample: object
+    sun: object
+    camera: object
+    settings: RigSettings
+    bounds: SampleBounds
+    patch_mm: float
+    material: object = None
+    theta_i_deg: float | None = None
+    theta_v_deg: float | None = None
+    _owned: list = field(default_factory=list)
+
+    @property
+    def patch_center(self) -> Vector:
+        return Vector(self.bounds.center)
+
+    def use_material(self, material) -> None:
+        """Put ``material`` (a sun-mode ClothLight material) on every slot of the sample."""
+        mesh = self.sample.data
+        if not len(mesh.materials):
+            mesh.materials.append(material)
+        for index in range(len(mesh.materials)):
+            mesh.materials[index] = material
+        self.material = material
+        if self.theta_i_deg is not None:
+            sync_sun(material, self.sun)
+
+    def set_incidence(self, theta_i_deg: float) -> None:
+        """Sun at zenith θi on the −x side (θi = 180°: straight from behind), and the material told."""
+        _aim(self.sun, toward_sun(theta_i_deg), self.patch_center, 0.0)
+        self.theta_i_deg = float(theta_i_deg)
+        if self.material is not None:
+            sync_sun(self.material, self.sun)
+
+    def set_view(self, theta_v_deg: float) -> None:
+        """Camera at signed zenith θv framing the patch exactly (``framing``: non-square pixels)."""
+        _aim(self.camera, toward_camera(theta_v_deg), self.patch_center, self._camera_distance)
+        render = self.scene.render
+        render.pixel_aspect_x, render.pixel_aspect_y = pixel_aspect(theta_v_deg)
+        self.theta_v_deg = float(theta_v_deg)
+
+    @property
+    def _camera_distance(self) -> float:
+        hx, hy = self.bounds.half_size
+        return 10.0 + 2.0 * math.hypot(hx, hy, self.bounds.half_thickness)
+
+    def render(self, path) -> np.ndarray:
+        """Render the current view to the EXR ``path``; its pixels (N, N, 4), top row first."""
+        return render_to_array(self.scene, pathlib.Path(path))
+
+    def measure(self, path) -> ViewMeasurement:
+        """Render the current view to ``path`` and measure it (``measure``)."""
+        if self.material is None or self.theta_i_deg is None or self.theta_v_deg is None:
+            raise RuntimeError("set a material, an incidence and a view before measuring")
+        return measure_view(self.render(path), theta_i_deg=self.theta_i_deg, theta_v_deg=self.theta_v_deg,
+                            patch_mm=self.patch_mm, sun_irradiance=self.settings.sun_irradiance)
+
+    def remove(self) -> None:
+        """Delete the rig's scene and everything it created (not the materials it was given)."""
+        collections = {"SCENE": bpy.data.scenes, "OBJECT": bpy.data.objects, "MESH": bpy.data.meshes,
+                       "LIGHT": bpy.data.lights, "CAMERA": bpy.data.cameras}
+        for block in reversed(self._owned):
+            try:
+                collections[block.id_type].remove(block)
+            except ReferenceError:  # already removed, e.g. by the user while the sweep ran
+                pass
+        self._owned.clear()
+
+
+def build_rig(sample, settings: RigSettings = RigSettings()) -> Rig:
+    """Build the rig in a new scene around ``sample``.
+
+    ``sample``: a mesh object whose mesh carries the ``cloth_normal`` attribute (a ClothLight woven
+    sample or :func:`calibration_plane`; it is copied, never changed), a WeaveParameters (a sample is
+    built), or None (:data:`VALIDATION_WEAVE`).  Raises ParameterError when the patch would bring
+    the sample's edges into view.
+    """
+    scene = bpy.data.scenes.new(RIG_SCENE)
+    owned = [scene]
+    try:
+        if sample is None or isinstance(sample, WeaveParameters):
+            copy = build_sample_object(sample or VALIDATION_WEAVE, name=RIG_SAMPLE, collection=scene.collection)
+            if copy.name not in scene.collection.objects:
+                scene.collection.objects.link(copy)
+            owned += [copy.data, copy]
+        else:
+            if not isinstance(sample, bpy.types.Object) or sample.type != "MESH":
+                raise ParameterError("sample", sample, "a mesh object, WeaveParameters or None")
+            if CLOTH_NORMAL not in sample.data.attributes:
+                raise ParameterError("sample", sample.name,
+                                     f"a mesh with the '{CLOTH_NORMAL}' point attribute (a ClothLight sample)")
+            copy = sample.copy()
+            copy.data = sample.data.copy()
+            copy.name = copy.data.name = RIG_SAMPLE
+            copy.animation_data_clear()
+            copy.parent = None
+            copy.matrix_world = Matrix.Identity(4)
+            copy.hide_render = False
+            copy.visible_camera = True
+            for slot in copy.material_slots:
+                slot.link = "DATA"
+            scene.collection.objects.link(copy)
+            owned += [copy.data, copy]
+        bounds = sample_bounds(copy)
+        if settings.patch_mm is None:
+            patch_mm = largest_patch_mm(bounds, settings.resolution, settings.max_view_deg, settings.max_incidence_deg)
+        else:
+            check_patch(settings.patch_mm, bounds, settings.resolution, settings.max_view_deg,
+                        settings.max_incidence_deg)
+            patch_mm = float(settings.patch_mm)
+
+        configure_measurement_render(scene, resolution=(settings.resolution, settings.resolution),
+                                     samples=settings.samples, seed=settings.seed)
+        scene.world = None
+        scene.cycles.max_bounces = 0
+        # Only the camera and the sun move between renders: keep the BVH and shaders.
+        scene.render.use_persistent_data = True
+        scene.unit_settings.system = "METRIC"
+        scene.unit_settings.scale_length = 0.001
+        scene.unit_settings.length_unit = "MILLIMETERS"
+
+        sun_data = bpy.data.lights.new(f"{RIG_SCENE} Sun", "SUN")
+        owned.append(sun_data)
+        sun_data.energy = settings.sun_irradiance
+        sun_data.color = (1.0, 1.0, 1.0)
+        sun_data.angle = 0.0
+        sun = bpy.data.objects.new(f"{RIG_SCENE} Sun", sun_data)
+        owned.append(sun)
         scene.collection.objects.link(sun)
-    camera_data = bpy.data.cameras.get("ClothLight Camera") or bpy.data.cameras.new("ClothLight Camera")
-    camera_data.type = "ORTHO"
-    camera_data.ortho_scale = settings.patch_mm
-    camera_data.clip_start = 1.0
-    camera_data.clip_end = 4 * CAMERA_DISTANCE_MM
-    camera = bpy.data.objects.get("ClothLight Camera") or bpy.data.objects.new("ClothLight Camera", camera_data)
-    if camera.name not in scene.collection.objects:
+
+        camera_data = bpy.data.cameras.new(f"{RIG_SCENE} Camera")
+        owned.append(camera_data)
+        camera_data.type = "ORTHO"
+        camera_data.sensor_fit = "VERTICAL"
+        camera_data.ortho_scale = patch_mm
+        camera = bpy.data.objects.new(f"{RIG_SCENE} Camera", camera_data)
+        owned.append(camera)
         scene.collection.objects.link(camera)
-    scene.camera = camera
-    return sample, sun, camera
-
-
-def aim(obj, direction: Vector, distance: float = 0.0) -> None:
-    """Put ``obj`` at ``distance`` along ``direction`` with its local −Z pointing back along it."""
-    obj.rotation_mode = "QUATERNION"
-    obj.rotation_quaternion = Vector((0.0, 0.0, 1.0)).rotation_difference(direction)
-    obj.location = direction * distance
-
-
-def set_incidence(sun, theta_i_deg: float) -> None:
-    """Sun on the negative-x side at zenith θi (so negative θv is the light's side)."""
-    aim(sun, direction_in_plane(-theta_i_deg))
-
-
-def set_view(camera, settings: RigSettings, theta_v_deg: float) -> None:
-    """Orthographic view from zenith θv, framing a patch of ``patch_mm`` on the cloth along x."""
-    aim(camera, direction_in_plane(theta_v_deg), CAMERA_DISTANCE_MM)
-    # The view's width across the plane of incidence is the patch side; along it the cloth is
-    # foreshortened by cos θv, so the square image sees patch_mm × patch_mm/cos θv of cloth.
-    camera.data.ortho_scale = settings.patch_mm
+        scene.camera = camera
+        rig = Rig(scene, copy, sun, camera, settings, bounds, patch_mm, _owned=owned)
+        camera_data.clip_start = 0.01
+        camera_data.clip_end = 2.0 * rig._camera_distance
+        return rig
+    except BaseException:
+        Rig(scene, None, None, None, settings, None, 0.0, _owned=owned).remove()
+        raise

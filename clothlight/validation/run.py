@@ -1,134 +1,296 @@
-"""One code path for a validation sweep: the operator, ``python -m clothlight.validate`` and a real
-Blender (``blender -b -P scripts/validate_blender.py -- …``) all call :func:`run_validation`."""
+"""One code path for a validation sweep (paper §4 and §6).
+
+The add-on's operator, ``python -m clothlight.validate`` and a real Blender
+(``blender -b -P scripts/validate_blender.py -- …``) all run :class:`ValidationRun`: a sweep as a
+sequence of steps, one render each, so that a modal operator can interleave them with the UI and
+:func:`run_validation` can run them in one go.
+
+For every material asked for (the yarn material reading baked tables, the paper's §6 baseline) the
+rig renders every (θi, θv) and measures the calibrated cloth BRDF; then, for the colour checks of
+§6.1, the sample at normal view lit from the front (θi = 0) and from behind (θi = 180°).  With a
+measurement the paper's normalisation and the metrics are added.  Outputs in ``out_dir``:
+``results.json``, ``report.md``, ``sweeps.png`` (and ``sweeps_paper_normalised.png`` with a
+measurement), ``swatches/*.png`` and the float renders under ``renders/``.
+"""
 
 from __future__ import annotations
 
-import dataclasses
 import pathlib
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import asdict, dataclass
 
 import bpy
+import numpy as np
 
-from mathutils import Vector
-
-from ..materials import SUN_MODE, build_baseline_material, build_yarn_material, sync_sun
-from ..measurement_render import render_to_array
+from ..materials import SUN_MODE, build_baseline_material, build_yarn_material, shader_node
+from ..mesh_attributes import YARN_TANGENT
 from ..yarn_tables import yarn_tables_from_bake
-from .measure import run_sweep
+from .framing import ParameterError
+from .measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
 from .measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
-from .report import plot_sweeps, write_json, write_markdown
-from .rig import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, RigSettings, aim, build_rig, set_view
+from .report import swatch_exposure, write_report, write_swatch_png
+from .rig import RigSettings, build_rig
+
+#: Materials a sweep can measure, in the order they are swept and plotted.
+MATERIALS = ("yarn", "baseline")
+MATERIAL_LABELS = {
+    "yarn": "ClothLight yarn BRDF",
+    "baseline": "baseline: Lambert (0.6/π, 0, 0) + Cook–Torrance m = 0.8",
+}
+#: The paper's Table 1 (§6.1): B/R and G/R at normal illumination and view.
+PAPER_TABLE1 = {
+    "real red cotton": {"B/R": 0.08, "G/R": 0.011},
+    "the paper's model (range)": {"B/R": [0.05, 0.25], "G/R": [0.001, 0.017]},
+}
+#: Incidences of the §6.1 colour swatches: lit from the front, and from straight behind, degrees.
+SWATCH_INCIDENCES_DEG = {"front": 0.0, "back": 180.0}
+SCHEMA = "clothlight-validation/1"
 
 
-def run_validation(out_dir, *, tables_dir=None, settings: RigSettings = RigSettings(),
-                   incidences=DEFAULT_INCIDENCES_DEG, views=DEFAULT_VIEWS_DEG, measurement_csv=None,
-                   mode: str = SUN_MODE, progress: Callable[[float], None] | None = None,
-                   cancel: Callable[[], bool] | None = None) -> dict:
-    """Sweep the yarn material (if ``tables_dir`` is a bake) and the paper's baseline; write
-    ``results.json``, ``sweeps.png`` and ``report.md`` into ``out_dir``; return the results."""
-    out_dir = pathlib.Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    scene = bpy.context.scene
-    sample, sun, camera = build_rig(settings, scene)
-    materials = {"baseline (Lambert 0.6/π red + Cook–Torrance m = 0.8)": build_baseline_material(mode=mode)}
-    if tables_dir is not None:
-        materials = {"ClothLight yarn BRDF": build_yarn_material(yarn_tables_from_bake(tables_dir), mode=mode), **materials}
-    curves = {}
-    for index, (label, material) in enumerate(materials.items()):
-        def share(done, index=index):
-            if progress is not None:
-                progress((index + done) / len(materials))
-
-        curves[label] = run_sweep(scene, sample, sun, camera, material, settings, incidences, views,
-                                  out_dir / "renders", share, cancel)
-    measurement = read_measurement(measurement_csv) if measurement_csv else None
-    results = {
-        "sample": f"{settings.weave.warp_count}×{settings.weave.weft_count} yarns, spacing {settings.weave.spacing_mm} mm, "
-                  f"patch {settings.patch_mm} mm, {settings.resolution}² px, {settings.samples} spp",
-        "units": {"brdf_rgb": "1/sr (cloth BRDF, calibrated)", "rgb_sum": "sum of linear RGB over cloth pixels",
-                  "angles": "degrees; negative θv on the light's side"},
-        "settings": dataclasses.asdict(settings) | {"weave": {"spacing_mm": settings.weave.spacing_mm}},
-        "curves": {label: [dataclasses.asdict(v) for v in views_] for label, views_ in curves.items()},
-        "table1_ratios": {},
-        "metrics": {},
-    }
-    for label, views_ in curves.items():
-        normal = next((v for v in views_ if v.theta_i_deg == 0 and v.theta_v_deg == 0), None)
-        if normal is not None and normal.brdf_rgb[0] > 0:
-            r, g, b = normal.brdf_rgb
-            results["table1_ratios"][label] = {"B/R": b / r, "G/R": g / r}
-    if measurement is not None:
-        _paper_normalise(curves, measurement)
-        for label, views_ in curves.items():
-            model, measured, normalised = [], [], []
-            for theta_i in incidences:
-                x, y = measurement.in_plane(theta_i)
-                for v in views_:
-                    if v.theta_i_deg == theta_i and len(x) and abs(x - v.theta_v_deg).min() < 0.5:
-                        measured.append(y[abs(x - v.theta_v_deg).argmin()][:3])
-                        model.append(v.brdf_rgb)
-                        normalised.append(v.paper_normalised_rgb)
-            if model:
-                results["metrics"][label] = {"rms": rms_error(model, measured),
-                                             "relative_rms": relative_rms_error(model, measured),
-                                             "shape_correlation": shape_correlation(model, measured),
-                                             "paper_normalised_relative_rms": relative_rms_error(normalised, measured)}
-        results["curves"] = {label: [dataclasses.asdict(v) for v in views_] for label, views_ in curves.items()}
-        plot_sweeps(out_dir / "sweeps_paper_normalised.png", curves, incidences, measurement, "paper_normalised_rgb")
-    if tables_dir is not None:
-        material = materials["ClothLight yarn BRDF"]
-        results["front_back_rgb"] = render_front_back(scene, sample, sun, camera, material, settings,
-                                                      out_dir / "swatches_front_back.png")
-    plot_sweeps(out_dir / "sweeps.png", curves, incidences, measurement)
-    write_json(out_dir / "results.json", results)
-    write_markdown(out_dir / "report.md", results, "sweeps.png")
-    return results
+class ValidationCancelled(Exception):
+    """The sweep was cancelled; the rig was removed and nothing was written but renders."""
 
 
-def _paper_normalise(curves, measurement) -> None:
-    """The paper's §4 step 5: scale each material's curves by the one factor that makes its
-    normal-incidence, normal-view red value equal the measured one."""
-    x, y = measurement.in_plane(0.0)
-    if not len(x) or abs(x).min() > 0.5:
-        return
-    target = y[abs(x).argmin()][0]
-    for views_ in curves.values():
-        normal = next((v for v in views_ if v.theta_i_deg == 0 and v.theta_v_deg == 0), None)
-        if normal is None or normal.brdf_rgb[0] <= 0:
+@dataclass(frozen=True)
+class Progress:
+    """``done`` of ``total`` renders finished; ``what`` names the last one."""
+
+    done: int
+    total: int
+    what: str
+
+
+class ValidationRun:
+    """A validation sweep, checked on construction, run by iterating :meth:`steps`.
+
+    Parameters
+    ----------
+    sample
+        A ClothLight sample object (copied, never changed), WeaveParameters, or None for
+        :data:`clothlight.validation.rig.VALIDATION_WEAVE` (see :func:`.rig.build_rig`).
+    out_dir
+        Folder for the outputs (created).
+    materials
+        Names from :data:`MATERIALS`; default: both when ``tables_dir`` is given, else the baseline.
+    tables_dir
+        A bake folder (``python -m precompute bake --out DIR``, or a cache entry): the yarn material's
+        tables.  None: those of the sample object's ClothLight yarn material, if it has one.
+    measured_csv
+        A measurement file (:mod:`.measured_data` format), or None.
+    settings
+        Angles, framing and render settings (:class:`.rig.RigSettings`).
+    swatches
+        Also render the front- and back-lit colour swatches (§6.1).
+
+    Raises ParameterError (or MeasurementFormatError naming the row) before any render.
+    """
+
+    def __init__(self, sample=None, out_dir="clothlight_validation", *, materials=None, tables_dir=None,
+                 measured_csv=None, settings: RigSettings = RigSettings(), swatches: bool = True):
+        if materials is None:
+            materials = MATERIALS if tables_dir is not None else ("baseline",)
+        materials = tuple(materials)
+        unknown = [m for m in materials if m not in MATERIALS]
+        if not materials or unknown or len(set(materials)) != len(materials):
+            raise ParameterError("materials", materials, f"distinct names from {MATERIALS}")
+        self.materials = tuple(m for m in MATERIALS if m in materials)
+        self.tables = None
+        if "yarn" in self.materials:
+            if tables_dir is None and isinstance(sample, bpy.types.Object):
+                tables_dir = tables_of_sample(sample)
+            if tables_dir is None:
+                raise ParameterError("tables_dir", None, "a bake folder (python -m precompute bake --out DIR) "
+                                                         "for the yarn material")
+            try:
+                self.tables = yarn_tables_from_bake(tables_dir)
+            except (FileNotFoundError, ValueError, KeyError) as error:
+                raise ParameterError("tables_dir", str(tables_dir), f"a complete bake folder ({error})") from None
+        self.measured_csv = None if measured_csv is None else pathlib.Path(measured_csv)
+        if self.measured_csv is not None and not self.measured_csv.is_file():
+            raise ParameterError("measured_csv", str(measured_csv), "an existing measurement file")
+        self.measurement = read_measurement(self.measured_csv) if self.measured_csv is not None else None
+        self.sample = sample
+        self.out_dir = pathlib.Path(out_dir)
+        self.settings = settings
+        self.swatches = bool(swatches)
+        per_material = len(settings.incidences_deg) * len(settings.views_deg) + (len(SWATCH_INCIDENCES_DEG) if swatches else 0)
+        self.total = len(self.materials) * per_material
+        self.results: dict | None = None
+
+    def steps(self) -> Iterator[Progress]:
+        """Build the rig, render one view per iteration (yielding the progress after it), then
+        write the outputs into :attr:`results`.  Closing the iterator early removes the rig."""
+        start = time.perf_counter()
+        rig = build_rig(self.sample, self.settings)
+        created = []
+        try:
+            if "yarn" in self.materials and YARN_TANGENT not in rig.sample.data.attributes:
+                raise ParameterError("sample", getattr(self.sample, "name", self.sample),
+                                     f"a mesh with the '{YARN_TANGENT}' attribute for the yarn material")
+            self.out_dir.mkdir(parents=True, exist_ok=True)
+            curves, swatches, seconds = {}, {}, {}
+            done = 0
+            for kind in self.materials:
+                material_start = time.perf_counter()
+                # Script nodes compile through the context scene's render engine: make it the rig's.
+                with bpy.context.temp_override(scene=rig.scene):
+                    material = self._build_material(kind)
+                created.append(material)
+                rig.use_material(material)
+                views = []
+                for theta_i in self.settings.incidences_deg:
+                    rig.set_incidence(theta_i)
+                    for theta_v in self.settings.views_deg:
+                        rig.set_view(theta_v)
+                        views.append(rig.measure(self.out_dir / "renders" / kind / f"i{theta_i:+05.1f}_v{theta_v:+05.1f}.exr"))
+                        done += 1
+                        yield Progress(done, self.total, f"{kind}: θi = {theta_i:g}°, θv = {theta_v:g}°")
+                curves[kind] = views
+                if self.swatches:
+                    swatches[kind], images = {}, {}
+                    rig.set_view(0.0)
+                    for side, theta_i in SWATCH_INCIDENCES_DEG.items():
+                        rig.set_incidence(theta_i)
+                        images[side] = rig.render(self.out_dir / "renders" / kind / f"swatch_{side}.exr")
+                        mean = images[side][..., :3].astype(np.float64).mean(axis=(0, 1)) / self.settings.sun_irradiance
+                        swatches[kind][side] = {"theta_i_deg": theta_i, "mean_rgb_per_irradiance": mean.tolist(),
+                                                "ratios": channel_ratios(mean)}
+                        done += 1
+                        yield Progress(done, self.total, f"{kind}: swatch lit from the {side}")
+                    exposure = swatch_exposure(*images.values())
+                    for side, pixels in images.items():
+                        png = write_swatch_png(pixels, self.out_dir / "swatches" / f"{kind}_{side}.png", exposure)
+                        swatches[kind][side]["png"] = str(png.relative_to(self.out_dir))
+                seconds[kind] = time.perf_counter() - material_start
+            self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
+            self.results["files"] = write_report(self.results, self.out_dir)
+        finally:
+            rig.remove()
+            for material in created:
+                try:
+                    bpy.data.materials.remove(material)
+                except ReferenceError:  # already removed, e.g. by the user while the sweep ran
+                    pass
+
+    def _build_material(self, kind: str):
+        if kind == "yarn":
+            return build_yarn_material(self.tables, name="ClothLight Gonioreflectometer Yarn", mode=SUN_MODE)
+        return build_baseline_material(name="ClothLight Gonioreflectometer Baseline", mode=SUN_MODE)
+
+    def _assemble(self, rig, curves, swatches, seconds, total_seconds) -> dict:
+        s = self.settings
+        results = {
+            "schema": SCHEMA,
+            "settings": {
+                "incidences_deg": list(s.incidences_deg), "views_deg": list(s.views_deg),
+                "resolution": s.resolution, "samples": s.samples, "seed": s.seed,
+                "patch_mm": rig.patch_mm, "sun_irradiance_w_per_m2": s.sun_irradiance,
+                "sample": {"name": getattr(self.sample, "name", None) or "ClothLight woven sample (built)",
+                           "size_mm": [2 * h for h in rig.bounds.half_size],
+                           "thickness_mm": 2 * rig.bounds.half_thickness,
+                           "weave": _weave_description(rig.sample)},
+                "tables_dir": str(self.tables.brdf_path.parent) if self.tables else None,
+                "measured_csv": str(self.measured_csv) if self.measured_csv else None,
+            },
+            "units": {
+                "angles": "degrees; θv negative on the light's side, θv = θi the mirror direction",
+                "rgb_sum": "sum of linear RGB pixel values (W m⁻² sr⁻¹) over cloth pixels",
+                "sum_over_cos_rgb": "the paper's step-5 sum Σ L_p a_p / cos θv, W m⁻² sr⁻¹ · mm²",
+                "brdf_rgb": "calibrated cloth BRDF, 1/sr",
+                "paper_normalised_rgb": "brdf_rgb × the paper's normalisation coefficient, 1/sr",
+            },
+            "materials": {},
+            "paper_table1": PAPER_TABLE1,
+            "seconds": {"total": total_seconds, **seconds},
+        }
+        measured_normal = self.measurement.at(0.0, 0.0) if self.measurement is not None else None
+        for kind, views in curves.items():
+            normal = find_view(views, 0.0, 0.0)
+            entry = {"label": MATERIAL_LABELS[kind],
+                     "table1": channel_ratios(normal.brdf_rgb) if normal is not None else None,
+                     "paper_normalisation_factor": None, "metrics": None}
+            if measured_normal is not None and normal is not None and sum(normal.brdf_rgb) > 0:
+                entry["paper_normalisation_factor"] = paper_normalisation_factor(normal.brdf_rgb, measured_normal)
+                apply_paper_normalisation(views, entry["paper_normalisation_factor"])
+            if self.measurement is not None:
+                entry["metrics"] = compare_with_measurement(views, self.measurement)
+            entry["views"] = [asdict(v) for v in views]
+            if kind in swatches:
+                entry["swatches"] = swatches[kind]
+            results["materials"][kind] = entry
+        if self.measurement is not None:
+            m = self.measurement
+            results["measurement"] = {
+                "path": str(self.measured_csv), "direction_pairs": len(m.angles_deg),
+                "spectral": m.wavelengths_nm is not None, "gamut_clipping": m.gamut_clipping,
+                "comments": list(m.comments),
+                "table1": channel_ratios(measured_normal) if measured_normal is not None else None,
+                "in_plane": {f"{theta_i:g}": [[float(x), *map(float, rgb)] for x, rgb in zip(*m.in_plane(theta_i))]
+                             for theta_i in s.incidences_deg},
+            }
+        return results
+
+
+def tables_of_sample(sample) -> str | None:
+    """The bake folder of the first ClothLight yarn material on the object ``sample``, or None."""
+    for slot in sample.material_slots:
+        node = shader_node(slot.material) if slot.material is not None else None
+        if node is not None and "Table" in node.inputs and node.inputs["Table"].default_value:
+            return str(pathlib.Path(bpy.path.abspath(node.inputs["Table"].default_value)).parent)
+    return None
+
+
+def _weave_description(sample) -> dict | None:
+    weave = sample.get("clothlight_weave")
+    return weave.to_dict() if weave is not None else None
+
+
+def compare_with_measurement(views, measurement) -> dict | None:
+    """RMS, relative RMS and shape correlation of a sweep against a measurement, over the views the
+    measurement has (in-plane, same θi and θv), per channel and for R, G, B together; for the
+    calibrated BRDF and, when set, the paper-normalised one.  None when no view was measured."""
+    pairs = [(v, measurement.at(v.theta_i_deg, v.theta_v_deg)) for v in views]
+    pairs = [(v, m) for v, m in pairs if m is not None]
+    if not pairs:
+        return None
+    measured = np.array([m for _, m in pairs])
+    metrics = {"views_compared": len(pairs)}
+    for quantity in ("brdf_rgb", "paper_normalised_rgb"):
+        if not all(getattr(v, quantity) for v, _ in pairs):
             continue
-        factor = target / normal.brdf_rgb[0]
-        for v in views_:
-            v.paper_normalised_rgb = [factor * c for c in v.brdf_rgb]
+        model = np.array([getattr(v, quantity) for v, _ in pairs])
+        by_channel = {}
+        for name, columns in (("R", [0]), ("G", [1]), ("B", [2]), ("RGB", [0, 1, 2])):
+            a, b = model[:, columns], measured[:, columns]
+            by_channel[name] = {"rms": rms_error(a, b), "relative_rms": relative_rms_error(a, b),
+                                "shape_correlation": shape_correlation(a, b)}
+        metrics[quantity] = by_channel
+    return metrics
 
 
-def render_front_back(scene, sample, sun, camera, material, settings: RigSettings, path) -> dict:
-    """The sample seen from the front under a white sun in front of it and behind it (paper
-    Figures 9–10); writes both renders side by side as a PNG and returns their mean RGB."""
-    import matplotlib
+def run_validation(sample=None, out_dir="clothlight_validation", *,
+                   progress: Callable[[int, int, str], None] | None = None,
+                   cancel: Callable[[], bool] | None = None, **options) -> dict:
+    """Run a whole sweep (see :class:`ValidationRun` for ``sample``, ``out_dir`` and ``options``)
+    and return its results (also in ``out_dir/results.json``).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
+    ``progress(done, total, what)`` is called after every render; ``cancel()`` is asked before
+    every render and, when true, the rig is removed and ValidationCancelled raised.
+    """
+    run = ValidationRun(sample, out_dir, **options)
+    steps = run.steps()
+    try:
+        while True:
+            if cancel is not None and cancel():
+                raise ValidationCancelled(f"validation cancelled; partial renders are in {run.out_dir / 'renders'}")
+            try:
+                step = next(steps)
+            except StopIteration:
+                break
+            if progress is not None:
+                progress(step.done, step.total, step.what)
+    finally:
+        steps.close()
+    return run.results
 
-    sample.data.materials.clear()
-    sample.data.materials.append(material)
-    set_view(camera, settings, 0.0)
-    images, means = {}, {}
-    for label, direction in (("front", Vector((0.0, 0.0, 1.0))), ("behind", Vector((0.0, 0.0, -1.0)))):
-        aim(sun, direction)
-        scene.view_layers[0].update()
-        sync_sun(material, sun)
-        pixels = render_to_array(scene, pathlib.Path(path).with_name(f"swatch_{label}.exr"))
-        images[label] = pixels[..., :3]
-        means[label] = pixels[..., :3].mean(axis=(0, 1)).tolist()
-    brightest = max(float(np.max(m)) for m in means.values()) or 1.0
-    fig, axes = plt.subplots(1, 2, figsize=(6, 3.2))
-    for ax, (label, image) in zip(axes, images.items()):
-        shown = np.clip(image / max(float(np.percentile(image, 99)), 1e-12), 0, 1)
-        ax.imshow(np.where(shown <= 0.0031308, 12.92 * shown, 1.055 * shown ** (1 / 2.4) - 0.055))
-        ax.set_title(f"sun {label}; relative brightness {max(means[label]) / brightest:.2f}", fontsize=8)
-        ax.axis("off")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return means

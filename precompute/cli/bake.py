@@ -1,13 +1,17 @@
-"""``python -m precompute bake``: bake a preset's yarn tables (cached) and print where they are."""
+"""``python -m precompute bake``: bake a yarn's tables (cached) and report B/R and G/R.
+
+Progress goes to stderr as a bar with the time left; the result to stdout, as
+text or with ``--json`` as the bake's summary.  Exit codes: 0 success, 2 bad
+input (the message names the parameter), 1 any other failure.
+"""
 
 from __future__ import annotations
 
 import json
 import pathlib
-import shutil
 import sys
 
-from ..bake import bake
+from ..bake import bake, export_bake
 from ..medium import DEFAULT_PRESET, preset_names
 
 
@@ -15,22 +19,25 @@ def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "bake",
         help="Monte-Carlo bake of a yarn's BRDF tables (OpenEXR), cached by content",
-        description="Medium optics -> Monte-Carlo transport -> yarn BRDF -> RGB tables. "
-        "A second bake of the same inputs is a cache hit.",
+        description="Medium optics -> Monte-Carlo transport -> yarn BRDF -> RGB OpenEXR tables "
+        "(docs/table-spec.md). A second bake of the same inputs is a cache hit; another illuminant "
+        "(--set bake.illuminant=A) recomputes colour without simulating again.",
     )
     source = parser.add_mutually_exclusive_group()
-    source.add_argument("--preset", default=DEFAULT_PRESET, help=f"one of {', '.join(preset_names())} (default {DEFAULT_PRESET})")
+    source.add_argument("--preset", default=DEFAULT_PRESET,
+                        help=f"a shipped preset: {', '.join(preset_names())} (default {DEFAULT_PRESET})")
     source.add_argument("--config", type=pathlib.Path, help="a preset TOML file")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a preset value, e.g. dye.weight_percent=2 or transport.angular_resolution=8")
-    parser.add_argument("--out", type=pathlib.Path, help="also copy the tables and summary into this folder")
-    parser.add_argument("--seed", type=int, help="random seed (default: the preset's, 0)")
+                        help="override a preset value (a TOML literal), e.g. dye.weight_percent=2, "
+                        "transport.angular_resolution=8, bake.illuminant=A; repeatable")
+    parser.add_argument("--out", type=pathlib.Path, help="also copy the tables, spectral.npz and summary.json here")
+    parser.add_argument("--seed", type=int, help="random seed (default: the preset's [transport] seed, 0)")
     budget = parser.add_mutually_exclusive_group()
     budget.add_argument("--paths", type=int, help="paths per incidence cell")
     budget.add_argument("--target-error", type=float,
                         help="relative standard error of every incidence cell's albedo to reach (default 0.01)")
-    parser.add_argument("--threads", type=int, help="CPU threads (default: all)")
-    parser.add_argument("--cache-dir", type=pathlib.Path, help="cache folder (default: the user cache)")
+    parser.add_argument("--threads", type=int, help="CPU threads (default: all); results do not depend on it")
+    parser.add_argument("--cache-dir", type=pathlib.Path, help="cache folder (default: the user cache folder)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
     parser.set_defaults(func=run)
 
@@ -38,27 +45,41 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
-    with tqdm(total=1000, desc="bake", unit="‰", file=sys.stderr, disable=None,
-              bar_format="{l_bar}{bar}| {elapsed}<{remaining}") as bar:
+    bars = []  # opened at the first progress report, so input errors print no bar
 
-        def progress(fraction: float) -> None:
-            bar.update(max(0, int(fraction * 1000) - bar.n))
+    def progress(fraction: float) -> None:
+        if not bars:
+            bars.append(tqdm(total=100, desc="bake", unit="%", file=sys.stderr, dynamic_ncols=True,
+                             bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed} elapsed, {remaining} left"))
+        bars[0].update(max(0.0, round(100 * fraction, 1) - bars[0].n))
 
+    try:
         result = bake(args.config or args.preset, args.overrides, seed=args.seed, paths_per_cell=args.paths,
                       target_rel_stderr=args.target_error, threads=args.threads, cache_dir=args.cache_dir,
                       progress=progress)
-    summary = dict(result.summary)
-    if args.out:
-        args.out.mkdir(parents=True, exist_ok=True)
-        for name in ("brdf.exr", "lobes.exr", "spectral.npz", "summary.json"):
-            shutil.copy2(result.folder / name, args.out / name)
-        summary.update(brdf_table=str(args.out / "brdf.exr"), lobe_table=str(args.out / "lobes.exr"), folder=str(args.out))
+    finally:
+        for bar in bars:
+            bar.close()
+    summary = export_bake(result, args.out) if args.out else result.summary
     if args.json:
-        print(json.dumps(summary, indent=2, default=float))
-    else:
-        ratios = summary["table1_ratios_normal"]
-        print(f"tables:   {summary['folder']}  ({'cache hit' if result.cache_hit else 'baked'})")
-        print(f"paths:    {summary['paths_total']} in all, albedo rel. stderr <= {summary['albedo_rel_stderr_max']:.3g}")
-        print(f"B/R = {ratios['B/R']:.4g}, G/R = {ratios['G/R']:.4g} at normal incidence and view "
-              "(paper, Table 1: real red cotton 0.08 and 0.011)")
+        print(json.dumps(summary, indent=1))
+        return 0
+    ratios, paper = summary["table1_ratios_normal"], summary["table1_ratios_paper_real_red_cotton"]
+    seconds = summary["seconds"]
+    origin = "cache hit" if result.cache_hit else ("simulated" if result.simulated else "colour recomputed")
+    print(f"tables:  {summary['folder']}  ({origin})")
+    print(f"paths:   {summary['paths']['total']:,} in all ({summary['paths']['min']:,} per incidence cell at least), "
+          f"albedo rel. stderr <= {summary['paths']['albedo_rel_stderr_max']:.3g}")
+    took = f"transport {seconds['transport']:.1f} s, BRDF {seconds['brdf']:.1f} s, tables {seconds['tables']:.1f} s"
+    print(f"time:    {summary['call_seconds']:.2f} s; when baked: {took}")
+    print(f"B/R = {_ratio(ratios['B/R'])}, G/R = {_ratio(ratios['G/R'])} at normal incidence and view "
+          f"(paper, Table 1, real red cotton: {paper['B/R']} and {paper['G/R']})")
+    unclipped = summary["table1_ratios_normal_unclipped"]
+    if unclipped != ratios:
+        print(f"         before clipping to the Rec.709 gamut: B/R = {_ratio(unclipped['B/R'])}, "
+              f"G/R = {_ratio(unclipped['G/R'])}")
     return 0
+
+
+def _ratio(value) -> str:
+    return "undefined (R = 0)" if value is None else f"{value:.4g}"

@@ -1,34 +1,59 @@
-"""``python -m precompute plot``: PNG plots of a baked yarn (see precompute/plots.py)."""
+"""``python -m precompute plot TABLE.exr --out DIR``: PNG plots of a baked yarn (see precompute/plots.py).
+
+``TABLE`` is a bake's ``brdf.exr`` or its folder.  The in-plane and polar
+plots need the table alone; the albedo spectra and the front/back swatches
+need the bake's ``spectral.npz`` beside it (skipped, with a note on stderr,
+when it is absent).
+"""
 
 from __future__ import annotations
 
 import json
 import pathlib
-
-import numpy as np
+import sys
 
 from .. import plots
-from ..tables import read_table
+from ..bake import SPECTRAL_FILE, TABLE_FILES, load_spectral
+from ..errors import ParameterError
+from ..tables import TableError, read_table
 
 
 def add_parser(subparsers) -> None:
-    parser = subparsers.add_parser("plot", help="PNG plots of baked yarn tables")
-    parser.add_argument("table", type=pathlib.Path, help="a bake folder, or its brdf.exr")
+    parser = subparsers.add_parser("plot", help="PNG plots of a baked yarn's tables",
+                                   description=__doc__.split("\n\n")[1])
+    parser.add_argument("table", type=pathlib.Path, metavar="TABLE", help="a bake's brdf.exr, or the bake folder")
     parser.add_argument("--out", type=pathlib.Path, required=True, help="folder for the PNG files")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    folder = args.table if args.table.is_dir() else args.table.parent
-    atlas, metadata = read_table(folder / "brdf.exr")
-    resolution = int(metadata["incidence_resolution"])
-    spectral = dict(np.load(folder / "spectral.npz"))
+    path = args.table / TABLE_FILES["brdf"] if args.table.is_dir() else args.table
+    try:
+        atlas, metadata = read_table(path, kind="brdf")
+        stderr_path = path.with_name(TABLE_FILES["brdf_stderr"])
+        stderr = read_table(stderr_path, kind="brdf_stderr").pixels if stderr_path.is_file() else None
+    except TableError as exc:
+        raise ParameterError("TABLE", str(args.table), f"a ClothLight brdf table: {exc}") from None
+    n_i = int(metadata["layout"]["incidence_resolution"])
     args.out.mkdir(parents=True, exist_ok=True)
     written = [
-        plots.plot_in_plane(atlas, resolution, args.out / "rho_in_plane.png"),
-        plots.plot_exit_maps(atlas, resolution, args.out / "rho_exit_maps.png"),
-        plots.plot_albedo_spectra(spectral, resolution, args.out / "albedo_spectra.png"),
-        plots.plot_swatches(spectral, resolution, args.out / "swatches_front_back.png"),
+        plots.plot_in_plane(atlas, n_i, args.out / "rho_in_plane.png", stderr),
+        plots.plot_polar(atlas, n_i, args.out / "rho_polar.png"),
     ]
+    spectral_path = path.with_name(SPECTRAL_FILE)
+    if spectral_path.is_file():
+        spectral, spectral_metadata = load_spectral(spectral_path)
+        if spectral_metadata.get("key") != metadata["spectral_key"]:
+            raise ParameterError(
+                "TABLE", str(args.table), f"a table whose {SPECTRAL_FILE} is its own (their spectral keys differ)"
+            )
+        colour = metadata["colour"]
+        written += [
+            plots.plot_albedo_spectra(spectral, n_i, args.out / "albedo_spectra.png"),
+            plots.plot_swatches(spectral, n_i, args.out / "swatches_front_back.png",
+                                colour["illuminant"], colour["observer"]),
+        ]
+    else:
+        print(f"note: no {SPECTRAL_FILE} beside {path}: albedo spectra and swatches skipped", file=sys.stderr)
     print(json.dumps([str(p) for p in written]))
     return 0

@@ -1,0 +1,344 @@
+"""Bakes in a separate Python process, so Blender's interface never waits on the Monte-Carlo transport.
+
+Blender's own Python runs :mod:`clothlight.bake_worker` as a child process with the same import
+path as Blender (so it finds the wheels the extension bundles and Blender's numpy) and talks to it
+in JSON lines: the child writes ``progress``, then ``done``, ``error`` or ``cancelled`` on stdout;
+the parent writes ``cancel`` on the child's stdin.  The child turns ``cancel`` (or its stdin
+closing, when Blender dies) into a KeyboardInterrupt in its main thread: the bake's cache stages
+every entry in a private temporary folder and removes it on the way out
+(:func:`precompute.cache.store`), so a cancelled bake leaves no partial table.  A child that does
+not stop within :data:`CANCEL_GRACE_SECONDS` (one transport block still running) is killed; its
+temporary folder is hidden from every lookup and removed by a later bake.
+
+No Blender here: the operators (UI, modal timer) and the build script (pre-baked tables) use it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import pathlib
+import queue
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+
+#: The folder holding the ``clothlight`` and ``precompute`` packages (the extension's root).
+PACKAGE_ROOT = pathlib.Path(__file__).resolve().parents[1]
+WORKER_MODULE = "clothlight.bake_worker"
+#: Seconds a cancelled child may take to clean up before it is killed.
+CANCEL_GRACE_SECONDS = 30.0
+#: Exit status of a child stopped by ``cancel``, as for SIGINT.
+CANCELLED_EXIT = 130
+#: Exit status of a child refused by bad input (precompute's ParameterError), as the CLI.
+PARAMETER_EXIT = 2
+
+#: What the bake needs beyond Blender's own Python and numpy, by import name → distribution name.
+BAKE_DEPENDENCIES = {
+    "numba": "numba",
+    "llvmlite": "llvmlite",
+    "scipy": "scipy",
+    "colour": "colour-science",
+    "typing_extensions": "typing-extensions",
+    "miepython": "miepython",
+    "OpenEXR": "OpenEXR",
+    "platformdirs": "platformdirs",
+}
+
+
+def missing_bake_dependencies() -> list[str]:
+    """Distributions the bake needs that this Python cannot import (without importing them)."""
+    import importlib.util
+
+    return [dist for module, dist in BAKE_DEPENDENCIES.items() if importlib.util.find_spec(module) is None]
+
+
+def typed_number(value: float) -> float:
+    """A float as typed: Blender stores float properties in single precision (0.14 → 0.14000000059604645),
+    and a bake's cache key hashes its inputs, so the digits beyond single precision are dropped."""
+    return float(f"{float(value):.6g}")
+
+
+@dataclasses.dataclass(frozen=True)
+class BakeRequest:
+    """Everything a bake is made from: a shipped preset, overrides of its medium, seed, budget, grids.
+
+    Two equal requests bake the same tables (the bake's cache key hashes the same inputs), which is
+    how the add-on recognises tables it shipped or baked before.
+
+    Attributes
+    ----------
+    preset
+        Name of a shipped medium preset (``precompute/presets/<name>.toml``).
+    overrides
+        ``(dotted key, value)`` pairs applied to the preset's TOML, e.g. ``("dye.weight_percent", 2.0)``.
+    seed
+        Seed of the transport's random streams.
+    paths_per_cell, target_rel_stderr
+        The path budget: paths per incidence cell, or the relative standard error of every cell's
+        albedo to reach.  Exactly one is set.
+    n_around, n_along, angular_resolution, incidence_resolution
+        Transport and table grids (``[transport]`` of a preset, see :mod:`precompute.bake`); the
+        defaults are the bake's.
+    """
+
+    preset: str = "red_cotton"
+    overrides: tuple[tuple[str, float], ...] = ()
+    seed: int = 0
+    paths_per_cell: int | None = None
+    target_rel_stderr: float | None = 0.01
+    n_around: int = 16
+    n_along: int = 8
+    angular_resolution: int = 12
+    incidence_resolution: int = 12
+
+    def __post_init__(self):
+        object.__setattr__(self, "overrides", tuple(sorted((str(k), typed_number(v)) for k, v in self.overrides)))
+        if self.target_rel_stderr is not None:
+            object.__setattr__(self, "target_rel_stderr", typed_number(self.target_rel_stderr))
+
+    def to_json(self) -> str:
+        """Canonical JSON: equal requests give equal text."""
+        return json.dumps(dataclasses.asdict(self), sort_keys=True, separators=(",", ":"))
+
+    @classmethod
+    def from_json(cls, text: str) -> "BakeRequest":
+        fields = json.loads(text)
+        fields["overrides"] = tuple(tuple(pair) for pair in fields.get("overrides", ()))
+        return cls(**fields)
+
+    def bake_arguments(self) -> dict:
+        """Keyword arguments of :func:`precompute.bake.bake`."""
+        grids = {f"transport.{name}": getattr(self, name)
+                 for name in ("n_around", "n_along", "angular_resolution", "incidence_resolution")}
+        return {
+            "preset_or_params": self.preset,
+            "overrides": {**dict(self.overrides), **grids},
+            "seed": self.seed,
+            "paths_per_cell": self.paths_per_cell,
+            "target_rel_stderr": None if self.paths_per_cell is not None else self.target_rel_stderr,
+        }
+
+
+def preset_request(name: str) -> BakeRequest:
+    """The request of the shipped preset ``name`` untouched: its own [transport] table over the defaults."""
+    from .addon import import_precompute
+
+    config = import_precompute("medium").load_preset_config(name)[0]
+    given = config.get("transport", {})
+    defaults = BakeRequest(preset=name)
+    fields = {key: given.get(key, getattr(defaults, key))
+              for key in ("seed", "n_around", "n_along", "angular_resolution", "incidence_resolution")}
+    if given.get("paths_per_cell") is not None and "target_rel_stderr" not in given:
+        fields.update(paths_per_cell=int(given["paths_per_cell"]), target_rel_stderr=None)
+    else:
+        fields.update(target_rel_stderr=float(given.get("target_rel_stderr", defaults.target_rel_stderr)))
+    return BakeRequest(preset=name, **fields)
+
+
+class BakeFailed(RuntimeError):
+    """The child bake stopped with an error; ``message`` is meant for the user, ``log`` for the console."""
+
+    def __init__(self, message: str, log: str = "", bad_input: bool = False):
+        super().__init__(message)
+        self.log = log
+        self.bad_input = bad_input
+
+
+class BakeCancelled(RuntimeError):
+    """The bake was cancelled before it finished."""
+
+
+@dataclasses.dataclass
+class BakeOutcome:
+    """A finished bake: its table folder and the bake's summary figures."""
+
+    folder: pathlib.Path
+    cache_hit: bool
+    seconds: float
+    table1_ratios: dict
+
+
+class BakeJob:
+    """One bake in a child process.  ``start()``, then ``poll()`` until ``done``; or ``wait()``.
+
+    Parameters
+    ----------
+    request
+        What to bake.
+    cache_dir
+        The bake cache's folder (the add-on's preference, by default its extension user folder).
+    threads
+        CPU threads of the transport; None: all.
+    numba_cache_dir
+        Where numba keeps compiled kernels: numba writes next to a module by default, and an
+        extension must not write into its own folder.
+    """
+
+    def __init__(self, request: BakeRequest, *, cache_dir, threads: int | None = None,
+                 numba_cache_dir=None):
+        self.request = request
+        self.cache_dir = pathlib.Path(cache_dir)
+        self.threads = threads
+        self.numba_cache_dir = numba_cache_dir
+        self.progress = 0.0
+        self.outcome: BakeOutcome | None = None
+        self.error: BakeFailed | BakeCancelled | None = None
+        self._process: subprocess.Popen | None = None
+        self._events: queue.Queue = queue.Queue()
+        self._stderr: list[str] = []
+        self._cancel_sent: float | None = None
+        self._started = 0.0
+
+    # -- the child process ----------------------------------------------------------------
+
+    def command(self) -> list[str]:
+        command = [sys.executable, "-m", WORKER_MODULE, "--request", self.request.to_json(),
+                   "--cache-dir", str(self.cache_dir)]
+        if self.threads:
+            command += ["--threads", str(int(self.threads))]
+        return command
+
+    def environment(self) -> dict:
+        """The child's environment: Blender's import path (bundled wheels, numpy) and numba's cache."""
+        env = dict(os.environ)
+        paths = [str(PACKAGE_ROOT)] + [p for p in sys.path if p and os.path.isdir(p)]
+        env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths))
+        env["PYTHONUNBUFFERED"] = "1"
+        env["PYTHONIOENCODING"] = "utf-8"
+        if self.numba_cache_dir is not None:
+            env["NUMBA_CACHE_DIR"] = str(self.numba_cache_dir)
+        return env
+
+    def start(self) -> "BakeJob":
+        if not sys.executable or not os.path.isfile(sys.executable):
+            raise BakeFailed(f"Blender's Python executable is missing ({sys.executable!r}): cannot bake")
+        self._started = time.monotonic()
+        self._process = subprocess.Popen(
+            self.command(), cwd=PACKAGE_ROOT, env=self.environment(),
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            text=True, encoding="utf-8", errors="replace", bufsize=1,
+        )
+        threading.Thread(target=self._read_events, args=(self._process.stdout,), daemon=True).start()
+        threading.Thread(target=self._read_log, args=(self._process.stderr,), daemon=True).start()
+        return self
+
+    def _read_events(self, stream) -> None:
+        for line in stream:
+            try:
+                self._events.put(json.loads(line))
+            except ValueError:
+                self._stderr.append(line)  # a stray print of a library: keep it for the console
+        self._events.put(None)
+
+    def _read_log(self, stream) -> None:
+        for line in stream:
+            self._stderr.append(line)
+            del self._stderr[:-200]
+
+    @property
+    def log(self) -> str:
+        return "".join(self._stderr)
+
+    @property
+    def elapsed(self) -> float:
+        return time.monotonic() - self._started if self._started else 0.0
+
+    # -- driving it -----------------------------------------------------------------------
+
+    @property
+    def done(self) -> bool:
+        return self.outcome is not None or self.error is not None
+
+    def poll(self) -> bool:
+        """Take the child's news without waiting; True once the job is over (``outcome`` or ``error`` set)."""
+        if self.done:
+            return True
+        finished = False
+        while True:
+            try:
+                event = self._events.get_nowait()
+            except queue.Empty:
+                break
+            if event is None:
+                finished = True
+                break
+            self._handle(event)
+        if finished:  # stdout closed: the child has exited or is exiting
+            self._process.wait()
+            self._conclude()
+        elif self._cancel_sent is not None and time.monotonic() - self._cancel_sent > CANCEL_GRACE_SECONDS:
+            self._process.kill()
+            self._process.wait()
+            self.error = BakeCancelled("bake cancelled (the child was killed after "
+                                       f"{CANCEL_GRACE_SECONDS:g} s; a later bake removes its temporary folder)")
+        if self.done:
+            try:
+                self._process.wait(timeout=10)  # it exits right after its last message
+            except subprocess.TimeoutExpired:
+                self._process.kill()
+                self._process.wait()
+        return self.done
+
+    def _handle(self, event: dict) -> None:
+        kind = event.get("event")
+        if kind == "progress":
+            self.progress = max(self.progress, float(event["fraction"]))
+        elif kind == "done":
+            self.progress = 1.0
+            self.outcome = BakeOutcome(
+                folder=pathlib.Path(event["folder"]), cache_hit=bool(event["cache_hit"]),
+                seconds=float(event["seconds"]), table1_ratios=event.get("table1_ratios", {}))
+        elif kind == "error":
+            self.error = BakeFailed(event["message"], self.log, bad_input=bool(event.get("bad_input")))
+        elif kind == "cancelled":
+            self.error = BakeCancelled("bake cancelled: no table was written")
+
+    def _conclude(self) -> None:
+        if self.done:
+            return
+        code = self._process.returncode
+        if code == CANCELLED_EXIT or self._cancel_sent is not None:
+            self.error = BakeCancelled("bake cancelled: no table was written")
+        else:
+            tail = self.log.strip().splitlines()[-1:] or [f"exit status {code}"]
+            self.error = BakeFailed(f"bake process stopped unexpectedly: {tail[0]}", self.log)
+
+    @property
+    def cancelling(self) -> bool:
+        return self._cancel_sent is not None and not self.done
+
+    def cancel(self) -> None:
+        """Ask the child to stop; ``poll()`` reports the end (``BakeCancelled``)."""
+        if self._process is None or self.done or self._cancel_sent is not None:
+            return
+        self._cancel_sent = time.monotonic()
+        try:
+            self._process.stdin.write("cancel\n")
+            self._process.stdin.flush()
+            self._process.stdin.close()
+        except OSError:
+            pass  # the child already exited: poll() picks up how
+
+    def wait(self, on_progress: Callable[[float], None] | None = None, interval: float = 0.1) -> BakeOutcome:
+        """Run to the end (background mode); Ctrl-C cancels the child too.  Raises BakeFailed/BakeCancelled."""
+        if self._process is None:
+            self.start()
+        reported = -1.0
+        try:
+            while not self.poll():
+                if on_progress is not None and self.progress != reported:
+                    reported = self.progress
+                    on_progress(reported)
+                time.sleep(interval)
+        except KeyboardInterrupt:
+            self.cancel()
+            while not self.poll():
+                time.sleep(interval)
+            raise
+        if self.error is not None:
+            raise self.error
+        return self.outcome

@@ -1,0 +1,12 @@
+import bpy
+weave = bpy.context.scene.clothlight.weave
+
+weave.pattern = 'satin_5'
+weave.warp_count = 10
+weave.weft_count = 10
+weave.spacing_mm = 0.5
+weave.cross_section = 'ROUND'
+weave.yarn_radius_mm = 0.1
+weave.auto_crimp = True
+weave.segments_per_crossing = 8
+weave.segments_around = 12

@@ -1,0 +1,346 @@
+"""Scene settings of the add-on: the woven sample, the yarn medium and its bake, the material.
+
+Registered as ``Scene.clothlight`` (saved with the .blend, undoable, animatable where it makes
+sense).  Lengths carry their unit in the name ("mm", "nm") because the weave core and the bake
+work in those units whatever the scene's unit system; the sample object is then scaled into the
+scene (see :func:`millimetre_scale`).
+
+The medium settings start from a shipped preset (``precompute/presets/*.toml``, chosen by
+``base``) and expose the values an artist tunes; only values that differ from the preset go to
+the bake as overrides, so an untouched preset bakes exactly what ``python -m precompute bake
+--preset <name>`` bakes and hits the same cache entry (and the same pre-baked tables).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
+
+from .addon import import_precompute
+from .jobs import BakeRequest, preset_request, typed_number
+from .weave import BUILT_IN, WeaveParameterError, WeaveParameters
+from .weave.params import CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
+
+_medium = import_precompute("medium")
+ParameterError = import_precompute("errors").ParameterError
+
+_WEAVE = WeaveParameters()
+_REQUEST = preset_request(_medium.DEFAULT_PRESET)
+
+PATTERN_LABELS = {
+    "plain": ("Plain", "Plain (tabby) weave: every end over one pick, under the next (the paper's sample, §3.1)"),
+    "basket": ("Basket", "Basket weave: pairs of ends and picks interlace as one"),
+    "twill_2_1": ("Twill 2/1", "Twill: each end floats over 2 picks and under 1, stepping one end per pick"),
+    "twill_2_2": ("Twill 2/2", "Twill: over 2, under 2 (a balanced twill, as in serge)"),
+    "twill_3_1": ("Twill 3/1", "Twill: over 3, under 1 (a warp-faced twill, as in denim)"),
+    "satin_5": ("Satin 5", "Five-end satin: long warp floats, one interlacing per end and pick"),
+    "satin_8": ("Satin 8", "Eight-end satin: longer floats, a smoother and shinier face"),
+}
+
+
+def _pattern_items():
+    items = [(name, *PATTERN_LABELS.get(name, (name, f"Built-in pattern {name}"))) for name in BUILT_IN]
+    items.append(("CUSTOM", "Custom Draft", "An interlacing matrix typed as rows of 0 and 1"))
+    items.append(("WIF", "WIF File", "The drawdown of a weaving draft in a WIF (Weaving Information File)"))
+    return [(key, label, description, index) for index, (key, label, description) in enumerate(items)]
+
+
+def parse_draft(text: str) -> np.ndarray:
+    """An interlacing matrix from rows of 0/1 separated by '/' or ';' ("10/01"): 1 where the end
+    passes over the pick, rows are picks.  Raises WeaveParameterError naming the draft."""
+    rows = [row.strip().replace(" ", "") for row in text.replace(";", "/").split("/") if row.strip()]
+    if not rows or any(set(row) - {"0", "1"} for row in rows) or len({len(row) for row in rows}) != 1:
+        raise WeaveParameterError("custom draft", text,
+                                  "rows of equal length made of 0 and 1, separated by '/', e.g. 110/011/101")
+    return np.array([[c == "1" for c in row] for row in rows])
+
+
+def millimetre_scale(scene) -> float:
+    """Object scale that shows a mesh modelled in millimetres at its real size in ``scene``'s units."""
+    return 0.001 / scene.unit_settings.scale_length
+
+
+class ClothLightWeaveSettings(bpy.types.PropertyGroup):
+    """The woven sample that Build Sample makes (paper §3.1; other weaves and yarn shapes, §7)."""
+
+    pattern: EnumProperty(
+        name="Pattern", items=_pattern_items(), default="plain",
+        description="How warp and weft interlace: the weave's drawdown, repeated over the sample")
+    custom_draft: StringProperty(
+        name="Draft", default="10/01",
+        description="Interlacing rows, one per weft pick, separated by '/': 1 where the warp end passes over "
+                    "the pick, 0 under it (e.g. 110/011/101 is a 2/1 twill)")
+    wif_path: StringProperty(
+        name="WIF File", subtype="FILE_PATH", default="",
+        description="Weaving Information File whose drawdown (threading, tie-up and treadling, or lift plan) "
+                    "gives the interlacing")
+    warp_count: IntProperty(
+        name="Warp Ends", default=_WEAVE.warp_count, min=1, max=1000, soft_max=64,
+        description="Number of warp yarns (ends) in the sample; they run along the sample's X axis")
+    weft_count: IntProperty(
+        name="Weft Picks", default=_WEAVE.weft_count, min=1, max=1000, soft_max=64,
+        description="Number of weft yarns (picks) in the sample; they run along the sample's Y axis")
+    spacing_mm: FloatProperty(
+        name="Spacing (mm)", default=_WEAVE.spacing_mm, min=0.001, max=100.0, soft_min=0.05, soft_max=5.0,
+        precision=3, step=1,
+        description="Centre-to-centre distance of neighbouring yarns, warp and weft alike, in millimetres "
+                    "(0.5 mm is 20 threads per centimetre)")
+    cross_section: EnumProperty(
+        name="Cross-Section", default="ROUND",
+        items=[("ROUND", "Round", "A circular yarn, as the paper's model (§3.2)"),
+               ("ELLIPTICAL", "Elliptical", "A yarn flattened in the cloth plane, as in dense cloth (§7)")],
+        description="Shape of the yarn's cross-section")
+    yarn_radius_mm: FloatProperty(
+        name="Yarn Radius (mm)", default=DEFAULT_YARN_RADIUS_MM, min=0.001, max=10.0, soft_min=0.02, soft_max=1.0,
+        precision=3, step=1,
+        description="Radius of the round yarn, in millimetres. The tables are baked for the medium's yarn "
+                    "radius: keep the two equal")
+    half_width_mm: FloatProperty(
+        name="Half-Width (mm)", default=DEFAULT_YARN_RADIUS_MM * 1.5, min=0.001, max=10.0, soft_min=0.02,
+        soft_max=1.0, precision=3, step=1,
+        description="Semi-axis of the elliptical cross-section in the cloth plane, in millimetres")
+    half_thickness_mm: FloatProperty(
+        name="Half-Thickness (mm)", default=DEFAULT_YARN_RADIUS_MM * 0.75, min=0.001, max=10.0, soft_min=0.02,
+        soft_max=1.0, precision=3, step=1,
+        description="Semi-axis of the elliptical cross-section across the cloth, in millimetres")
+    auto_crimp: BoolProperty(
+        name="Automatic Crimp", default=True,
+        description=f"Crimp just clearing the crossing yarns: (1 + {CROSSING_CLEARANCE:g}) × the yarn's half-thickness")
+    crimp_warp_mm: FloatProperty(
+        name="Warp Crimp (mm)", default=DEFAULT_YARN_RADIUS_MM * (1 + CROSSING_CLEARANCE), min=0.0, max=10.0,
+        soft_max=1.0, precision=3, step=1,
+        description="Height of a warp yarn's centreline above (below) the cloth's mid-plane where it passes over "
+                    "(under) a pick, in millimetres")
+    crimp_weft_mm: FloatProperty(
+        name="Weft Crimp (mm)", default=DEFAULT_YARN_RADIUS_MM * (1 + CROSSING_CLEARANCE), min=0.0, max=10.0,
+        soft_max=1.0, precision=3, step=1,
+        description="Height of a weft yarn's centreline above (below) the cloth's mid-plane where it passes over "
+                    "(under) an end, in millimetres")
+    segments_per_crossing: IntProperty(
+        name="Segments Along", default=_WEAVE.segments_per_crossing, min=2, max=256, soft_max=32,
+        description="Mesh segments along a yarn per yarn spacing")
+    segments_around: IntProperty(
+        name="Segments Around", default=_WEAVE.segments_around, min=3, max=256, soft_max=48,
+        description="Mesh segments around a yarn's cross-section")
+    real_world_size: BoolProperty(
+        name="Real-World Size", default=True,
+        description="Scale the sample to its physical size in the scene's units (a 0.5 mm spacing measures "
+                    "0.5 mm); off: one Blender unit per millimetre")
+
+    def interlacing(self) -> np.ndarray | str:
+        if self.pattern == "CUSTOM":
+            return parse_draft(self.custom_draft)
+        if self.pattern == "WIF":
+            from .weave import read_wif
+
+            if not self.wif_path:
+                raise WeaveParameterError("WIF file", "", "the path of a .wif weaving draft")
+            return read_wif(bpy.path.abspath(self.wif_path)).interlacing
+        return self.pattern
+
+    def parameters(self) -> WeaveParameters:
+        """The weave core's parameters; raises WeaveParameterError naming the bad one."""
+        shape = ({"yarn_radius_mm": typed_number(self.yarn_radius_mm)} if self.cross_section == "ROUND"
+                 else {"semi_axes_mm": (typed_number(self.half_width_mm), typed_number(self.half_thickness_mm))})
+        crimp = None if self.auto_crimp else (typed_number(self.crimp_warp_mm), typed_number(self.crimp_weft_mm))
+        return WeaveParameters(
+            interlacing=self.interlacing(), warp_count=self.warp_count, weft_count=self.weft_count,
+            spacing_mm=typed_number(self.spacing_mm), crimp_amplitude_mm=crimp,
+            segments_per_crossing=self.segments_per_crossing, segments_around=self.segments_around, **shape)
+
+    @property
+    def yarn_thickness_mm(self) -> float:
+        return self.yarn_radius_mm if self.cross_section == "ROUND" else self.half_thickness_mm
+
+
+# -- the medium ------------------------------------------------------------------------------
+
+def _particle_size_key(config: dict) -> str | None:
+    particles = config.get("particles") or [{}]
+    for key in ("diameter_nm", "median_diameter_nm"):
+        if key in particles[0]:
+            return f"particles.0.{key}"
+    return None
+
+
+def medium_keys(config: dict) -> dict[str, str]:
+    """The dotted TOML keys of the exposed values that a preset has: property name → key."""
+    keys = {"yarn_radius_mm": "yarn.radius_mm"}
+    if isinstance(config.get("dye"), dict):
+        keys["dye_weight_percent"] = "dye.weight_percent"
+    size = _particle_size_key(config)
+    if size is not None:
+        keys["particle_diameter_nm"] = size
+        keys["particle_volume_fraction"] = "particles.0.volume_fraction"
+    return keys
+
+
+def config_value(config: dict, key: str):
+    node = config
+    for part in key.split("."):
+        node = node[int(part)] if isinstance(node, list) else node[part]
+    return node
+
+
+@functools.lru_cache(maxsize=None)
+def preset_config(name: str) -> dict:
+    """The TOML content of the shipped preset ``name`` (ParameterError for an unknown name)."""
+    return _medium.load_preset_config(name)[0]
+
+
+_DEFAULT_CONFIG = preset_config(_medium.DEFAULT_PRESET)
+
+
+def _default(key: str, fallback: float) -> float:
+    try:
+        return float(config_value(_DEFAULT_CONFIG, key))
+    except (KeyError, IndexError):
+        return fallback
+
+
+def _base_items():
+    items = []
+    for index, name in enumerate(_medium.preset_names()):
+        description = str(preset_config(name).get("description", name))
+        items.append((name, bpy.path.display_name(name), description, index))
+    return items
+
+
+def _load_base(self, _context) -> None:
+    self.load_preset(self.base)
+
+
+class ClothLightMediumSettings(bpy.types.PropertyGroup):
+    """The yarn's medium (paper §3.2, §6.2) and the Monte-Carlo bake of its BRDF tables (§5)."""
+
+    base: EnumProperty(
+        name="Base Medium", items=_base_items(), default=_medium.DEFAULT_PRESET,
+        update=_load_base,
+        description="Shipped medium preset the values below start from (host, particles, dye spectrum, yarn); "
+                    "choosing one loads its values")
+    dye_weight_percent: FloatProperty(
+        name="Dye (% of fibre weight)", default=_default("dye.weight_percent", 0.0), min=0.0, max=100.0,
+        soft_max=10.0, precision=2, step=10,
+        description="Dye content as a percentage of the fibre's weight; the paper's range is 1–5 % (§6.2)")
+    particle_diameter_nm: FloatProperty(
+        name="Particle Diameter (nm)", default=_default(_particle_size_key(_DEFAULT_CONFIG) or "", 150.0),
+        min=1.0, max=100000.0, soft_min=10.0, soft_max=2000.0, precision=1, step=100,
+        description="Diameter of the scattering particles in nanometres (the paper's 150 nm, §6.2); for a "
+                    "log-normal size distribution, its number median")
+    particle_volume_fraction: FloatProperty(
+        name="Particle Volume Fraction", default=_default("particles.0.volume_fraction", 0.14),
+        min=1e-6, max=_medium.MAX_VOLUME_FRACTION, soft_max=0.4, precision=4, step=1,
+        description="Fraction of the yarn's volume the particles fill (the paper's 'concentration 0.14', §6.2); "
+                    f"below {_medium.MAX_VOLUME_FRACTION}, the densest packing of spheres")
+    yarn_radius_mm: FloatProperty(
+        name="Yarn Radius (mm)", default=_default("yarn.radius_mm", DEFAULT_YARN_RADIUS_MM), min=0.001, max=10.0,
+        soft_min=0.02, soft_max=1.0, precision=3, step=1,
+        description="Radius of the circular yarn the light is traced through, in millimetres (§3.2); "
+                    "the sample's yarns should match it")
+    budget: EnumProperty(
+        name="Budget", default="TARGET_ERROR",
+        items=[("TARGET_ERROR", "Target Error", "Trace until every incidence cell's albedo reaches a relative "
+                                                "standard error"),
+               ("PATHS", "Fixed Paths", "Trace a fixed number of light paths per incidence cell")],
+        description="How long the Monte-Carlo transport runs")
+    target_error: FloatProperty(
+        name="Target Error", default=_REQUEST.target_rel_stderr, min=1e-4, max=0.5, soft_min=0.002, soft_max=0.1,
+        precision=4, step=0.1, subtype="FACTOR",
+        description="Relative standard error of every incidence cell's albedo to reach (0.01 = 1 %)")
+    paths_per_cell: IntProperty(
+        name="Paths per Cell", default=20000, min=8, max=100_000_000, soft_min=100, soft_max=1_000_000,
+        description="Light paths traced per incidence cell of the transport")
+    seed: IntProperty(
+        name="Seed", default=_REQUEST.seed, min=0,
+        description="Seed of the transport's random streams: the same seed gives the same tables")
+    n_around: IntProperty(
+        name="Cells Around", default=_REQUEST.n_around, min=2, max=256, soft_max=64,
+        description="Spatial cells around the yarn's circumference in the BSSRDF (the paper: 16)")
+    n_along: IntProperty(
+        name="Cells Along", default=_REQUEST.n_along, min=2, max=256, soft_max=64,
+        description="Spatial cells along the yarn in the BSSRDF, even (the paper: 8)")
+    angular_resolution: IntProperty(
+        name="Angular Resolution", default=_REQUEST.angular_resolution, min=2, max=64, soft_max=32,
+        description="N of the N × N equal-solid-angle hemisphere grids of the BSSRDF (the paper: 12, 144 cells)")
+    incidence_resolution: IntProperty(
+        name="Incidence Resolution", default=_REQUEST.incidence_resolution, min=2, max=64, soft_max=32,
+        description="N of the N × N sphere grid of incidence directions in the tables")
+    tables_dir: StringProperty(
+        name="Tables", subtype="DIR_PATH", default="",
+        description="Folder of baked tables Apply Material uses (set by Bake Tables, or any folder made by "
+                    "'python -m precompute bake --out'). Empty: pre-baked tables of an unchanged shipped preset")
+    tables_request: StringProperty(
+        name="Baked Settings", default="", options={"HIDDEN"},
+        description="The settings the tables in Tables were baked from (empty: chosen by hand)")
+
+    def load_preset(self, name: str) -> None:
+        """Set every exposed value from the shipped preset ``name`` (its [transport] table included);
+        ``request()`` is then :func:`clothlight.jobs.preset_request` of it."""
+        config = preset_config(name)
+        for prop, key in medium_keys(config).items():
+            setattr(self, prop, float(config_value(config, key)))
+        request = preset_request(name)
+        for field in ("n_around", "n_along", "angular_resolution", "incidence_resolution", "seed"):
+            setattr(self, field, getattr(request, field))
+        if request.paths_per_cell is not None:
+            self.budget, self.paths_per_cell = "PATHS", request.paths_per_cell
+        else:
+            self.budget, self.target_error = "TARGET_ERROR", request.target_rel_stderr
+
+    def exposed_keys(self) -> dict[str, str]:
+        return medium_keys(preset_config(self.base))
+
+    def request(self) -> BakeRequest:
+        """The bake these settings ask for: overrides only where a value differs from the preset."""
+        config = preset_config(self.base)
+        overrides = [(key, typed_number(getattr(self, prop))) for prop, key in medium_keys(config).items()
+                     if typed_number(getattr(self, prop)) != typed_number(config_value(config, key))]
+        fixed = self.budget == "PATHS"
+        return BakeRequest(
+            preset=self.base, overrides=tuple(overrides), seed=self.seed,
+            paths_per_cell=self.paths_per_cell if fixed else None,
+            target_rel_stderr=None if fixed else self.target_error,
+            n_around=self.n_around, n_along=self.n_along,
+            angular_resolution=self.angular_resolution, incidence_resolution=self.incidence_resolution)
+
+
+def _is_sun(_self, obj) -> bool:
+    return obj.type == "LIGHT" and obj.data.type == "SUN"
+
+
+class ClothLightSceneSettings(bpy.types.PropertyGroup):
+    weave: PointerProperty(type=ClothLightWeaveSettings)
+    medium: PointerProperty(type=ClothLightMediumSettings)
+    material_mode: EnumProperty(
+        name="Lighting", default="GENERAL",
+        items=[("GENERAL", "General", "Any lights and world: the baked BRDF as a fitted mixture of Cycles "
+                                      "closures (approximate, renders with all of Cycles' lighting)"),
+               ("SUN", "Sun (Exact)", "The baked BRDF evaluated exactly for one sun lamp, shadowed by the yarns; "
+                                      "other lights are ignored (validation, measurements)")],
+        description="How the yarn material is lit")
+    sun: PointerProperty(
+        name="Sun", type=bpy.types.Object, poll=_is_sun,
+        description="Sun lamp of a sun-mode material; its direction and strength follow the lamp. "
+                    "Empty: the scene's first sun")
+
+
+CLASSES = (ClothLightWeaveSettings, ClothLightMediumSettings, ClothLightSceneSettings)
+
+
+def register() -> None:
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.clothlight = PointerProperty(type=ClothLightSceneSettings, name="ClothLight")
+
+
+def unregister() -> None:
+    del bpy.types.Scene.clothlight
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)
+
+
+__all__ = ["ClothLightMediumSettings", "ClothLightSceneSettings", "ClothLightWeaveSettings", "ParameterError",
+           "millimetre_scale", "parse_draft"]

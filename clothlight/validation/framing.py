@@ -1,0 +1,163 @@
+"""Where the gonioreflectometer's sun and cameras go and which patch of cloth they see (paper §4).
+
+Pure geometry, no Blender.  Conventions: the cloth lies in the x-y plane with its macroscopic
+normal +z; the plane of incidence is x-z.  The sun sits on the −x side at zenith θi, a camera at
+signed zenith θv, negative on the light's side (the paper's §6 graphs), so θv = +θi is the mirror
+direction.  Angles are in degrees, lengths in millimetres (the woven sample's unit).
+
+Framing.  Every view frames the same square patch of side P centred on the sample.  An
+orthographic camera at θv sees that patch foreshortened to P cos θv across the plane of incidence
+and P along it, so the frame is P cos θv × P.  The rig keeps the image N × N pixels and makes
+the pixels non-square (pixel aspect 1 : 1/cos θv, ortho scale P on the vertical axis): each pixel
+then covers the same (P/N)² of cloth at every view, and its cross-section perpendicular to the
+view is (P/N)² cos θv.
+
+No edges.  A view ray through the patch crosses the cloth's slab (half-thickness h about its
+mid-plane) within h tan θv of where it meets the mid-plane, and a shadow ray toward the sun from a
+visible point travels at most 2h tan θi sideways before leaving the slab; Cycles' pixel filter
+reaches about one pixel outside the frame.  So the sample must extend, across the plane of
+incidence, P/2 + h tan|θv|max + 2h tan θi,max + P/N + edge band from the patch centre (the edge
+band, one yarn spacing for a woven sample, keeps the incomplete outermost yarns out of view), and
+P/2 + P/N + edge band along it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..addon import import_precompute
+
+ParameterError = import_precompute("errors").ParameterError
+
+#: The paper's incidences (§6, graphs 1–6), degrees.
+DEFAULT_INCIDENCES_DEG = (0.0, 30.0, 45.0, 60.0)
+#: The paper's views: −60 … 70° in 10° steps, negative on the light's side (§6), degrees.
+DEFAULT_VIEWS_DEG = tuple(float(v) for v in range(-60, 71, 10))
+#: Views beyond this zenith are refused: the frame shrinks as cos θv and the pixel aspect
+#: 1/cos θv would exceed what Blender accepts long before 90°.
+MAX_VIEW_DEG = 85.0
+#: Incidences beyond this zenith are refused: the sun's irradiance on the cloth, E cos θi, vanishes.
+MAX_INCIDENCE_DEG = 85.0
+
+
+def toward_sun(theta_i_deg: float) -> np.ndarray:
+    """Unit vector toward a sun at incidence θi (degrees), on the −x side of the plane of incidence."""
+    t = math.radians(theta_i_deg)
+    return np.array([-math.sin(t), 0.0, math.cos(t)])
+
+
+def toward_camera(theta_v_deg: float) -> np.ndarray:
+    """Unit vector toward a camera at signed view zenith θv (degrees); negative: the light's side."""
+    t = math.radians(theta_v_deg)
+    return np.array([math.sin(t), 0.0, math.cos(t)])
+
+
+def frame_size_mm(patch_mm: float, theta_v_deg: float) -> tuple[float, float]:
+    """Width (image x, in the plane of incidence) and height (image y, along the world's y) of the
+    frame that shows exactly the square patch of side ``patch_mm`` from θv: (P cos θv, P), mm."""
+    return patch_mm * math.cos(math.radians(theta_v_deg)), patch_mm
+
+
+def pixel_aspect(theta_v_deg: float) -> tuple[float, float]:
+    """Blender's (pixel_aspect_x, pixel_aspect_y) that make an N × N image span P cos θv × P."""
+    return 1.0, 1.0 / math.cos(math.radians(theta_v_deg))
+
+
+def pixel_cross_section_mm2(patch_mm: float, resolution: int, theta_v_deg: float) -> float:
+    """Area of one pixel's beam perpendicular to the view, (P/N)² cos θv, mm²."""
+    return (patch_mm / resolution) ** 2 * math.cos(math.radians(theta_v_deg))
+
+
+@dataclass(frozen=True)
+class SampleBounds:
+    """The sample's extent in its own frame (cloth normal +z), mm.
+
+    ``center``: centre of its bounding box; ``half_size``: half extents along x and y;
+    ``half_thickness``: half its extent along z; ``edge_band``: width along the border that must stay
+    out of view (one yarn spacing for a woven sample, 0 for a plain surface); ``period``: the
+    weave's repeat along x and y, or None for a surface without one.
+    """
+
+    center: tuple[float, float, float]
+    half_size: tuple[float, float]
+    half_thickness: float
+    edge_band: float = 0.0
+    period: tuple[float, float] | None = None
+
+
+def required_half_extent_mm(patch_mm: float, bounds: SampleBounds, resolution: int,
+                            max_view_deg: float, max_incidence_deg: float) -> tuple[float, float]:
+    """How far the sample must reach from the patch centre along x and y to keep its edges out
+    of every view (module docstring), mm."""
+    h = bounds.half_thickness
+    filter_reach = patch_mm / resolution
+    along_y = patch_mm / 2.0 + filter_reach + bounds.edge_band
+    along_x = (along_y + h * math.tan(math.radians(abs(max_view_deg)))
+               + 2.0 * h * math.tan(math.radians(max_incidence_deg)))
+    return along_x, along_y
+
+
+def largest_patch_mm(bounds: SampleBounds, resolution: int, max_view_deg: float, max_incidence_deg: float) -> float:
+    """The largest patch that keeps the sample's edges out of every view: a whole number of weave
+    repeats when the sample has a period (the patch average is then the cloth's average at every
+    view, whatever the phase of the weave under the patch), mm.
+
+    Raises ParameterError when the sample cannot hold one repeat (or, without a period, any patch).
+    """
+    hx, hy = bounds.half_size
+    h = bounds.half_thickness
+    tilt = h * math.tan(math.radians(abs(max_view_deg))) + 2.0 * h * math.tan(math.radians(max_incidence_deg))
+    # Solve P/2 + P/N + band (+ tilt along x) <= half size for P.
+    shrink = 0.5 + 1.0 / resolution
+    limit = min((hx - bounds.edge_band - tilt) / shrink, (hy - bounds.edge_band) / shrink)
+    if bounds.period is None:
+        if limit <= 0.0:
+            raise ParameterError("sample", f"{2 * hx:.3g} × {2 * hy:.3g} mm",
+                                 f"a sample wider than {2 * (bounds.edge_band + tilt):.3g} mm across the plane of "
+                                 "incidence, so that a patch fits inside it with its edges out of view")
+        return limit
+    repeat = max(bounds.period)
+    whole = math.floor(limit / repeat + 1e-9)
+    if whole < 1:
+        needed = 2.0 * (repeat * shrink + bounds.edge_band + tilt)
+        raise ParameterError("sample", f"{2 * hx:.3g} × {2 * hy:.3g} mm",
+                             f"at least {needed:.3g} mm across the plane of incidence (one {repeat:g} mm weave repeat "
+                             f"plus margins for views to {max_view_deg:g}° and incidence to {max_incidence_deg:g}°): "
+                             "use more yarns")
+    return whole * repeat
+
+
+def check_patch(patch_mm: float, bounds: SampleBounds, resolution: int, max_view_deg: float,
+                max_incidence_deg: float) -> None:
+    """Raise ParameterError unless a patch of side ``patch_mm`` keeps the sample's edges out of view."""
+    if not (isinstance(patch_mm, (int, float)) and math.isfinite(patch_mm) and patch_mm > 0):
+        raise ParameterError("patch_mm", patch_mm, "a length > 0 (mm)")
+    need_x, need_y = required_half_extent_mm(patch_mm, bounds, resolution, max_view_deg, max_incidence_deg)
+    hx, hy = bounds.half_size
+    if need_x > hx + 1e-9 or need_y > hy + 1e-9:
+        largest = largest_patch_mm(SampleBounds(bounds.center, bounds.half_size, bounds.half_thickness,
+                                                bounds.edge_band, None), resolution, max_view_deg, max_incidence_deg)
+        raise ParameterError("patch_mm", patch_mm,
+                             f"≤ {largest:.4g} mm on this {2 * hx:.3g} × {2 * hy:.3g} mm sample: a larger patch would "
+                             f"bring the sample's edges into view at θv up to {max_view_deg:g}° or into the shadow "
+                             f"rays at θi up to {max_incidence_deg:g}°")
+
+
+def check_angles(incidences_deg, views_deg) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The incidences and views as float tuples, or ParameterError naming the first bad one."""
+    checked = []
+    for name, values, low, high in (("incidences_deg", incidences_deg, 0.0, MAX_INCIDENCE_DEG),
+                                    ("views_deg", views_deg, -MAX_VIEW_DEG, MAX_VIEW_DEG)):
+        values = tuple(values)
+        if not values:
+            raise ParameterError(name, values, "at least one angle")
+        for value in values:
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
+                raise ParameterError(name, value, f"angles in [{low:g}, {high:g}] degrees")
+        if len(set(values)) != len(values):
+            raise ParameterError(name, values, "distinct angles")
+        checked.append(tuple(float(v) for v in values))
+    return checked[0], checked[1]

@@ -1,0 +1,195 @@
+"""Generate the example .blend files in ``example_blends/`` (re-run it for a new Blender version):
+
+    python scripts/make_example_blends.py                  # Blender as a Python module (the venv)
+    blender -b -P scripts/make_example_blends.py           # the same in a real Blender 5.0
+
+* ``paper_sample_validation.blend`` — the paper's sample (§3.1: plain-woven red cotton, 12 × 12
+  yarns of 0.1 mm radius at 0.5 mm) lit by one sun, its yarn material in sun mode (the baked BRDF
+  evaluated exactly, §5), and the virtual gonioreflectometer of §4 in the scene "ClothLight
+  Gonioreflectometer": a copy of the sample, a sun at θi = 30° and an orthographic camera at
+  θv = 0°, framed and set up for measurement (Cycles OSL on the CPU, no denoising, linear EXR).
+* ``twill_closeup_general.blend`` — a 2/2 twill of the same yarn close up, in general-lighting
+  mode (the closure mixture, §5, lit by everything Cycles has) under a physical sky: sun and
+  sky light from every direction, as an HDRI would give.
+
+Both read the red-cotton tables from ``example_blends/tables/red_cotton/`` through ``//``-relative
+paths, so the folder can be moved as a whole; the OSL shaders are embedded with their compiled
+bytecode.  The tables are the untouched preset's bake (``python -m precompute bake --preset
+red_cotton``; cached, so a re-run bakes nothing new).  Scenes are in millimetres
+(``unit_settings.scale_length = 0.001``): one Blender unit is one millimetre of cloth.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import pathlib
+import shutil
+import sys
+
+REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
+if str(REPO_ROOT) not in sys.path:  # a development script: the installed extension never does this
+    sys.path.insert(0, str(REPO_ROOT))
+
+import bpy  # noqa: E402
+from mathutils import Vector  # noqa: E402
+
+from clothlight.jobs import BakeJob, preset_request  # noqa: E402
+from clothlight.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
+from clothlight.render_setup import use_cycles_osl_on_cpu  # noqa: E402
+from clothlight.sample_object import build_sample_object  # noqa: E402
+from clothlight.sun_link import SUN_PROPERTY  # noqa: E402
+from clothlight.validation.rig import RigSettings, build_rig  # noqa: E402
+from clothlight.weave import WeaveParameters  # noqa: E402
+from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
+
+PRESET = "red_cotton"
+TABLE_FILES = ("brdf.exr", "lobes.exr", "summary.json")
+PAPER_WEAVE = WeaveParameters(interlacing="plain", warp_count=12, weft_count=12, spacing_mm=0.5, yarn_radius_mm=0.1)
+TWILL_WEAVE = WeaveParameters(interlacing="twill_2_2", warp_count=16, weft_count=16, spacing_mm=0.5,
+                              yarn_radius_mm=0.1)
+
+
+def example_tables(out_dir: pathlib.Path) -> pathlib.Path:
+    """The red-cotton tables copied next to the blends (baked, or found in the bake cache)."""
+    from clothlight.addon import import_precompute
+
+    job = BakeJob(preset_request(PRESET), cache_dir=import_precompute("cache").default_cache_dir())
+    outcome = job.wait(on_progress=lambda f: print(f"\rbaking {PRESET}: {f:.0%}", end="", file=sys.stderr))
+    print(file=sys.stderr)
+    folder = out_dir / "tables" / PRESET
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in TABLE_FILES:
+        shutil.copy2(outcome.folder / name, folder / name)
+    return folder
+
+
+def relative_tables(material, blend_dir: pathlib.Path) -> None:
+    """Point a yarn material's table sockets at ``//``-relative paths (valid wherever the folder goes)."""
+    for node in material.node_tree.nodes:
+        if node.type == "SCRIPT":
+            for socket in ("Table", "LobeTable"):
+                if socket in node.inputs:
+                    path = pathlib.Path(node.inputs[socket].default_value)
+                    node.inputs[socket].default_value = "//" + path.relative_to(blend_dir).as_posix()
+
+
+def millimetre_scene(scene) -> None:
+    scene.unit_settings.system = "METRIC"
+    scene.unit_settings.scale_length = 0.001
+    scene.unit_settings.length_unit = "MILLIMETERS"
+    use_cycles_osl_on_cpu(scene)
+
+
+def add_sun(scene, name: str, direction, irradiance: float = 3.0):
+    """A sun whose light arrives from ``direction`` (pointing toward the sun), of ``irradiance`` W/m²."""
+    light = bpy.data.lights.new(name, "SUN")
+    light.energy = irradiance
+    light.angle = math.radians(0.53)
+    sun = bpy.data.objects.new(name, light)
+    sun.rotation_euler = Vector((0, 0, 1)).rotation_difference(Vector(direction).normalized()).to_euler()
+    scene.collection.objects.link(sun)
+    return sun
+
+
+def add_camera(scene, name: str, location, target, lens_mm: float = 50.0):
+    camera = bpy.data.objects.new(name, bpy.data.cameras.new(name))
+    camera.data.lens = lens_mm
+    camera.data.clip_start = 0.1
+    camera.data.clip_end = 1000.0
+    camera.location = location
+    camera.rotation_euler = (Vector(target) - Vector(location)).to_track_quat("-Z", "Y").to_euler()
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    return camera
+
+
+def fresh_file() -> None:
+    bpy.ops.wm.read_homefile(use_empty=True)
+
+
+def save(path: pathlib.Path) -> None:
+    bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True, relative_remap=True)
+    print(path)
+
+
+def paper_sample_validation(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pathlib.Path:
+    fresh_file()
+    scene = bpy.context.scene
+    scene.name = "Paper Sample"
+    millimetre_scene(scene)
+    scene.cycles.samples = 64
+    scene.render.resolution_x = scene.render.resolution_y = 512
+    tables = yarn_tables_from_bake(tables_dir)
+    sample = build_sample_object(PAPER_WEAVE, collection=scene.collection)
+    sun = add_sun(scene, "Sun", (-math.sin(math.radians(30)), 0.0, math.cos(math.radians(30))))
+    material = build_yarn_material(tables, "ClothLight Red Cotton Sun", mode=SUN_MODE)
+    material[SUN_PROPERTY] = sun
+    bpy.context.view_layer.update()
+    sync_sun(material, sun)
+    sample.data.materials.append(material)
+    add_camera(scene, "Camera", (0.0, -9.0, 9.0), (0.0, 0.0, 0.0))
+    scene.world = None  # sun mode: the material sees only its sun
+
+    rig = build_rig(sample, RigSettings(incidences_deg=(30.0,), views_deg=(0.0,), resolution=128, samples=16))
+    rig_material = build_yarn_material(tables, "ClothLight Red Cotton Gonioreflectometer", mode=SUN_MODE)
+    rig_material[SUN_PROPERTY] = rig.sun
+    rig.use_material(rig_material)
+    rig.set_incidence(30.0)
+    rig.set_view(0.0)
+    for blend_material in (material, rig_material):
+        relative_tables(blend_material, out_dir)
+    path = out_dir / "paper_sample_validation.blend"
+    save(path)
+    return path
+
+
+def twill_closeup_general(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pathlib.Path:
+    fresh_file()
+    scene = bpy.context.scene
+    scene.name = "Twill Close-Up"
+    millimetre_scene(scene)
+    scene.cycles.samples = 128
+    scene.render.resolution_x, scene.render.resolution_y = 640, 400
+    sample = build_sample_object(TWILL_WEAVE, collection=scene.collection)
+    material = build_yarn_material(yarn_tables_from_bake(tables_dir), "ClothLight Red Cotton", mode=GENERAL_MODE)
+    sample.data.materials.append(material)
+    relative_tables(material, out_dir)
+    camera = add_camera(scene, "Camera", (0.0, -6.0, 3.2), (0.0, 0.0, 0.0), lens_mm=60.0)
+    camera.data.dof.use_dof = True
+    camera.data.dof.focus_distance = (camera.location - Vector((0.0, 0.0, 0.0))).length
+    camera.data.dof.aperture_fstop = 0.6  # f-number of a macro shot at this scale: a shallow focus band
+
+    world = bpy.data.worlds.new("Sky")
+    tree = world.node_tree
+    tree.nodes.clear()
+    sky = tree.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = "MULTIPLE_SCATTERING"
+    sky.sun_elevation = math.radians(35.0)
+    sky.sun_rotation = math.radians(120.0)
+    background = tree.nodes.new("ShaderNodeBackground")
+    # The physical sky is in absolute units (the sun is tens of thousands of W/m²): scaled to a
+    # daylight exposure where the cloth's linear values sit in the display range.
+    background.inputs["Strength"].default_value = 0.02
+    output = tree.nodes.new("ShaderNodeOutputWorld")
+    tree.links.new(sky.outputs["Color"], background.inputs["Color"])
+    tree.links.new(background.outputs["Background"], output.inputs["Surface"])
+    scene.world = world
+    path = out_dir / "twill_closeup_general.blend"
+    save(path)
+    return path
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=pathlib.Path, default=REPO_ROOT / "example_blends")
+    args = parser.parse_args(argv)
+    out_dir = args.out.resolve()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    tables_dir = example_tables(out_dir)
+    paper_sample_validation(out_dir, tables_dir)
+    twill_closeup_general(out_dir, tables_dir)
+
+
+if __name__ == "__main__":
+    main(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else None)

@@ -1,0 +1,433 @@
+"""The add-on as a Blender user gets it: the built zip installed into a fresh Blender user folder
+(tests/conftest.py), enabled, and driven headless — Build Sample, Bake Tables (tiny budget, in a child
+process, and cancelled), Apply Material (pre-baked and freshly baked tables), Validate (tiny),
+presets, register/unregister twice, and a .blend saved and reloaded with its settings intact."""
+
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import time
+from types import SimpleNamespace
+
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from tests.test_extension import PREBAKED_PRESET, built_zip  # noqa: E402
+
+EXTENSION_MODULE = "bl_ext.user_default.clothlight"
+ADDON = f"{EXTENSION_MODULE}.clothlight"
+#: A bake small enough for a test: 4 × 4 angular grids, 64 paths per incidence cell.
+TINY = {"budget": "PATHS", "paths_per_cell": 64, "n_around": 4, "n_along": 2, "angular_resolution": 4,
+        "incidence_resolution": 4}
+
+pytestmark = pytest.mark.blender
+
+
+@pytest.fixture(scope="module")
+def addon(tmp_path_factory):
+    zip_path = built_zip(tmp_path_factory)
+    bpy.ops.wm.read_homefile(use_empty=True)
+    result = bpy.ops.extensions.package_install_files(filepath=str(zip_path), repo="user_default",
+                                                      enable_on_install=True)
+    assert result == {"FINISHED"}
+    # The installer reports FINISHED even on a platform mismatch: check the module really loaded.
+    assert EXTENSION_MODULE in sys.modules and EXTENSION_MODULE in bpy.context.preferences.addons
+    import importlib
+
+    yield {name: importlib.import_module(f"{ADDON}.{name}") for name in ("operators", "jobs", "properties", "preferences")}
+    import addon_utils
+
+    addon_utils.disable(EXTENSION_MODULE)
+    bpy.ops.wm.read_homefile(use_empty=True)
+
+
+@pytest.fixture
+def scene(addon):
+    bpy.ops.wm.read_homefile(use_empty=True)
+    return bpy.context.scene
+
+
+def unused_blocks() -> set:
+    collections = (bpy.data.meshes, bpy.data.materials, bpy.data.objects, bpy.data.lights, bpy.data.cameras,
+                   bpy.data.images, bpy.data.node_groups, bpy.data.scenes, bpy.data.worlds)
+    return {(type(block).__name__, block.name) for collection in collections for block in collection
+            if block.users == 0 and not block.use_fake_user}
+
+
+def shader_inputs(material):
+    node = next(n for n in material.node_tree.nodes if n.type == "SCRIPT")
+    return node.inputs
+
+
+# -- registration, preferences ---------------------------------------------------------------------
+
+
+def test_installed_extension_registers_its_classes_and_user_folders(addon, scene):
+    for name in ("CLOTHLIGHT_OT_build_sample", "CLOTHLIGHT_OT_bake_tables", "CLOTHLIGHT_OT_apply_material",
+                 "CLOTHLIGHT_OT_validate", "CLOTHLIGHT_OT_setup_render", "CLOTHLIGHT_PT_main",
+                 "CLOTHLIGHT_PT_material_properties", "CLOTHLIGHT_OT_weave_preset_add"):
+        assert hasattr(bpy.types, name), name
+    prefs = bpy.context.preferences.addons[EXTENSION_MODULE].preferences
+    assert prefs.threads == 0 and prefs.cache_dir == ""
+    package = pathlib.Path(sys.modules[EXTENSION_MODULE].__file__).parent
+    for folder in (addon["preferences"].cache_directory(), addon["preferences"].numba_cache_directory()):
+        assert pathlib.Path(folder).is_dir() and not pathlib.Path(folder).is_relative_to(package)
+
+
+def test_bake_request_defaults_are_the_bakes_own():
+    from precompute.bake import TRANSPORT_DEFAULTS
+    from clothlight.jobs import BakeRequest
+
+    request = BakeRequest()
+    for key, value in TRANSPORT_DEFAULTS.items():
+        assert getattr(request, key) == value, key
+
+
+# -- settings ------------------------------------------------------------------------------------
+
+
+def test_medium_settings_load_the_preset_and_send_only_changed_values(addon, scene):
+    medium = scene.clothlight.medium
+    jobs = addon["jobs"]
+    assert medium.request() == jobs.preset_request("red_cotton")
+    medium.dye_weight_percent = 2.5
+    medium.particle_volume_fraction = 0.14  # the preset's own value, stored in single precision
+    assert medium.request().overrides == (("dye.weight_percent", 2.5),)
+    medium.base = "delustred_polyester"
+    assert "dye_weight_percent" not in medium.exposed_keys()
+    assert medium.particle_diameter_nm == pytest.approx(250.0)
+    assert medium.request() == jobs.preset_request("delustred_polyester")
+    medium.particle_diameter_nm = 300.0
+    assert medium.request().overrides == (("particles.0.median_diameter_nm", 300.0),)
+
+
+def test_weave_settings_with_bad_values_are_refused_by_name_and_build_nothing(addon, scene):
+    weave = scene.clothlight.weave
+    weave.yarn_radius_mm = 0.3  # wider than half the 0.5 mm spacing: neighbouring yarns would intersect
+    with pytest.raises(RuntimeError, match="yarn_radius_mm"):
+        bpy.ops.clothlight.build_sample()
+    weave.yarn_radius_mm = 0.1
+    weave.pattern = "CUSTOM"
+    weave.custom_draft = "12/01"
+    with pytest.raises(RuntimeError, match="custom draft"):
+        bpy.ops.clothlight.build_sample()
+    assert not bpy.data.objects and not bpy.data.meshes
+
+
+# -- Build Sample ---------------------------------------------------------------------------------
+
+
+def test_build_sample_makes_a_real_size_sample_and_rebuilds_it_in_place(addon, scene):
+    weave = scene.clothlight.weave
+    weave.warp_count, weave.weft_count = 4, 6
+    assert bpy.ops.clothlight.build_sample() == {"FINISHED"}
+    obj = bpy.context.active_object
+    assert obj["clothlight_weave"]["warp_count"] == 4
+    # Modelled in mm, shown at its physical size in a metre scene: 6 picks × 0.5 mm = 3 mm = 0.003 m.
+    assert obj.dimensions.x == pytest.approx(0.003, rel=0.02)
+    weave.pattern = "twill_2_1"
+    weave.warp_count = 3
+    assert bpy.ops.clothlight.build_sample() == {"FINISHED"}
+    assert bpy.context.active_object == obj and len(bpy.data.objects) == len(bpy.data.meshes) == 1
+    assert obj["clothlight_weave"]["warp_count"] == 3 and len(obj["clothlight_weave"]["interlacing"]) == 3
+    bpy.ops.object.select_all(action="DESELECT")
+    bpy.context.view_layer.objects.active = None
+    assert bpy.ops.clothlight.build_sample() == {"FINISHED"}  # nothing active: a second sample
+    assert len(bpy.data.objects) == 2 and not unused_blocks()
+
+
+# -- Apply Material -------------------------------------------------------------------------------
+
+
+def test_apply_material_uses_the_prebaked_tables_follows_the_sun_and_leaves_no_orphans(addon, scene):
+    bpy.ops.clothlight.build_sample()
+    sample = bpy.context.active_object
+    assert bpy.ops.clothlight.apply_material() == {"FINISHED"}
+    general = sample.active_material
+    general_name = general.name
+    prebaked = addon["operators"].PREBAKED_DIR / PREBAKED_PRESET
+    assert pathlib.Path(shader_inputs(general)["Table"].default_value) == prebaked / "brdf.exr"
+    assert shader_inputs(general)["SunMode"].default_value == 0
+    assert scene.render.engine == "CYCLES" and scene.cycles.shading_system
+
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    scene.collection.objects.link(sun)
+    sun.data.energy = 3.0
+    scene.clothlight.material_mode = "SUN"
+    sample.select_set(True)
+    bpy.context.view_layer.objects.active = sample
+    assert bpy.ops.clothlight.apply_material() == {"FINISHED"}
+    sun_material = sample.active_material
+    assert sun_material.name != general_name and "ClothLight" in sun_material.name
+    assert general_name not in bpy.data.materials  # replaced and unused: removed, not orphaned
+    inputs = shader_inputs(sun_material)
+    assert inputs["SunMode"].default_value == 1 and tuple(inputs["SunIrradiance"].default_value)[:3] == (3.0, 3.0, 3.0)
+    sun.rotation_euler = (0.0, 1.0, 0.0)  # the sun tilts 1 rad toward +x
+    bpy.context.view_layer.update()
+    direction = tuple(shader_inputs(sun_material)["SunDirection"].default_value)
+    assert direction == pytest.approx((0.8414710, 0.0, 0.5403023), abs=1e-5)
+    assert not unused_blocks()
+
+
+def test_apply_material_refuses_objects_that_are_not_samples(addon, scene):
+    bpy.ops.mesh.primitive_cube_add()
+    assert not bpy.ops.clothlight.apply_material.poll()
+
+
+# -- Bake Tables ----------------------------------------------------------------------------------
+
+
+def test_bake_tables_runs_to_the_end_in_background_mode_and_apply_uses_its_tables(addon, scene):
+    medium = scene.clothlight.medium
+    for key, value in TINY.items():
+        setattr(medium, key, value)
+    medium.dye_weight_percent = 2.0
+    started = time.perf_counter()
+    # In background mode INVOKE_DEFAULT runs execute(): the bake in its child process, to the end.
+    assert bpy.ops.clothlight.bake_tables("INVOKE_DEFAULT") == {"FINISHED"}
+    assert time.perf_counter() - started < 90
+    folder = pathlib.Path(medium.tables_dir)
+    cache = pathlib.Path(addon["preferences"].cache_directory())
+    assert folder.is_relative_to(cache) and (folder / "brdf.exr").is_file()
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["medium"]["dye"]["weight_percent"] == 2.0 and summary["transport"]["paths_per_cell"] == 64
+    assert medium.tables_request == medium.request().to_json()
+    bpy.ops.clothlight.build_sample()
+    assert bpy.ops.clothlight.apply_material() == {"FINISHED"}
+    table = pathlib.Path(shader_inputs(bpy.context.active_object.active_material)["Table"].default_value)
+    assert table == folder / "brdf.exr"
+
+
+def test_bake_tables_reports_bad_input_by_parameter_name(addon, scene):
+    medium = scene.clothlight.medium
+    for key, value in TINY.items():
+        setattr(medium, key, value)
+    medium.particle_volume_fraction = 0.74  # the densest packing of spheres, which the medium must stay below
+    with pytest.raises(RuntimeError, match="volume_fraction"):
+        bpy.ops.clothlight.bake_tables()
+    assert medium.tables_dir == ""
+
+
+def _partials(cache: pathlib.Path) -> list:
+    return list(cache.rglob("*.partial"))
+
+
+class _WindowManager:
+    """The window manager's part in a modal operator, for driving one headless (timers never fire there)."""
+
+    windows = ()
+
+    def event_timer_add(self, interval, window=None):
+        return object()
+
+    def event_timer_remove(self, timer):
+        pass
+
+    def modal_handler_add(self, operator):
+        pass
+
+
+class _Workspace:
+    def __init__(self):
+        self.status = []
+
+    def status_text_set(self, text):
+        self.status.append(text)
+
+
+def _interactive_bake(operators, scene):
+    """The Bake Tables operator's interactive path (invoke → modal on timer ticks) with a recording report."""
+    cls = operators.CLOTHLIGHT_OT_bake_tables
+    methods = {name: getattr(cls, name) for name in ("_start", "_start_modal", "_show", "_finish", "modal")}
+    operator = type("InteractiveBake", (), {**methods, "report": lambda self, kind, text: self.reports.append(
+        (kind.pop(), text))})()
+    operator.reports = []
+    context = SimpleNamespace(scene=scene, window=None, workspace=_Workspace(), window_manager=_WindowManager(),
+                              preferences=bpy.context.preferences)
+    return operator, context
+
+
+def _tick(operator, context, until, timeout=120.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        result = operator.modal(context, SimpleNamespace(type="TIMER", value="NOTHING"))
+        if until(result):
+            return result
+        time.sleep(0.05)
+    raise AssertionError("the bake did not get there in time")
+
+
+def test_interactive_bake_polls_its_child_shows_progress_and_finishes(addon, scene):
+    operators = addon["operators"]
+    medium = scene.clothlight.medium
+    for key, value in TINY.items():
+        setattr(medium, key, value)
+    medium.seed = 3
+    operator, context = _interactive_bake(operators, scene)
+    assert operator._start_modal(context) == {"RUNNING_MODAL"}
+    assert operators.running_bake() is not None and not bpy.ops.clothlight.bake_tables.poll()
+    # Other events pass through to the interface while the child works.
+    assert operator.modal(context, SimpleNamespace(type="MOUSEMOVE", value="NOTHING")) == {"PASS_THROUGH"}
+    assert _tick(operator, context, lambda result: result != {"PASS_THROUGH"}) == {"FINISHED"}
+    assert callable(context.workspace.status[0]) and context.workspace.status[-1] is None
+    assert operators.running_bake() is None
+    assert pathlib.Path(medium.tables_dir, "brdf.exr").is_file() and medium.tables_request == medium.request().to_json()
+    assert operator.reports[-1][0] == "INFO" and "B/R" in operator.reports[-1][1]
+
+
+def test_esc_cancels_an_interactive_bake_and_no_partial_table_is_left(addon, scene):
+    operators = addon["operators"]
+    medium = scene.clothlight.medium
+    for key, value in TINY.items():
+        setattr(medium, key, value)
+    medium.paths_per_cell, medium.angular_resolution, medium.seed = 20000, 6, 7
+    operator, context = _interactive_bake(operators, scene)
+    cache = pathlib.Path(addon["preferences"].cache_directory())
+    entries = set(cache.glob("*/*"))
+    assert operator._start_modal(context) == {"RUNNING_MODAL"}
+    job = operators.running_bake()
+    _tick(operator, context, lambda result: job.progress > 0.0 or result != {"PASS_THROUGH"})
+    assert not job.done, "the bake finished before it could be cancelled"
+    assert operator.modal(context, SimpleNamespace(type="ESC", value="PRESS")) == {"RUNNING_MODAL"}
+    assert _tick(operator, context, lambda result: result != {"PASS_THROUGH"}) == {"CANCELLED"}
+    assert isinstance(job.error, addon["jobs"].BakeCancelled) and operator.reports[-1][0] == "WARNING"
+    assert set(cache.glob("*/*")) == entries and not _partials(cache)
+    assert medium.tables_dir == "" and operators.running_bake() is None
+
+
+def test_the_bundled_wheels_and_blenders_numpy_alone_can_bake(addon, tmp_path):
+    """The child's import path cut down to the extension, its wheels and numpy: nothing from the venv."""
+    import numpy
+
+    jobs = addon["jobs"]
+    site = pathlib.Path(bpy.utils.user_resource("EXTENSIONS")) / ".local" / "lib" / "python3.11" / "site-packages"
+    assert (site / "numba").is_dir() and not (site / "numpy").exists()
+    numpy_only = tmp_path / "numpy_only"
+    numpy_only.mkdir()
+    numpy_dir = pathlib.Path(numpy.__file__).parent
+    for sibling in numpy_dir.parent.iterdir():
+        if sibling.name == "numpy" or sibling.name.startswith(("numpy.libs", "numpy-")):
+            (numpy_only / sibling.name).symlink_to(sibling)
+    request = jobs.BakeRequest(seed=11, paths_per_cell=64, target_rel_stderr=None, n_around=4, n_along=2,
+                               angular_resolution=4, incidence_resolution=4)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(jobs.PACKAGE_ROOT), str(site), str(numpy_only)]),
+           "NUMBA_CACHE_DIR": addon["preferences"].numba_cache_directory()}
+    log = tmp_path / "stderr.txt"
+    with open(log, "w") as stderr:
+        # stdin stays open: the worker takes its closing as a cancel.
+        child = subprocess.Popen(
+            [sys.executable, "-S", "-m", jobs.WORKER_MODULE, "--request", request.to_json(), "--cache-dir", str(tmp_path)],
+            cwd=jobs.PACKAGE_ROOT, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr, text=True)
+        output = child.stdout.read()
+        child.wait(timeout=300)
+        child.stdin.close()
+    events = [json.loads(line) for line in output.splitlines()]
+    assert child.returncode == 0 and events[-1]["event"] == "done", log.read_text()[-3000:]
+    assert pathlib.Path(events[-1]["folder"]).is_relative_to(tmp_path)
+
+
+def test_without_bake_dependencies_bake_is_refused_with_the_reason_and_prebaked_tables_still_work(
+        addon, scene, monkeypatch):
+    operators = addon["operators"]
+    monkeypatch.setattr(operators, "missing_bake_dependencies", lambda: ["numba", "llvmlite"])
+    assert not bpy.ops.clothlight.bake_tables.poll()
+    bpy.ops.clothlight.build_sample()
+    assert bpy.ops.clothlight.apply_material() == {"FINISHED"}  # the untouched preset: pre-baked tables
+    scene.clothlight.medium.dye_weight_percent = 1.0
+    with pytest.raises(RuntimeError, match="Bake unavailable: numba, llvmlite not installed"):
+        bpy.ops.clothlight.apply_material()
+
+
+# -- Validate -------------------------------------------------------------------------------------
+
+
+def test_validate_measures_the_sample_with_its_material_and_removes_its_rig(addon, scene, tmp_path):
+    bpy.ops.clothlight.build_sample()
+    bpy.ops.clothlight.apply_material()
+    before = {(type(b).__name__, b.name) for c in (bpy.data.objects, bpy.data.meshes, bpy.data.scenes) for b in c}
+    result = bpy.ops.clothlight.validate("INVOKE_DEFAULT", out_dir=str(tmp_path), incidences="0", views="0 30",
+                                         resolution=16, samples=1, swatches=False)
+    assert result == {"FINISHED"}
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert set(results["materials"]) == {"yarn", "baseline"}
+    after = {(type(b).__name__, b.name) for c in (bpy.data.objects, bpy.data.meshes, bpy.data.scenes) for b in c}
+    # The sweep plot is loaded as an image for the Image Editor (clothlight/validation/operator.py).
+    assert after == before and not unused_blocks() - {("Image", "ClothLight Validation")}
+
+
+# -- presets --------------------------------------------------------------------------------------
+
+
+def _shipped(subdir: str) -> list[pathlib.Path]:
+    root = pathlib.Path(sys.modules[ADDON].__file__).parent / "presets" / subdir
+    return sorted(root.glob("*.py"))
+
+
+def test_shipped_presets_are_found_by_blender_and_give_valid_settings(addon, scene):
+    from precompute.medium import preset_names
+
+    weave_presets = _shipped("clothlight_weave")
+    assert str(weave_presets[0].parent) in bpy.utils.preset_paths("clothlight_weave")
+    for path in weave_presets:
+        bpy.ops.script.execute_preset(filepath=str(path), menu_idname="CLOTHLIGHT_PT_weave_presets")
+        scene.clothlight.weave.parameters()  # raises for a preset the weave core refuses
+    bases = set()
+    for path in _shipped("clothlight_medium"):
+        bpy.ops.script.execute_preset(filepath=str(path), menu_idname="CLOTHLIGHT_PT_medium_presets")
+        medium = scene.clothlight.medium
+        assert medium.request() == addon["jobs"].preset_request(medium.base)
+        bases.add(medium.base)
+    assert bases == set(preset_names())
+
+
+def test_a_user_medium_preset_is_saved_where_blender_keeps_presets_and_restores_the_values(addon, scene):
+    medium = scene.clothlight.medium
+    medium.dye_weight_percent = 4.25
+    medium.seed = 5
+    assert bpy.ops.clothlight.medium_preset_add(name="Test Deep Dye") == {"FINISHED"}
+    path = pathlib.Path(bpy.utils.preset_find("Test_Deep_Dye", "clothlight_medium"))
+    try:
+        assert path.is_relative_to(pathlib.Path(bpy.utils.user_resource("SCRIPTS")))
+        medium.base = "undyed_cotton"
+        bpy.ops.script.execute_preset(filepath=str(path), menu_idname="CLOTHLIGHT_PT_medium_presets")
+        assert medium.base == "red_cotton" and medium.dye_weight_percent == pytest.approx(4.25) and medium.seed == 5
+    finally:
+        path.unlink()
+
+
+# -- lifecycle ------------------------------------------------------------------------------------
+
+
+def test_register_and_unregister_twice(addon, scene):
+    module = sys.modules[EXTENSION_MODULE]
+    shipped = str(_shipped("clothlight_weave")[0].parent)
+    for _ in range(2):
+        module.unregister()
+        assert not hasattr(bpy.types, "CLOTHLIGHT_OT_build_sample") and not hasattr(bpy.types.Scene, "clothlight")
+        assert shipped not in bpy.utils.preset_paths("clothlight_weave")
+        module.register()
+        assert hasattr(bpy.types, "CLOTHLIGHT_OT_build_sample") and hasattr(bpy.types.Scene, "clothlight")
+    assert bpy.ops.clothlight.build_sample() == {"FINISHED"}
+
+
+def test_settings_survive_saving_and_reopening_the_blend(addon, scene, tmp_path):
+    settings = scene.clothlight
+    settings.weave.pattern = "satin_5"
+    settings.weave.spacing_mm = 0.6
+    settings.medium.base = "dark_dyed_cotton"
+    settings.medium.dye_weight_percent = 4.5
+    settings.material_mode = "SUN"
+    bpy.ops.clothlight.build_sample()
+    path = tmp_path / "saved.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.read_homefile(use_empty=True)
+    assert bpy.context.scene.clothlight.weave.pattern == "plain"
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    settings = bpy.context.scene.clothlight
+    assert settings.weave.pattern == "satin_5" and settings.weave.spacing_mm == pytest.approx(0.6)
+    assert settings.medium.base == "dark_dyed_cotton" and settings.medium.dye_weight_percent == pytest.approx(4.5)
+    assert settings.material_mode == "SUN"
+    assert bpy.data.objects["ClothLight Sample"]["clothlight_weave"]["spacing_mm"] == pytest.approx(0.6)

@@ -1,0 +1,370 @@
+"""The virtual gonioreflectometer: calibration on surfaces of known BRDF, framing without edges,
+the object mask, the whole sweep with its outputs, cancel, the operator and the command line.
+
+Calibration is proved on a flat plane: with the baseline shader's Lambert term alone (albedo a) the
+rig must measure a/π at every incidence and view, and with its Cook–Torrance term alone the value
+of that BRDF written out here from its definition; with a yarn table of constant ρ = L/E⊥ it must
+measure ρ / cos θi.  Renders are tiny (16 px, 1 sample): a flat plane under a sun-mode material is
+exact at any sampling.
+"""
+
+import json
+import math
+import pathlib
+import subprocess
+import sys
+
+import numpy as np
+import OpenEXR
+import pytest
+
+import bpy  # noqa: E402 - Blender as a Python module, a required test dependency
+from clothlight.materials import SUN_MODE, build_baseline_material, build_yarn_material, shader_node
+from clothlight.validation.framing import SampleBounds, frame_size_mm, largest_patch_mm, pixel_cross_section_mm2
+from clothlight.validation.measure import measure_view
+from clothlight.validation.rig import RIG_SCENE, RigSettings, build_rig, calibration_plane
+from clothlight.validation.run import ValidationCancelled, ValidationRun, run_validation
+from clothlight.weave import WeaveParameters
+from clothlight.yarn_tables import yarn_tables_from_bake
+from precompute.errors import ParameterError
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+SYNTHETIC_CSV = REPO / "clothlight" / "validation" / "data" / "synthetic_red_cotton.csv"
+ALBEDO = np.array([0.5, 0.25, 0.1])
+SUN_IRRADIANCE = 3.0  # W/m²: not 1, so that a missing division by E shows
+
+
+def fresh_file():
+    bpy.ops.wm.read_homefile(use_empty=True)
+
+
+def flat_rig(incidences, views, **overrides):
+    fresh_file()
+    plane = calibration_plane(10.0)
+    settings = RigSettings(incidences_deg=incidences, views_deg=views, resolution=16, samples=1, patch_mm=4.0,
+                           sun_irradiance=SUN_IRRADIANCE, **overrides)
+    return build_rig(plane, settings)
+
+
+def wear(rig, builder, **inputs):
+    """Build a sun-mode material (script nodes compile through the rig scene's engine), set inputs, wear it."""
+    with bpy.context.temp_override(scene=rig.scene):
+        material = builder()
+    node = shader_node(material)
+    for name, value in inputs.items():
+        node.inputs[name].default_value = value
+    rig.use_material(material)
+    return material
+
+
+def sweep(rig, tmp_path):
+    measured = []
+    for theta_i in rig.settings.incidences_deg:
+        rig.set_incidence(theta_i)
+        for theta_v in rig.settings.views_deg:
+            rig.set_view(theta_v)
+            measured.append(rig.measure(tmp_path / f"i{theta_i:g}_v{theta_v:g}.exr"))
+    return measured
+
+
+def baseline():
+    return build_baseline_material(name="test baseline", mode=SUN_MODE)
+
+
+@pytest.mark.blender
+def test_a_lambertian_plane_measures_albedo_over_pi_at_every_view_and_incidence(tmp_path):
+    rig = flat_rig((0.0, 30.0, 45.0, 60.0), (-60.0, -30.0, 0.0, 20.0, 50.0, 70.0))
+    wear(rig, baseline, DiffuseAlbedo=(*ALBEDO, 1.0), SpecularWeight=0.0)
+    for view in sweep(rig, tmp_path):
+        np.testing.assert_allclose(view.brdf_rgb, ALBEDO / math.pi, rtol=1e-3)
+        assert view.cloth_pixels == 16 * 16 and view.coverage == pytest.approx(1.0, abs=1e-6)
+    rig.remove()
+
+
+def cook_torrance(theta_i, theta_v, m=0.8, n=1.557):
+    """Cook–Torrance (1/sr) for light at −θi, view at θv in the x-z plane, from its definition:
+    F D G / (4 (n·l)(n·v)), Beckmann D = exp(−tan²α/m²) / (π m² cos⁴α), G = min(1, 2(n·h)(n·v)/(v·h),
+    2(n·h)(n·l)/(v·h)), F Cook and Torrance's dielectric Fresnel with g² = n² − 1 + c², c = v·h."""
+    light = np.array([-math.sin(theta_i), 0.0, math.cos(theta_i)])
+    view = np.array([math.sin(theta_v), 0.0, math.cos(theta_v)])
+    half = (light + view) / np.linalg.norm(light + view)
+    nh, nl, nv, vh = half[2], light[2], view[2], view @ half
+    alpha = math.acos(min(nh, 1.0))
+    d = math.exp(-((math.tan(alpha) / m) ** 2)) / (math.pi * m**2 * nh**4)
+    g_att = min(1.0, 2 * nh * nv / vh, 2 * nh * nl / vh)
+    c = vh
+    g = math.sqrt(n * n - 1 + c * c)
+    f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1 + (c * (g + c) - 1) ** 2 / (c * (g - c) + 1) ** 2)
+    return f * d * g_att / (4 * nl * nv)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("theta_i", [30.0, 45.0, 60.0])
+def test_the_cook_torrance_term_measures_its_formula(tmp_path, theta_i):
+    # the mirror direction (h = n: D at its peak) and two off-specular views
+    rig = flat_rig((theta_i,), (theta_i, theta_i - 25.0, -20.0))
+    wear(rig, baseline, DiffuseAlbedo=(0.0, 0.0, 0.0, 1.0), SpecularWeight=1.0)
+    for view in sweep(rig, tmp_path):
+        expected = cook_torrance(math.radians(theta_i), math.radians(view.theta_v_deg))
+        np.testing.assert_allclose(view.brdf_rgb, [expected] * 3, rtol=1e-3)
+    rig.remove()
+
+
+def write_exr(path, image):
+    # OpenEXR reads the array's memory as C-ordered: a broadcast view must be copied out first
+    image = np.ascontiguousarray(image, dtype=np.float32)
+    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, {"RGB": image}) as exr:
+        exr.write(str(path))
+
+
+CONSTANT_RHO = np.array([0.2, 0.1, 0.05])
+
+
+@pytest.fixture(scope="module")
+def constant_bake(tmp_path_factory):
+    """A bake folder whose yarn BRDF is the constant ρ = L/E⊥ = CONSTANT_RHO for every pair of directions."""
+    folder = tmp_path_factory.mktemp("bake")
+    n_i, n_o, lobes = 4, 4, 14
+    write_exr(folder / "brdf.exr", np.broadcast_to(CONSTANT_RHO, (n_i * n_o, n_i * n_o, 3)))
+    write_exr(folder / "lobes.exr", np.zeros((n_o, lobes * n_o, 3)))
+    (folder / "summary.json").write_text(json.dumps({
+        "schema": "clothlight-table/1", "incidence_resolution": n_i, "exit_resolution": n_o,
+        "lobe_count": lobes, "host_index": 1.557}))
+    return folder
+
+
+@pytest.mark.blender
+def test_a_constant_yarn_table_measures_rho_over_cos_incidence(tmp_path, constant_bake):
+    # ρ is radiance per irradiance on a plane facing the beam, so a flat yarn of constant ρ has the
+    # cloth BRDF ρ / cos θi, the same at every view
+    rig = flat_rig((0.0, 45.0, 60.0), (-50.0, 0.0, 40.0))
+    tables = yarn_tables_from_bake(constant_bake)
+    wear(rig, lambda: build_yarn_material(tables, name="test yarn", mode=SUN_MODE), SpecularWeight=0.0)
+    for view in sweep(rig, tmp_path):
+        np.testing.assert_allclose(view.brdf_rgb, CONSTANT_RHO / math.cos(math.radians(view.theta_i_deg)), rtol=1e-3)
+    rig.remove()
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("theta_v", [-70.0, -45.0, 0.0, 30.0, 70.0])
+def test_every_view_frames_exactly_the_patch(theta_v):
+    rig = flat_rig((0.0,), (theta_v,))
+    rig.set_view(theta_v)
+    frame = rig.camera.data.view_frame(scene=rig.scene)  # camera space, pixel aspect included
+    width = max(c.x for c in frame) - min(c.x for c in frame)
+    height = max(c.y for c in frame) - min(c.y for c in frame)
+    np.testing.assert_allclose((width, height), frame_size_mm(rig.patch_mm, theta_v), rtol=1e-5)
+    direction = rig.camera.matrix_world.to_3x3().col[2].normalized()  # toward the camera
+    corners = []
+    for corner in frame:
+        point = rig.camera.matrix_world @ corner
+        point = point - direction * (point.z / direction.z)  # along the view onto the cloth plane z = 0
+        corners.append(tuple(point))
+    h = rig.patch_mm / 2.0
+    np.testing.assert_allclose(sorted(corners), sorted((sx * h, sy * h, 0.0) for sx in (-1, 1) for sy in (-1, 1)),
+                               atol=1e-5)  # Blender's float32
+    rig.remove()
+
+
+def measure_woven(count, patch_mm, tmp_path):
+    """The baseline on a count × count plain weave at the most oblique views and incidence, checking the mask."""
+    fresh_file()
+    settings = RigSettings(incidences_deg=(0.0, 60.0), views_deg=(-60.0, 70.0), resolution=32, samples=1,
+                           patch_mm=patch_mm)
+    rig = build_rig(WeaveParameters(warp_count=count, weft_count=count), settings)
+    wear(rig, baseline)
+    measured = []
+    for theta_i in settings.incidences_deg:
+        rig.set_incidence(theta_i)
+        for theta_v in settings.views_deg:
+            rig.set_view(theta_v)
+            pixels = rig.render(tmp_path / f"{count}_{theta_i:g}_{theta_v:g}.exr")
+            background = pixels[..., 3] == 0.0
+            assert np.all(pixels[background][:, :3] == 0.0)  # the background adds no light
+            measured.append(measure_view(pixels, theta_i_deg=theta_i, theta_v_deg=theta_v, patch_mm=rig.patch_mm,
+                                         sun_irradiance=settings.sun_irradiance))
+    patch = rig.patch_mm
+    rig.remove()
+    return patch, measured
+
+
+@pytest.mark.blender
+def test_woven_views_see_no_sample_edge_and_the_mask_is_the_cloth(tmp_path, monkeypatch):
+    """The default validation sample and a much larger one give the same pixels at the most oblique
+    views and incidence: nothing beyond the default sample is seen or casts shadow.  Control: with
+    the rig's check switched off, a patch too large for the sample does show its edges."""
+    patch, small = measure_woven(12, None, tmp_path)
+    assert patch == pytest.approx(2.0)  # two plain-weave repeats fit inside the margins
+    _, large = measure_woven(20, patch, tmp_path)
+    for a, b in zip(small, large):
+        np.testing.assert_allclose(a.brdf_rgb, b.brdf_rgb, rtol=1e-4)
+        assert a.cloth_pixels == b.cloth_pixels
+        assert 0.5 * 32**2 < a.cloth_pixels < 32**2  # mostly yarn, with gaps between yarns
+    monkeypatch.setattr("clothlight.validation.rig.check_patch", lambda *args: None)
+    _, edged = measure_woven(12, 5.5, tmp_path)
+    _, reference = measure_woven(20, 5.5, tmp_path)
+    assert max(abs(a.brdf_rgb[0] / b.brdf_rgb[0] - 1.0) for a, b in zip(edged, reference)) > 1e-3
+
+
+def test_the_mask_sums_cloth_pixels_only_and_the_calibration_formula():
+    n, radiance, alpha = 8, 0.4, np.ones((8, 8))
+    pixels = np.zeros((n, n, 4))
+    pixels[..., :3] = radiance
+    pixels[..., 3] = alpha
+    pixels[0, :, :3], pixels[0, :, 3] = 5.0, 0.0  # a bright row that is not cloth (alpha 0)
+    pixels[1, :, :3], pixels[1, :, 3] = radiance / 2, 0.5  # half-covered pixels: premultiplied
+    for theta_i, theta_v in ((0.0, 0.0), (60.0, -40.0), (30.0, 70.0)):
+        view = measure_view(pixels, theta_i_deg=theta_i, theta_v_deg=theta_v, patch_mm=2.0, sun_irradiance=2.0)
+        cloth_sum = radiance * (n * n - 2 * n) + radiance / 2 * n
+        assert view.cloth_pixels == n * n - n
+        np.testing.assert_allclose(view.rgb_sum, [cloth_sum] * 3)
+        assert view.coverage == pytest.approx((n * n - 2 * n + 0.5 * n) / n**2)
+        # f = Σ L_p a_p / (E cos θi A cos θv): the mean radiance over E cos θi, at every view
+        a_p = pixel_cross_section_mm2(2.0, n, theta_v)
+        assert a_p == pytest.approx((2.0 / n) ** 2 * math.cos(math.radians(theta_v)))
+        np.testing.assert_allclose(view.brdf_rgb, cloth_sum / n**2 / (2.0 * math.cos(math.radians(theta_i))))
+
+
+@pytest.mark.blender
+def test_patches_that_would_show_edges_are_refused():
+    fresh_file()
+    with pytest.raises(ParameterError, match="patch_mm"):
+        build_rig(None, RigSettings(patch_mm=3.0))
+    with pytest.raises(ParameterError, match="use more yarns"):
+        build_rig(WeaveParameters(warp_count=6, weft_count=6), RigSettings())
+    assert RIG_SCENE not in bpy.data.scenes and len(bpy.data.objects) == 0  # nothing left behind
+    # a flat plane of side S holds patches up to (S/2)/(1/2 + 1/N)
+    bounds = SampleBounds((0.0, 0.0, 0.0), (5.0, 5.0), 0.0)
+    assert largest_patch_mm(bounds, 16, 70.0, 60.0) == pytest.approx(5.0 / (0.5 + 1 / 16))
+
+
+def png_size(path):
+    data = pathlib.Path(path).read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+
+
+@pytest.mark.blender
+def test_the_whole_sweep_writes_calibrated_results_plots_and_report(tmp_path, constant_bake):
+    fresh_file()
+    settings = RigSettings(incidences_deg=(0.0, 60.0), views_deg=(-60.0, 0.0, 60.0), resolution=16, samples=1)
+    calls = []
+    results = run_validation(None, tmp_path, tables_dir=constant_bake, measured_csv=SYNTHETIC_CSV, settings=settings,
+                             progress=lambda done, total, what: calls.append((done, total)))
+    assert calls == [(k, 16) for k in range(1, 17)]  # 2 materials × (6 views + 2 swatches)
+    on_disk = json.loads((tmp_path / "results.json").read_text())
+    measured_sum = sum(next(p for p in on_disk["measurement"]["in_plane"]["0"] if p[0] == 0.0)[1:])  # θi = θv = 0
+    patch = on_disk["settings"]["patch_mm"]
+    for kind in ("yarn", "baseline"):
+        entry = on_disk["materials"][kind]
+        assert len(entry["views"]) == 6
+        for v in entry["views"]:
+            # the JSON's BRDF is its pixel sum through the documented formula
+            f = np.array(v["rgb_sum"]) * (patch / 16) ** 2 / (1.0 * math.cos(math.radians(v["theta_i_deg"])) * patch**2)
+            np.testing.assert_allclose(v["brdf_rgb"], f, rtol=1e-9)
+        normal = next(v for v in entry["views"] if v["theta_i_deg"] == 0 and v["theta_v_deg"] == 0)
+        r, g, b = normal["brdf_rgb"]
+        assert entry["table1"] == pytest.approx({"B/R": b / r, "G/R": g / r})
+        # the paper's normalisation: the model's normal-incidence, normal-view value becomes the measured one
+        assert sum(normal["paper_normalised_rgb"]) == pytest.approx(measured_sum)
+        assert entry["metrics"]["views_compared"] == 6
+        for side in ("front", "back"):
+            assert png_size(tmp_path / entry["swatches"][side]["png"]) == (16, 16)
+    # lit from behind, the baseline's surface terms see no light; the yarn table transmits
+    assert sum(on_disk["materials"]["baseline"]["swatches"]["back"]["mean_rgb_per_irradiance"]) < 1e-3
+    assert sum(on_disk["materials"]["yarn"]["swatches"]["back"]["mean_rgb_per_irradiance"]) > 0.05
+    assert on_disk["files"]["plots"] == ["sweeps.png", "sweeps_paper_normalised.png"]
+    for name in ("report.md", "sweeps.png", "sweeps_paper_normalised.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    report = (tmp_path / "report.md").read_text()
+    assert "(sweeps.png)" in report and "SYNTHETIC" in report and "Table 1" in report
+    assert results["materials"]["yarn"]["table1"] == pytest.approx(on_disk["materials"]["yarn"]["table1"])
+    # the user's file is as it was: the rig's scene, objects and materials are gone
+    assert [s.name for s in bpy.data.scenes] == ["Scene"]
+    assert len(bpy.data.objects) == len(bpy.data.meshes) == len(bpy.data.materials) == 0
+
+
+@pytest.mark.blender
+def test_a_user_sample_is_measured_from_a_copy_and_left_untouched(tmp_path):
+    fresh_file()
+    plane = calibration_plane(10.0, name="user plane")
+    bpy.context.scene.collection.objects.link(plane)
+    own = bpy.data.materials.new("user material")
+    plane.data.materials.append(own)
+    plane.location = (3.0, -2.0, 1.0)  # the rig measures the sample in its own frame
+    settings = RigSettings(incidences_deg=(30.0,), views_deg=(0.0,), resolution=8, samples=1, patch_mm=4.0)
+    results = run_validation(plane, tmp_path, settings=settings, swatches=False)
+    # default baseline: Lambert 0.6/π red plus Cook–Torrance m = 0.8 at (θi, θv) = (30°, 0°), white
+    expected = np.array([0.6 / math.pi, 0.0, 0.0]) + cook_torrance(math.radians(30.0), 0.0)
+    np.testing.assert_allclose(results["materials"]["baseline"]["views"][0]["brdf_rgb"], expected, rtol=1e-3)
+    assert list(plane.data.materials) == [own] and tuple(plane.location) == (3.0, -2.0, 1.0)
+    assert [o.name for o in bpy.data.objects] == ["user plane"]
+
+
+@pytest.mark.blender
+def test_cancel_stops_before_the_next_render_and_removes_the_rig(tmp_path):
+    fresh_file()
+    settings = RigSettings(incidences_deg=(0.0, 30.0), views_deg=(0.0, 30.0), resolution=8, samples=1)
+    done = []
+    with pytest.raises(ValidationCancelled):
+        run_validation(None, tmp_path, settings=settings, progress=lambda d, t, w: done.append(d),
+                       cancel=lambda: len(done) >= 2)
+    assert done == [1, 2]
+    assert len(list((tmp_path / "renders" / "baseline").glob("*.exr"))) == 2
+    assert not (tmp_path / "results.json").exists()
+    assert [s.name for s in bpy.data.scenes] == ["Scene"] and len(bpy.data.objects) == 0
+
+
+@pytest.mark.blender
+def test_a_run_stepped_like_the_modal_operator_can_be_closed_midway(tmp_path):
+    fresh_file()
+    run = ValidationRun(None, tmp_path, settings=RigSettings(incidences_deg=(0.0,), views_deg=(0.0, 40.0),
+                                                             resolution=8, samples=1), swatches=False)
+    steps = run.steps()
+    assert next(steps).done == 1 and RIG_SCENE in bpy.data.scenes
+    steps.close()  # what Esc does
+    assert RIG_SCENE not in bpy.data.scenes and len(bpy.data.objects) == 0 and run.results is None
+
+
+@pytest.fixture
+def operator_registered():
+    from clothlight.validation.operator import CLOTHLIGHT_OT_validate, register, unregister
+
+    registered = hasattr(bpy.types, CLOTHLIGHT_OT_validate.__name__)
+    if not registered:
+        register()
+    yield
+    if not registered:
+        unregister()
+
+
+@pytest.mark.blender
+def test_the_operator_runs_the_sweep_in_background_mode(tmp_path, operator_registered):
+    fresh_file()
+    options = dict(out_dir=str(tmp_path), materials={"BASELINE"}, incidences="0", views="0, 30", resolution=8,
+                   samples=1, swatches=False)
+    assert bpy.ops.clothlight.validate("INVOKE_DEFAULT", **options) == {"FINISHED"}
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert [v["theta_v_deg"] for v in results["materials"]["baseline"]["views"]] == [0.0, 30.0]
+    assert bpy.context.window_manager["clothlight_validation_dir"] == str(tmp_path)
+    assert bpy.data.images["ClothLight Validation"].filepath == str(tmp_path / "sweeps.png")
+    with pytest.raises(RuntimeError, match="incidences"):
+        bpy.ops.clothlight.validate(**{**options, "incidences": "0 thirty"})
+    with pytest.raises(RuntimeError, match="tables_dir"):
+        bpy.ops.clothlight.validate(**{**options, "materials": {"YARN"}})
+
+
+@pytest.mark.blender
+def test_the_command_line_and_the_blender_script_share_arguments(tmp_path):
+    from clothlight.validate import main
+
+    tiny = ["--material", "baseline", "--resolution", "8", "--samples", "1", "--incidences", "0", "--views", "0",
+            "--no-swatches"]
+    assert main(["--out", str(tmp_path / "a"), *tiny]) == 0
+    assert (tmp_path / "a" / "results.json").is_file()
+    assert main(["--out", str(tmp_path / "b"), "--views", "0", "95"]) == 2
+    assert main(["--out", str(tmp_path / "b"), "--measured", str(tmp_path / "missing.csv")]) == 2
+    script = subprocess.run([sys.executable, str(REPO / "scripts" / "validate_blender.py"), "--",
+                             "--out", str(tmp_path / "c"), *tiny, "--json"], cwd=REPO, capture_output=True, text=True)
+    assert script.returncode == 0, script.stderr[-2000:]
+    assert json.loads(script.stdout)["materials"]["baseline"]["views"][0]["theta_v_deg"] == 0.0

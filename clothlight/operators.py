@@ -33,8 +33,8 @@ from .materials import GENERAL_MODE, SUN_MODE, build_yarn_material, shader_node,
 from .mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from .properties import ParameterError, millimetre_scale
 from .render_setup import use_cycles_osl_on_cpu
-from .sun_link import SUN_PROPERTY
 from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
+from .sun_link import SUN_PROPERTY
 from .weave import WeaveParameterError
 from .yarn_tables import yarn_tables_from_bake
 
@@ -93,15 +93,25 @@ def tables_for(medium) -> tuple[pathlib.Path, str | None]:
     raise LookupError("No tables for these settings yet: " + (reason if reason else "press Bake Tables"))
 
 
-def material_name(medium, mode: str) -> str:
-    """One material per set of tables and mode, so re-applying updates it everywhere it is used."""
+def _short_hash(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()[:6]
+
+
+def material_name(medium, folder: pathlib.Path, mode: str) -> str:
+    """One material per set of tables and mode, so re-applying updates it everywhere it is used:
+    named by the preset (and a hash of the changes, if any) the tables were baked from, or for a
+    folder chosen by hand, by the medium its summary names."""
     if medium.tables_dir and not medium.tables_request:
-        label = pathlib.Path(bpy.path.abspath(medium.tables_dir)).name or "Tables"
+        try:
+            label = json.loads((folder / "summary.json").read_text())["medium"]["name"]
+        except (OSError, ValueError, KeyError, TypeError):
+            label = folder.name
+        label = f"{label} {_short_hash(str(folder))}"
     else:
-        request = medium.request()
+        request = BakeRequest.from_json(medium.tables_request) if medium.tables_dir else medium.request()
         label = bpy.path.display_name(request.preset)
         if request != preset_request(request.preset):
-            label += " " + hashlib.sha256(request.to_json().encode()).hexdigest()[:6]
+            label += " " + _short_hash(request.to_json())
     return f"ClothLight {label}" + (" Sun" if mode == SUN_MODE else "")
 
 
@@ -225,7 +235,7 @@ class CLOTHLIGHT_OT_apply_material(bpy.types.Operator):
         try:
             folder, warning = tables_for(medium)
             tables = yarn_tables_from_bake(folder)
-            name = material_name(medium, mode)
+            name = material_name(medium, folder, mode)
             # Script nodes compile only when the scene renders with Cycles and OSL.
             render_note = use_cycles_osl_on_cpu(context.scene)
             material = build_yarn_material(tables, name, mode=mode)

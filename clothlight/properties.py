@@ -213,6 +213,11 @@ def _load_base(self, _context) -> None:
     self.load_preset(self.base)
 
 
+def _forget_request(self, _context) -> None:
+    # A folder chosen by hand: what it was baked from is in its summary, not in these settings.
+    self.tables_request = ""
+
+
 class ClothLightMediumSettings(bpy.types.PropertyGroup):
     """The yarn's medium (paper §3.2, §6.2) and the Monte-Carlo bake of its BRDF tables (§5)."""
 
@@ -269,7 +274,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         name="Incidence Resolution", default=_REQUEST.incidence_resolution, min=2, max=64, soft_max=32,
         description="N of the N × N sphere grid of incidence directions in the tables")
     tables_dir: StringProperty(
-        name="Tables", subtype="DIR_PATH", default="",
+        name="Tables", subtype="DIR_PATH", default="", update=_forget_request,
         description="Folder of baked tables Apply Material uses (set by Bake Tables, or any folder made by "
                     "'python -m precompute bake --out'). Empty: pre-baked tables of an unchanged shipped preset")
     tables_request: StringProperty(

@@ -114,7 +114,7 @@ class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
         if medium.tables_dir and medium.tables_request and medium.tables_request != medium.request().to_json():
             layout.label(text="Settings changed since the bake", icon="ERROR")
         elif not medium.tables_dir and operators.prebaked_tables(medium.request()) is not None:
-            layout.label(text="Pre-baked tables of this preset", icon="CHECKMARK")
+            layout.label(text="Shipped tables for these settings", icon="CHECKMARK")
 
 
 class CLOTHLIGHT_PT_bake_settings(_SidebarPanel, bpy.types.Panel):

@@ -30,6 +30,7 @@ wheels are in it (Blender 5.1 moves to Python 3.13).  Downloaded wheels are kept
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib.metadata
 import importlib.util
 import pathlib
@@ -93,7 +94,8 @@ def bundled_versions() -> tuple[dict[str, str], list[str]]:
             try:
                 version = importlib.metadata.version(dist)
             except importlib.metadata.PackageNotFoundError:
-                raise SystemExit(f"{dist} is neither pinned in requirements.txt nor installed: run `make setup`") from None
+                raise SystemExit(f"{dist} is neither pinned in requirements.txt nor installed: "
+                                 "run `make setup`") from None
             notes.append(f"{dist}=={version} (not pinned in requirements.txt: the version installed from it)")
         versions[dist] = version
     return versions, notes
@@ -112,9 +114,11 @@ def blender_extension_tool() -> pathlib.Path:
 # -- wheels --------------------------------------------------------------------------------------
 
 
-def _pip_download(requirement: str, platform: str, dest: pathlib.Path, wheelhouse: pathlib.Path, offline: bool) -> bool:
+def _pip_download(requirement: str, platform: str, dest: pathlib.Path, wheelhouse: pathlib.Path,
+                  offline: bool) -> bool:
+    abi = "cp" + PYTHON_VERSION.replace(".", "")
     command = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps", "--only-binary=:all:",
-               "--python-version", PYTHON_VERSION, "--implementation", "cp", "--abi", f"cp{PYTHON_VERSION.replace('.', '')}",
+               "--python-version", PYTHON_VERSION, "--implementation", "cp", "--abi", abi,
                "--find-links", str(wheelhouse), "--dest", str(dest), requirement]
     for tag in PLATFORM_TAGS[platform]:
         command += ["--platform", tag]
@@ -123,7 +127,8 @@ def _pip_download(requirement: str, platform: str, dest: pathlib.Path, wheelhous
     return subprocess.run(command, capture_output=True, text=True).returncode == 0
 
 
-def platform_wheels(platform: str, versions: dict[str, str], wheelhouse: pathlib.Path) -> tuple[list[pathlib.Path], list[str]]:
+def platform_wheels(platform: str, versions: dict[str, str],
+                    wheelhouse: pathlib.Path) -> tuple[list[pathlib.Path], list[str]]:
     """Wheels of every bundled distribution for ``platform`` (from the wheelhouse, else downloaded
     into it), and the distributions that have none."""
     wheelhouse.mkdir(parents=True, exist_ok=True)
@@ -147,13 +152,15 @@ def platform_wheels(platform: str, versions: dict[str, str], wheelhouse: pathlib
 # -- pre-baked tables ----------------------------------------------------------------------------
 
 
-def prebake(presets: list[str], stage: pathlib.Path, cache_dir: pathlib.Path | None) -> None:
-    """Bake each preset's default tables (or find them in the cache) into ``stage/prebaked/<preset>``."""
+def prebake(presets: list[str], stage: pathlib.Path, cache_dir: pathlib.Path | None,
+            transport: dict | None = None) -> None:
+    """Bake each preset's tables (or find them in the cache) into ``stage/prebaked/<preset>``: the
+    untouched preset's bake, or with ``transport`` settings replacing its own (tests use tiny ones)."""
     from clothlight.addon import import_precompute
 
     cache_dir = cache_dir or import_precompute("cache").default_cache_dir()
     for name in presets:
-        request = preset_request(name)
+        request = dataclasses.replace(preset_request(name), **(transport or {}))
         started = time.perf_counter()
         job = BakeJob(request, cache_dir=cache_dir)
         shown = [-1]
@@ -206,8 +213,8 @@ def _run_tool(tool: pathlib.Path, *args: str) -> None:
 
 
 def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = ("linux-x64",),
-                    prebake_presets: list[str] = (), wheelhouse: pathlib.Path | None = None,
-                    cache_dir: pathlib.Path | None = None) -> list[pathlib.Path]:
+                    prebake_presets: list[str] = (), prebake_transport: dict | None = None,
+                    wheelhouse: pathlib.Path | None = None, cache_dir: pathlib.Path | None = None) -> list[pathlib.Path]:
     """Build and validate one zip per platform (one universal zip without wheels when ``platforms``
     is None); return their paths."""
     output_dir.mkdir(parents=True, exist_ok=True)
@@ -218,7 +225,7 @@ def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = (
         stage = pathlib.Path(scratch) / "clothlight"
         shutil.copytree(REPO_ROOT, stage, ignore=STAGE_IGNORE)
         if prebake_presets:
-            prebake(list(prebake_presets), stage, cache_dir)
+            prebake(list(prebake_presets), stage, cache_dir, prebake_transport)
         version = re.search(r'^version\s*=\s*"([^"]+)"', manifest_source, re.MULTILINE).group(1)
         if platforms is None:
             (stage / "blender_manifest.toml").write_text(staged_manifest(manifest_source, None, [], False))
@@ -261,19 +268,34 @@ def main(argv=None) -> None:
     parser.add_argument("--no-wheels", action="store_true",
                         help="one zip for every platform, without wheels: no bakes in Blender, pre-baked tables only")
     parser.add_argument("--prebake", nargs="+", default=["all"], metavar="PRESET",
-                        help=f"presets whose tables to ship: 'all' (default), 'none' or names from {', '.join(presets)}")
+                        help="presets whose tables to ship: 'all' (default), 'none' or names from "
+                             + ", ".join(presets))
+    parser.add_argument("--prebake-transport", nargs="+", default=[], metavar="KEY=VALUE",
+                        help="transport settings of the pre-bakes instead of each preset's, e.g. paths_per_cell=64 "
+                             "angular_resolution=4 (tests); the add-on uses them for exactly those settings")
     parser.add_argument("--wheelhouse", type=pathlib.Path,
                         default=pathlib.Path.home() / ".cache" / "clothlight" / "wheels",
                         help="folder keeping downloaded wheels between builds (default ~/.cache/clothlight/wheels)")
-    parser.add_argument("--cache-dir", type=pathlib.Path, help="bake cache for the pre-baked tables (default: the user cache)")
+    parser.add_argument("--cache-dir", type=pathlib.Path,
+                        help="bake cache for the pre-baked tables (default: the user cache)")
     args = parser.parse_args(argv)
     chosen = presets if args.prebake == ["all"] else [] if args.prebake == ["none"] else args.prebake
     unknown = sorted(set(chosen) - set(presets))
     if unknown:
         parser.error(f"--prebake: unknown preset {unknown[0]!r}; choose from {', '.join(presets)}, all or none")
+    transport = {}
+    for item in args.prebake_transport:
+        key, _, value = item.partition("=")
+        if key not in ("seed", "paths_per_cell", "target_rel_stderr", "n_around", "n_along", "angular_resolution",
+                       "incidence_resolution") or not value:
+            parser.error(f"--prebake-transport: {item!r} is not KEY=VALUE with a transport key of BakeRequest")
+        transport[key] = float(value) if key == "target_rel_stderr" else int(value)
+    if "paths_per_cell" in transport:
+        transport.setdefault("target_rel_stderr", None)
     platforms = None if args.no_wheels else (list(PLATFORM_TAGS) if "all" in args.platforms else args.platforms)
     for zip_path in build_extension(args.output_dir.resolve(), platforms=platforms, prebake_presets=chosen,
-                                    wheelhouse=args.wheelhouse, cache_dir=args.cache_dir):
+                                    prebake_transport=transport, wheelhouse=args.wheelhouse,
+                                    cache_dir=args.cache_dir):
         print(zip_path)
 
 

@@ -45,7 +45,9 @@ from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
 
 PRESET = "red_cotton"
 TABLE_FILES = ("brdf.exr", "lobes.exr", "summary.json")
-PAPER_WEAVE = WeaveParameters(interlacing="plain", warp_count=12, weft_count=12, spacing_mm=0.5, yarn_radius_mm=0.1)
+# Coarser tessellation than the default for the sample seen whole: the files stay small.
+PAPER_WEAVE = WeaveParameters(interlacing="plain", warp_count=12, weft_count=12, spacing_mm=0.5, yarn_radius_mm=0.1,
+                              segments_per_crossing=6, segments_around=8)
 TWILL_WEAVE = WeaveParameters(interlacing="twill_2_2", warp_count=16, weft_count=16, spacing_mm=0.5,
                               yarn_radius_mm=0.1)
 
@@ -81,7 +83,7 @@ def millimetre_scene(scene) -> None:
     use_cycles_osl_on_cpu(scene)
 
 
-def add_sun(scene, name: str, direction, irradiance: float = 3.0):
+def add_sun(scene, name: str, direction, irradiance: float = 10.0):
     """A sun whose light arrives from ``direction`` (pointing toward the sun), of ``irradiance`` W/m²."""
     light = bpy.data.lights.new(name, "SUN")
     light.energy = irradiance
@@ -109,6 +111,7 @@ def fresh_file() -> None:
 
 
 def save(path: pathlib.Path) -> None:
+    bpy.context.preferences.filepaths.save_version = 0  # regenerated files need no .blend1 backups
     bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True, relative_remap=True)
     print(path)
 
@@ -170,7 +173,7 @@ def twill_closeup_general(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pa
     background = tree.nodes.new("ShaderNodeBackground")
     # The physical sky is in absolute units (the sun is tens of thousands of W/m²): scaled to a
     # daylight exposure where the cloth's linear values sit in the display range.
-    background.inputs["Strength"].default_value = 0.02
+    background.inputs["Strength"].default_value = 0.1
     output = tree.nodes.new("ShaderNodeOutputWorld")
     tree.links.new(sky.outputs["Color"], background.inputs["Color"])
     tree.links.new(background.outputs["Background"], output.inputs["Surface"])

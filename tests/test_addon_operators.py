@@ -15,13 +15,18 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from tests.test_extension import PREBAKED_PRESET, built_zip  # noqa: E402
+from tests.test_extension import PREBAKED_PRESET, PREBAKED_TRANSPORT, built_zip  # noqa: E402
 
 EXTENSION_MODULE = "bl_ext.user_default.clothlight"
 ADDON = f"{EXTENSION_MODULE}.clothlight"
-#: A bake small enough for a test: 4 × 4 angular grids, 64 paths per incidence cell.
-TINY = {"budget": "PATHS", "paths_per_cell": 64, "n_around": 4, "n_along": 2, "angular_resolution": 4,
-        "incidence_resolution": 4}
+#: A bake small enough for a test: 4 × 4 angular grids, 64 paths per incidence cell; the test build
+#: ships the red-cotton tables baked with exactly these settings.
+TINY = {"budget": "PATHS", **PREBAKED_TRANSPORT}
+
+
+def tiny(medium) -> None:
+    for key, value in TINY.items():
+        setattr(medium, key, value)
 
 pytestmark = pytest.mark.blender
 
@@ -37,7 +42,8 @@ def addon(tmp_path_factory):
     assert EXTENSION_MODULE in sys.modules and EXTENSION_MODULE in bpy.context.preferences.addons
     import importlib
 
-    yield {name: importlib.import_module(f"{ADDON}.{name}") for name in ("operators", "jobs", "properties", "preferences")}
+    yield {name: importlib.import_module(f"{ADDON}.{name}")
+           for name in ("operators", "jobs", "properties", "preferences")}
     import addon_utils
 
     addon_utils.disable(EXTENSION_MODULE)
@@ -143,6 +149,7 @@ def test_build_sample_makes_a_real_size_sample_and_rebuilds_it_in_place(addon, s
 
 
 def test_apply_material_uses_the_prebaked_tables_follows_the_sun_and_leaves_no_orphans(addon, scene):
+    tiny(scene.clothlight.medium)  # the settings the shipped tables were baked with
     bpy.ops.clothlight.build_sample()
     sample = bpy.context.active_object
     assert bpy.ops.clothlight.apply_material() == {"FINISHED"}
@@ -182,8 +189,7 @@ def test_apply_material_refuses_objects_that_are_not_samples(addon, scene):
 
 def test_bake_tables_runs_to_the_end_in_background_mode_and_apply_uses_its_tables(addon, scene):
     medium = scene.clothlight.medium
-    for key, value in TINY.items():
-        setattr(medium, key, value)
+    tiny(medium)
     medium.dye_weight_percent = 2.0
     started = time.perf_counter()
     # In background mode INVOKE_DEFAULT runs execute(): the bake in its child process, to the end.
@@ -203,8 +209,7 @@ def test_bake_tables_runs_to_the_end_in_background_mode_and_apply_uses_its_table
 
 def test_bake_tables_reports_bad_input_by_parameter_name(addon, scene):
     medium = scene.clothlight.medium
-    for key, value in TINY.items():
-        setattr(medium, key, value)
+    tiny(medium)
     medium.particle_volume_fraction = 0.74  # the densest packing of spheres, which the medium must stay below
     with pytest.raises(RuntimeError, match="volume_fraction"):
         bpy.ops.clothlight.bake_tables()
@@ -263,8 +268,7 @@ def _tick(operator, context, until, timeout=120.0):
 def test_interactive_bake_polls_its_child_shows_progress_and_finishes(addon, scene):
     operators = addon["operators"]
     medium = scene.clothlight.medium
-    for key, value in TINY.items():
-        setattr(medium, key, value)
+    tiny(medium)
     medium.seed = 3
     operator, context = _interactive_bake(operators, scene)
     assert operator._start_modal(context) == {"RUNNING_MODAL"}
@@ -281,8 +285,7 @@ def test_interactive_bake_polls_its_child_shows_progress_and_finishes(addon, sce
 def test_esc_cancels_an_interactive_bake_and_no_partial_table_is_left(addon, scene):
     operators = addon["operators"]
     medium = scene.clothlight.medium
-    for key, value in TINY.items():
-        setattr(medium, key, value)
+    tiny(medium)
     medium.paths_per_cell, medium.angular_resolution, medium.seed = 20000, 6, 7
     operator, context = _interactive_bake(operators, scene)
     cache = pathlib.Path(addon["preferences"].cache_directory())
@@ -319,7 +322,8 @@ def test_the_bundled_wheels_and_blenders_numpy_alone_can_bake(addon, tmp_path):
     with open(log, "w") as stderr:
         # stdin stays open: the worker takes its closing as a cancel.
         child = subprocess.Popen(
-            [sys.executable, "-S", "-m", jobs.WORKER_MODULE, "--request", request.to_json(), "--cache-dir", str(tmp_path)],
+            [sys.executable, "-S", "-m", jobs.WORKER_MODULE, "--request", request.to_json(),
+             "--cache-dir", str(tmp_path)],
             cwd=jobs.PACKAGE_ROOT, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr, text=True)
         output = child.stdout.read()
         child.wait(timeout=300)
@@ -334,8 +338,9 @@ def test_without_bake_dependencies_bake_is_refused_with_the_reason_and_prebaked_
     operators = addon["operators"]
     monkeypatch.setattr(operators, "missing_bake_dependencies", lambda: ["numba", "llvmlite"])
     assert not bpy.ops.clothlight.bake_tables.poll()
+    tiny(scene.clothlight.medium)
     bpy.ops.clothlight.build_sample()
-    assert bpy.ops.clothlight.apply_material() == {"FINISHED"}  # the untouched preset: pre-baked tables
+    assert bpy.ops.clothlight.apply_material() == {"FINISHED"}  # the shipped tables of these settings
     scene.clothlight.medium.dye_weight_percent = 1.0
     with pytest.raises(RuntimeError, match="Bake unavailable: numba, llvmlite not installed"):
         bpy.ops.clothlight.apply_material()
@@ -345,6 +350,7 @@ def test_without_bake_dependencies_bake_is_refused_with_the_reason_and_prebaked_
 
 
 def test_validate_measures_the_sample_with_its_material_and_removes_its_rig(addon, scene, tmp_path):
+    tiny(scene.clothlight.medium)
     bpy.ops.clothlight.build_sample()
     bpy.ops.clothlight.apply_material()
     before = {(type(b).__name__, b.name) for c in (bpy.data.objects, bpy.data.meshes, bpy.data.scenes) for b in c}
@@ -431,3 +437,80 @@ def test_settings_survive_saving_and_reopening_the_blend(addon, scene, tmp_path)
     assert settings.medium.base == "dark_dyed_cotton" and settings.medium.dye_weight_percent == pytest.approx(4.5)
     assert settings.material_mode == "SUN"
     assert bpy.data.objects["ClothLight Sample"]["clothlight_weave"]["spacing_mm"] == pytest.approx(0.6)
+
+
+# -- panels ---------------------------------------------------------------------------------------
+
+
+class _Layout:
+    """Stands in for UILayout in background mode (no UI there): checks every property and operator a
+    panel draws exists, and records the labels."""
+
+    def __init__(self, labels):
+        self.labels = labels
+        self.use_property_split = self.use_property_decorate = False
+        self.emboss = "NORMAL"
+
+    def prop(self, data, name, **_kw):
+        assert name in data.bl_rna.properties, f"{type(data).__name__} has no property {name!r}"
+
+    def operator(self, idname, **_kw):
+        category, name = idname.split(".")
+        assert hasattr(getattr(bpy.types, f"{category.upper()}_OT_{name}", None), "bl_idname"), idname
+        return SimpleNamespace()
+
+    def label(self, text="", **_kw):
+        self.labels.append(text)
+
+    def progress(self, factor=0.0, text="", **_kw):
+        assert 0.0 <= factor <= 1.0
+        self.labels.append(text)
+
+    def popover(self, panel, **_kw):
+        assert hasattr(bpy.types, panel), panel
+
+    def row(self, **_kw):
+        return self
+
+    column = row
+
+
+def _draw_panels(context) -> list:
+    labels = []
+    for name in ("CLOTHLIGHT_PT_main", "CLOTHLIGHT_PT_sample", "CLOTHLIGHT_PT_medium", "CLOTHLIGHT_PT_bake_settings",
+                 "CLOTHLIGHT_PT_bake_grids", "CLOTHLIGHT_PT_material", "CLOTHLIGHT_PT_validation",
+                 "CLOTHLIGHT_PT_material_properties"):
+        cls = getattr(bpy.types, name)
+        panel = SimpleNamespace(layout=_Layout(labels))
+        if hasattr(cls, "poll") and not cls.poll(context):
+            continue
+        cls.draw(panel, context)
+        if hasattr(cls, "draw_header_preset"):
+            cls.draw_header_preset(panel, context)
+    return labels
+
+
+def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come_from(addon, scene):
+    context = SimpleNamespace(scene=scene, active_object=None, window_manager=bpy.context.window_manager,
+                              material=None)
+    tiny(scene.clothlight.medium)
+    labels = _draw_panels(context)
+    assert "Shipped tables for these settings" in labels
+    for pattern, cross_section, budget, mode in (("CUSTOM", "ELLIPTICAL", "PATHS", "SUN"),
+                                                 ("WIF", "ROUND", "TARGET_ERROR", "GENERAL")):
+        scene.clothlight.weave.pattern, scene.clothlight.weave.cross_section = pattern, cross_section
+        scene.clothlight.weave.auto_crimp = pattern == "WIF"
+        scene.clothlight.medium.budget, scene.clothlight.material_mode = budget, mode
+        _draw_panels(context)
+    scene.clothlight.medium.base = "undyed_cotton"
+    assert "This medium is undyed" in _draw_panels(context)
+    scene.clothlight.medium.base = "red_cotton"
+    tiny(scene.clothlight.medium)
+    scene.clothlight.weave.pattern = "plain"
+    bpy.ops.clothlight.build_sample()
+    bpy.ops.clothlight.apply_material()
+    sample = bpy.context.active_object
+    context = SimpleNamespace(scene=scene, active_object=sample, window_manager=bpy.context.window_manager,
+                              material=sample.active_material)
+    labels = _draw_panels(context)
+    assert any(label.startswith("B/R ") for label in labels) and any("General lighting" in label for label in labels)

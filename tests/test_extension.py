@@ -20,8 +20,11 @@ _spec = importlib.util.spec_from_file_location("build_extension", REPO_ROOT / "s
 build_extension = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(build_extension)
 
-#: The preset the test build pre-bakes (one is enough to test the mechanism; `make extension` bakes all).
+#: The preset the test build pre-bakes, and with what: one preset, tiny grids and budget, are enough to
+#: test the mechanism (`make extension` pre-bakes every preset's own bake).
 PREBAKED_PRESET = "red_cotton"
+PREBAKED_TRANSPORT = {"paths_per_cell": 64, "n_around": 4, "n_along": 2, "angular_resolution": 4,
+                      "incidence_resolution": 4}
 
 
 def built_zip(tmp_path_factory) -> pathlib.Path:
@@ -32,7 +35,8 @@ def built_zip(tmp_path_factory) -> pathlib.Path:
         return existing[0]
     result = subprocess.run(
         [sys.executable, str(REPO_ROOT / "scripts" / "build_extension.py"), "--output-dir", str(out),
-         "--platforms", "linux-x64", "--prebake", PREBAKED_PRESET],
+         "--platforms", "linux-x64", "--prebake", PREBAKED_PRESET,
+         "--prebake-transport", *(f"{key}={value}" for key, value in PREBAKED_TRANSPORT.items())],
         capture_output=True, text=True,
     )
     assert result.returncode == 0, result.stdout + result.stderr
@@ -52,7 +56,7 @@ def _wheel_name_version(filename: str) -> tuple[str, str]:
 def test_zip_holds_the_add_on_shaders_presets_and_prebaked_tables_but_no_dev_files_or_numpy(extension_zip):
     names = zipfile.ZipFile(extension_zip).namelist()
     assert "blender_manifest.toml" in names and "__init__.py" in names
-    assert "clothlight/__init__.py" in names and "osl/clothlight.h" in names and "precompute/presets/red_cotton.toml" in names
+    assert {"clothlight/__init__.py", "osl/clothlight.h", "precompute/presets/red_cotton.toml"} <= set(names)
     assert any(n.startswith("clothlight/presets/clothlight_weave/") for n in names)
     assert not [n for n in names if n.startswith(("tests/", "benchmarks/", "scripts/", "example_blends/", ".git"))]
     assert not [n for n in names if "numpy" in n.lower() or n.endswith((".oso", ".nbi", ".nbc")) or "__pycache__" in n]
@@ -61,14 +65,17 @@ def test_zip_holds_the_add_on_shaders_presets_and_prebaked_tables_but_no_dev_fil
     assert "spectral.npz" not in prebaked
 
 
-def test_prebaked_tables_are_the_untouched_preset_bake(extension_zip):
+def test_prebaked_tables_record_the_request_they_were_baked_from(extension_zip):
     with zipfile.ZipFile(extension_zip) as archive:
         request = BakeRequest.from_json(archive.read(f"prebaked/{PREBAKED_PRESET}/request.json").decode())
         summary = json.loads(archive.read(f"prebaked/{PREBAKED_PRESET}/summary.json"))
-    assert request == preset_request(PREBAKED_PRESET) and not request.overrides
+    untouched = preset_request(PREBAKED_PRESET)
+    assert request.preset == PREBAKED_PRESET and not request.overrides and request.seed == untouched.seed
     assert summary["schema"].startswith("clothlight-table/")
-    assert summary["transport"]["angular_resolution"] == request.angular_resolution
-    assert summary["transport"]["target_rel_stderr"] == pytest.approx(request.target_rel_stderr)
+    assert summary["medium"]["name"] == PREBAKED_PRESET
+    for key, value in PREBAKED_TRANSPORT.items():
+        assert getattr(request, key) == value and summary["transport"][key] == value, key
+    assert request.target_rel_stderr is None and summary["transport"]["target_rel_stderr"] is None
 
 
 def test_manifest_lists_linux_wheels_of_every_bake_dependency_at_the_pinned_versions(extension_zip):

@@ -1,14 +1,17 @@
 """Monte-Carlo light transport in a yarn → BSSRDF → yarn BRDF (paper §3.3, §5.3); slab mode for checks.
 
-Quantities, units and the spectral estimator: docs/transport.md.
+What is simulated, tallied and tabulated, with units, and the proof of the
+spectral estimator: docs/transport.md.
 """
 
-from .brdf import YarnBRDF, yarn_brdf
+from .beam import ParallelBeamRadiance, simulate_parallel_beam
+from .brdf import YarnBRDF, source_weights, yarn_brdf, yarn_brdf_at
 from .cylinder import TransportGrids, YarnGeometry, YarnTransport, simulate_yarn
 from .media import TransportMedium, henyey_greenstein_medium, medium_from_optics
 from .slab import SlabResult, simulate_hg_slab, simulate_slab
 
 __all__ = [
+    "ParallelBeamRadiance",
     "SlabResult",
     "TransportGrids",
     "TransportMedium",
@@ -18,7 +21,10 @@ __all__ = [
     "henyey_greenstein_medium",
     "medium_from_optics",
     "simulate_hg_slab",
+    "simulate_parallel_beam",
     "simulate_slab",
     "simulate_yarn",
+    "source_weights",
     "yarn_brdf",
+    "yarn_brdf_at",
 ]

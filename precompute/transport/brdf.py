@@ -1,18 +1,25 @@
-"""The yarn BRDF from the BSSRDF by integration over the lit yarn surface (paper §5.3.2, eq. 5).
+"""The yarn BRDF from the BSSRDF by summation over the lit yarn surface (paper §5.3.2, eq. 5).
 
-For parallel light of irradiance E⊥ from direction ω_i (unit vector toward the
-light, in the local frame of the receiving point: x = yarn axis, y = n × t,
-z = outward normal; any direction of the sphere), every source cell dA of the
-yarn receives the flux ``E⊥ cos θ_in(dA) A_dA`` when lit (``f = 1`` iff
-``cos θ_in > 0``).  Summing the BSSRDF over them gives the exit radiance::
+Definition used everywhere downstream: a parallel beam of irradiance E⊥
+(measured on a plane facing the beam) arriving from direction ω_i (unit vector
+toward the light, in the local frame of the receiving point: x = yarn axis,
+y = n × t, z = outward normal; any direction of the sphere) gives the exit
+radiance ``L_o = ρ(ω_i, ω_o) E⊥`` toward ω_o (z ≥ 0), volume light only (the
+Fresnel surface reflection is the shader's Cook–Torrance term).  In 1/sr.
 
-    ρ(ω_i, ω_o) = L_o / E⊥ = Σ_dA BSSRDF(ω_in(dA), dA, ω_o, dB) · cos θ_in(dA) · f · A_dA   [1/sr]
+Every source cell dA of the yarn receives the flux ``E⊥ cos θ_in(dA) A_dA``
+when it is lit (``f = 1`` iff cos θ_in > 0; light from behind the receiving
+point reaches it through the yarn), so eq. (5) reads
 
-Illumination is uniform along the axis, so the sum over the axial offsets of
-dA is the BSSRDF summed over all axial bins, overflow included — exact for an
-infinite yarn.  Around the circumference each source cell is split into
-sub-positions, so the cosine and the incidence cell follow the surface's
-rotation within the cell.
+    ρ(ω_i, ω_o) = Σ_dA S(ω_in(dA), dA → dB, ω_o) · cos θ_in(dA) · f · A_dA
+
+with S the BSSRDF in 1/(mm² sr) (:class:`~.cylinder.YarnTransport`).  The
+illumination is uniform along the axis, so the sum over the axial positions of
+dA is S summed over all axial bins, overflow included — exact for an infinite
+yarn.  Around the circumference each source cell is split into
+``CIRCUMFERENTIAL_SUBSAMPLES`` positions (midpoint rule), at which the local
+incidence direction is computed and S interpolated bilinearly between the
+incidence cells' centres in the equal-area square (nearest cell optionally).
 """
 
 from __future__ import annotations
@@ -24,20 +31,19 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..grids import AngularGrid
-from .cylinder import YarnTransport, _mean_cos_per_cell
+from ._checks import integer_at_least
+from .cylinder import YarnTransport, mean_cos_per_cell
 
-#: Sub-positions per source cell around the circumference.
-CIRCUMFERENTIAL_SUBSAMPLES = 8
+#: Positions per source cell around the circumference in the sum of eq. (5).
+CIRCUMFERENTIAL_SUBSAMPLES = 16
+INTERPOLATIONS = ("bilinear", "nearest")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class YarnBRDF:
-    """ρ(ω_i, ω_o) = L_o / E⊥ (1/sr), shape (N_i², N_o², L), with its standard error.
-
-    ``incidence_grid``: sphere grid of ω_i; ``exit_grid``: hemisphere grid of ω_o.
-    Volume (subsurface) light only: the Fresnel surface reflection is the
-    shader's Cook–Torrance term.
-    """
+    """ρ(ω_i, ω_o) = L_o / E⊥ (1/sr) at the centres of ``incidence_grid`` (sphere, ω_i in the
+    receiving frame) and of ``exit_grid`` (hemisphere), shape (N_i², N_o², L), with its
+    Monte-Carlo standard error ``rho_stderr``.  Volume (subsurface) light only."""
 
     wavelengths_nm: np.ndarray
     incidence_grid: AngularGrid
@@ -46,44 +52,93 @@ class YarnBRDF:
     rho_stderr: np.ndarray
 
     def hemispherical_albedo(self) -> np.ndarray:
-        """∫ ρ cos θ_o dω_o over the exit hemisphere: (N_i², L), the exitance per E⊥."""
-        cos_out = _mean_cos_per_cell(self.exit_grid)
+        """∫ ρ cos θ_o dω_o over the exit hemisphere, (N_i², L): exitance per unit E⊥."""
+        cos_out = mean_cos_per_cell(self.exit_grid)
         return np.einsum("iol,o->il", self.rho, cos_out) * self.exit_grid.cell_solid_angle
 
 
-def yarn_brdf(transport: YarnTransport, incidence_resolution: int = 12) -> YarnBRDF:
-    """Eq. (5) over the full sphere of incidence, evaluated at the centres of a sphere grid."""
-    if int(incidence_resolution) < 2:
-        raise ParameterError("incidence_resolution", incidence_resolution, "an integer ≥ 2")
-    incidence_grid = AngularGrid("sphere", int(incidence_resolution))
-    grids = transport.grids
-    source_grid = transport.incidence_grid
-    n_around = grids.n_around
-    d_psi = 2.0 * math.pi / n_around
-    area = transport.cell_area_mm2
+def source_weights(transport: YarnTransport, directions: np.ndarray, *, interpolation: str = "bilinear",
+                   subsamples: int = CIRCUMFERENTIAL_SUBSAMPLES) -> np.ndarray:
+    """Weights W (n_dirs, n_in, n_around) of eq. (5): ρ = Σ_{c,δ} W[·, c, δ] S_axial[c, δ], in mm².
 
-    # Exit radiance per unit incident flux, summed along the axis: (G, n_src_dir, n_around, n_out, L)
-    radiance = transport.exit_radiance_groups.astype(np.float64)
-    omega = incidence_grid.cell_centers()  # receiving frame (t, b, n)
-    n_dirs = len(omega)
-    groups = radiance.shape[0]
-    rho_groups = np.zeros((groups, n_dirs, radiance.shape[3], radiance.shape[4]))
-    offsets = (np.arange(CIRCUMFERENTIAL_SUBSAMPLES) + 0.5) / CIRCUMFERENTIAL_SUBSAMPLES - 0.5
+    For light from each of ``directions`` (n_dirs, 3; receiving frame), W[·, c, δ] sums
+    cos θ_in · f · A_dA / subsamples over the sub-positions of the source cell δ cells
+    before the receiving one whose local incidence direction falls in (or, bilinearly,
+    near) incidence cell c.
+    """
+    if interpolation not in INTERPOLATIONS:
+        raise ParameterError("interpolation", interpolation, f"one of {INTERPOLATIONS}")
+    subsamples = integer_at_least("subsamples", subsamples, 1)
+    directions = np.asarray(directions, float).reshape(-1, 3)
+    norms = np.linalg.norm(directions, axis=1)
+    if not np.all(np.isfinite(norms)) or np.any(np.abs(norms - 1.0) > 1e-6):
+        raise ParameterError("directions", "not unit vectors", "unit vectors (n, 3)")
+    grid = transport.incidence_grid
+    n = grid.resolution
+    n_around = transport.grids.n_around
+    dpsi = 2.0 * math.pi / n_around
+    weights = np.zeros((len(directions), grid.n_cells, n_around))
+    rows = np.arange(len(directions))
+    offsets = (np.arange(subsamples) + 0.5) / subsamples - 0.5
     for delta in range(n_around):
         for offset in offsets:
-            alpha = (-delta + offset) * d_psi  # azimuth of the source point relative to the receiver
+            # the source point sits at azimuth alpha from the receiving point
+            alpha = (-delta + offset) * dpsi
             ca, sa = math.cos(alpha), math.sin(alpha)
-            local = np.stack(
-                [omega[:, 0], omega[:, 2] * sa + omega[:, 1] * ca, omega[:, 2] * ca - omega[:, 1] * sa], axis=1
-            )
+            local = np.stack([directions[:, 0],
+                              directions[:, 2] * sa + directions[:, 1] * ca,
+                              directions[:, 2] * ca - directions[:, 1] * sa], axis=1)
             lit = local[:, 2] > 0.0
             if not np.any(lit):
                 continue
-            cells = source_grid.cell_of(local[lit])
-            weight = local[lit, 2] * area / CIRCUMFERENTIAL_SUBSAMPLES
-            rho_groups[:, lit] += radiance[:, cells, delta] * weight[None, :, None, None]
-    rho = rho_groups.mean(axis=0)
-    stderr = rho_groups.std(axis=0, ddof=1) / math.sqrt(groups)
+            flux = local[lit, 2] * transport.cell_area_mm2 / subsamples
+            target = weights[:, :, delta]
+            if interpolation == "nearest":
+                np.add.at(target, (rows[lit], grid.cell_of(local[lit])), flux)
+                continue
+            st = grid.direction_to_square(local[lit])
+            fi = np.clip(st[:, 0] * n - 0.5, 0.0, n - 1.0)
+            fj = np.clip(st[:, 1] * n - 0.5, 0.0, n - 1.0)
+            i0 = np.minimum(fi.astype(int), n - 2)
+            j0 = np.minimum(fj.astype(int), n - 2)
+            ti = fi - i0
+            tj = fj - j0
+            for di, dj, w in ((0, 0, (1 - ti) * (1 - tj)), (1, 0, ti * (1 - tj)),
+                              (0, 1, (1 - ti) * tj), (1, 1, ti * tj)):
+                np.add.at(target, (rows[lit], (j0 + dj) * n + i0 + di), flux * w)
+    return weights
+
+
+def yarn_brdf_at(transport: YarnTransport, directions: np.ndarray, *, interpolation: str = "bilinear",
+                 subsamples: int = CIRCUMFERENTIAL_SUBSAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """ρ and its standard error (n_dirs, n_out, L), 1/sr, for light from ``directions`` (receiving frame).
+
+    The error is exact for the estimator: each incidence cell's paths are independent of
+    the others', and a path adds to one (offset, exit cell) bin of the axial sum only.
+    """
+    weights = source_weights(transport, directions, interpolation=interpolation, subsamples=subsamples)
+    axial = transport.axial_bssrdf()  # (n_in, n_around, n_out, L)
+    n_in, n_around, n_out, n_wl = axial.shape
+    rho = np.zeros((len(weights), n_out * n_wl))
+    variance = np.zeros_like(rho)
+    for c in range(n_in):
+        w = weights[:, c, :]
+        if not np.any(w):
+            continue
+        part = w @ axial[c].reshape(n_around, -1)
+        second = (w**2) @ transport.bssrdf_axial_second_moment[c].reshape(n_around, -1).astype(np.float64)
+        rho += part
+        variance += np.maximum(second - part**2, 0.0) / (transport.paths_per_cell[c] - 1)
+    shape = (len(weights), n_out, n_wl)
+    return rho.reshape(shape), np.sqrt(variance).reshape(shape)
+
+
+def yarn_brdf(transport: YarnTransport, incidence_resolution: int = 12, *, interpolation: str = "bilinear",
+              subsamples: int = CIRCUMFERENTIAL_SUBSAMPLES) -> YarnBRDF:
+    """Eq. (5) over the full sphere of incidence, at the cell centres of ``AngularGrid("sphere", N_i)``."""
+    incidence_grid = AngularGrid("sphere", integer_at_least("incidence_resolution", incidence_resolution, 2))
+    rho, stderr = yarn_brdf_at(transport, incidence_grid.cell_centers(), interpolation=interpolation,
+                               subsamples=subsamples)
     return YarnBRDF(
         wavelengths_nm=transport.wavelengths_nm,
         incidence_grid=incidence_grid,

@@ -1,19 +1,25 @@
-"""Monte-Carlo transport in a yarn: an infinite cylinder of scattering, absorbing medium (paper §3.3, §5.3.1).
+"""Monte-Carlo transport in a yarn and its BSSRDF (paper §3.3, §5.3.1, eq. 4).
 
-Rays start uniformly inside one reference surface cell dA with directions
-uniform inside each incidence cell; the Fresnel-reflected part is recorded as
-the surface specular (the shader's Cook–Torrance term), the refracted part is
-traced until it leaves the yarn or is absorbed.  Every exit is binned by its
-offset around the circumference and along the axis relative to dA (plus two
-axial overflow bins, so nothing that exits is dropped) and by its direction
-in the exit cell's local frame.  The cylinder's symmetry makes this one
-source cell stand for all of them (Fig. 8b).  See docs/transport.md.
+The yarn is an infinite circular cylinder (radius R, boundary index n) of
+scattering, absorbing medium.  Its surface is cut into cells: ``n_around``
+around the circumference and, along the axis, cells of the same arc length
+``Δ = 2πR / n_around``.  Rays start uniformly inside one reference cell dA
+(the source, ψ ∈ [0, 2π/n_around), z ∈ [0, Δ)) from directions inside each
+incidence cell of the hemisphere grid of dA's local frame, weighted by cos θ
+(the flux of a uniform radiance over the cell), so that every ray carries unit
+incident flux.  The Fresnel-reflected share is recorded as the surface specular
+(the shader's Cook–Torrance term covers it); the refracted share is traced
+until it leaves the yarn or is absorbed.  Every exit is binned by its cell
+offset around the circumference, its axial cell offset (``n_along`` cells with
+the source at index ``n_along // 2``, and two overflow bins, below and above,
+so nothing that exits is dropped) and its direction cell in the exit point's
+local frame.  By the cylinder's symmetry one source cell stands for all of
+them (Fig. 8b).  Quantities and units: docs/transport.md.
 """
 
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,39 +30,50 @@ import numpy as np
 from ..errors import ParameterError
 from ..grids import AngularGrid
 from . import _kernels
+from ._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
+from ._threads import numba_threads
 from .media import TransportMedium, medium_from_optics
 
-#: The error target applies at wavelengths whose albedo is at least this share of the cell's
-#: largest: deep in a dye's absorption band the albedo is ~1e-4 of the peak and reaching 1 %
-#: there would cost orders of magnitude more paths for no visible change.
-ALBEDO_FLOOR = 0.01
-#: Independent groups of paths whose separate tallies give the BRDF's standard error.
-STDERR_GROUPS = 4
+#: Paths per random stream (task) of a yarn run; a cell's paths are a sequence of such tasks.
+TASK_PATHS = 2048
+#: Paths per incidence cell in the first round of a run with an error target.
+FIRST_ROUND_PATHS = 4 * TASK_PATHS
+#: Paths per incidence cell of an error-target run's second round, which measures the variance
+#: per path under the adapted choice of hero wavelengths.
+PROBE_ROUND_PATHS = 32 * TASK_PATHS
+#: An error-target run gives each unconverged cell this much more than its estimated need.
+ROUND_MARGIN = 1.05
+#: Share of the progress bar given to the first round of an error-target run (its total is unknown then).
+FIRST_ROUND_SHARE = 0.1
+#: Share of the hero-wavelength probability spread uniformly in error-target rounds after the first:
+#: it keeps every q_λ ≥ D / L, so the weights stay ≤ L / D.
+HERO_DEFENSIVE = 0.25
+#: The error target applies at wavelengths whose hemispherical albedo is at least this share of the
+#: cell's largest: all that can show in any colour (docs/transport.md, "Error target").
+ALBEDO_FLOOR = 1e-6
 
 
 @dataclass(frozen=True)
 class YarnGeometry:
-    """A circular yarn cross-section of ``radius_mm`` and boundary index ``index`` (host, real)."""
+    """A yarn of circular cross-section: ``radius_mm`` (mm) and real boundary ``index`` (host)."""
 
     radius_mm: float
     index: float
 
     def __post_init__(self):
-        if not (math.isfinite(self.radius_mm) and self.radius_mm > 0):
-            raise ParameterError("yarn.radius_mm", self.radius_mm, "> 0")
-        if not (math.isfinite(self.index) and self.index >= 1.0):
-            raise ParameterError("host index", self.index, "≥ 1")
+        object.__setattr__(self, "radius_mm", positive_length("yarn.radius_mm", self.radius_mm))
+        object.__setattr__(self, "index", refractive_index("index", self.index))
 
 
 @dataclass(frozen=True)
 class TransportGrids:
-    """Spatial and angular grids of the tallies.
+    """Spatial and angular tally grids.
 
-    ``n_around`` cells around the circumference (the source cell is cell 0),
-    ``n_along`` cells along the axis centred on the source cell, square cells
-    (axial length = arc length ``2πR / n_around``); ``angular_resolution`` N for
-    the N × N equal-solid-angle hemisphere grids of incidence and exit
-    directions.  The paper's 128 spatial and 144 angular cells: 16 × 8 and N = 12.
+    ``n_around`` surface cells around the circumference (the source is cell 0),
+    ``n_along`` along the axis (source at index ``n_along // 2``) plus two overflow
+    bins, square cells of side ``2πR / n_around``; ``angular_resolution`` N of the
+    N × N equal-solid-angle hemisphere grids of incidence and exit directions.  The
+    paper's 128 spatial and 144 angular cells are the defaults 16 × 8 and N = 12.
     """
 
     n_around: int = 16
@@ -64,36 +81,45 @@ class TransportGrids:
     angular_resolution: int = 12
 
     def __post_init__(self):
-        if int(self.n_around) < 4:
-            raise ParameterError("grid.n_around", self.n_around, "an integer ≥ 4")
-        if int(self.n_along) < 2 or int(self.n_along) % 2:
-            raise ParameterError("grid.n_along", self.n_along, "an even integer ≥ 2")
-        if int(self.angular_resolution) < 2:
-            raise ParameterError("grid.angular_resolution", self.angular_resolution, "an integer ≥ 2")
+        integer_at_least("grid.n_around", self.n_around, 3)
+        integer_at_least("grid.n_along", self.n_along, 1)
+        integer_at_least("grid.angular_resolution", self.angular_resolution, 2)
 
     def cell_length_mm(self, radius_mm: float) -> float:
+        """Side of a surface cell, mm: the arc length 2πR / n_around."""
         return 2.0 * math.pi * radius_mm / self.n_around
 
+    def axial_offsets(self) -> np.ndarray:
+        """Axial offset (in cells) of exit bins 0 … n_along − 1 from the source cell."""
+        return np.arange(self.n_along) - self.n_along // 2
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, eq=False)
 class YarnTransport:
-    """Tallies of one yarn simulation; per incidence cell ``c`` of ``incidence_grid``.
+    """Tallies of one yarn simulation, per incidence cell c of ``incidence_grid`` (n_in = N²).
 
-    ``bssrdf`` (n_in, n_around, n_along + 2, n_out, L): eq. (4), 1/(mm² sr) — exit
-    radiance at the exit cell per unit flux incident on dA; the last two axial
-    bins are the overflow below / above the grid.  ``exit_radiance_groups``
-    (STDERR_GROUPS, n_in, n_around, n_out, L): the same summed along the axis
-    (overflow included), for independent path groups, 1/(mm² sr).
-    ``specular``, ``exit_fraction``, ``absorbed_fraction``, ``lost_fraction``
-    (n_in, L): shares of the incident flux; ``albedo_rel_stderr`` (n_in, L) the
-    relative standard error of ``exit_fraction``.
+    bssrdf : (n_in, n_around, n_along + 2, n_out, L) float32, 1/(mm² sr)
+        Eq. (4) divided by the exit cell's area: exit radiance of cell dB (cos-weighted
+        mean over the cell and its exit-direction cell) per unit flux incident on dA.
+        Indexed by the circumferential offset of dB from dA, its axial bin
+        (``grids.axial_offsets()``; bin n_along: all exits further below, n_along + 1:
+        further above, same normalisation) and the exit-direction cell.
+    bssrdf_axial_second_moment : (n_in, n_around, n_out, L) float32, (1/(mm² sr))²
+        Per-path mean of the squared contribution to ``bssrdf`` summed over the axial bins
+        (each path exits at most once): gives the standard errors of that sum.
+    specular, exit_fraction, absorbed_fraction, lost_fraction : (n_in, L)
+        Shares of the incident flux: Fresnel reflection at entry, all exits, absorption,
+        paths ended after the interaction limit.  They sum to 1 within noise.
+    albedo_rel_stderr : (n_in, L)
+        Relative standard error of ``exit_fraction`` (the hemispherical albedo of the cell).
+    paths_per_cell : (n_in,) int; ``events``: collisions simulated; ``wall_seconds``.
     """
 
     wavelengths_nm: np.ndarray
     geometry: YarnGeometry
     grids: TransportGrids
     bssrdf: np.ndarray
-    exit_radiance_groups: np.ndarray
+    bssrdf_axial_second_moment: np.ndarray
     specular: np.ndarray
     exit_fraction: np.ndarray
     absorbed_fraction: np.ndarray
@@ -101,6 +127,7 @@ class YarnTransport:
     albedo_rel_stderr: np.ndarray
     paths_per_cell: np.ndarray
     seed: int
+    target_rel_stderr: float | None
     events: int
     wall_seconds: float
 
@@ -112,33 +139,50 @@ class YarnTransport:
     def exit_grid(self) -> AngularGrid:
         return AngularGrid("hemisphere", self.grids.angular_resolution)
 
+    @property
+    def cell_area_mm2(self) -> float:
+        """Area of a surface cell, mm²."""
+        return self.grids.cell_length_mm(self.geometry.radius_mm) ** 2
+
+    def axial_bssrdf(self) -> np.ndarray:
+        """``bssrdf`` summed over all axial bins, overflow included: (n_in, n_around, n_out, L), 1/(mm² sr).
+
+        For light uniform along the yarn this is the exit radiance at offset (δ, ω_out)
+        per unit flux on each source cell of a ring around the axis.
+        """
+        return self.bssrdf.sum(axis=2, dtype=np.float64)
+
+    def axial_bssrdf_stderr(self) -> np.ndarray:
+        """Standard error of :meth:`axial_bssrdf`, same shape and units."""
+        mean = self.axial_bssrdf()
+        n = self.paths_per_cell[:, None, None, None].astype(float)
+        variance = np.maximum(self.bssrdf_axial_second_moment - mean**2, 0.0) / (n - 1)
+        return np.sqrt(variance)
+
     def counted_albedo_rel_stderr(self) -> np.ndarray:
         """``albedo_rel_stderr`` where the error target applies (see ALBEDO_FLOOR), 0 elsewhere."""
         return np.where(_counted(self.exit_fraction), self.albedo_rel_stderr, 0.0)
 
-    @property
-    def cell_area_mm2(self) -> float:
-        return self.grids.cell_length_mm(self.geometry.radius_mm) ** 2
 
-
-def _bssrdf_normalisation(grids: TransportGrids, geometry: YarnGeometry) -> np.ndarray:
-    """1 / (dω_out · cos θ_out · A_dB) per exit cell (eq. 4 with the exit cell area), 1/(sr mm²)."""
-    exit_grid = AngularGrid("hemisphere", grids.angular_resolution)
-    cos_out = _mean_cos_per_cell(exit_grid)
-    area = grids.cell_length_mm(geometry.radius_mm) ** 2
-    return 1.0 / (exit_grid.cell_solid_angle * cos_out * area)
-
-
-def _mean_cos_per_cell(grid: AngularGrid, subsamples: int = 64) -> np.ndarray:
-    """Mean of cos θ over each hemisphere cell (uniform in solid angle)."""
+def mean_cos_per_cell(grid: AngularGrid, subsamples: int = 64) -> np.ndarray:
+    """Mean of cos θ over each cell of a hemisphere grid (directions uniform in solid angle)."""
     n = grid.resolution
     offsets = (np.arange(subsamples) + 0.5) / subsamples
     cells = np.arange(n)
     s = (cells[None, :, None, None] + offsets[None, None, None, :]) / n
     t = (cells[:, None, None, None] + offsets[None, None, :, None]) / n
     s, t = np.broadcast_arrays(s, t)
-    directions = grid.square_to_direction(s, t)
-    return directions[..., 2].mean(axis=(2, 3)).reshape(-1)
+    return grid.square_to_direction(s, t)[..., 2].mean(axis=(2, 3)).reshape(-1)
+
+
+def max_cos_per_cell(resolution: int) -> np.ndarray:
+    """Largest cos θ in each cell of the hemisphere grid (exact for the concentric map, z = 1 − r²,
+    r = max(|2s − 1|, |2t − 1|))."""
+    edges = 2.0 * np.arange(resolution + 1) / resolution - 1.0
+    low, high = edges[:-1], edges[1:]
+    nearest = np.where((low < 0) & (high > 0), 0.0, np.minimum(np.abs(low), np.abs(high)))
+    r_min = np.maximum(nearest[None, :], nearest[:, None])  # [j, i]
+    return (1.0 - r_min**2).reshape(-1)
 
 
 def simulate_yarn(
@@ -148,144 +192,280 @@ def simulate_yarn(
     *,
     paths_per_cell: int | None = None,
     target_rel_stderr: float | None = None,
-    max_paths_per_cell: int = 500_000,
+    max_paths_per_cell: int = 4_000_000,
+    hero_probabilities: np.ndarray | None = None,
     seed: int = 0,
     threads: int | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> YarnTransport:
-    """Trace light through a yarn for every incidence cell; see the module docstring.
+    """Trace light through a yarn from every incidence cell (module docstring; eq. 4).
 
     Parameters
     ----------
     optics
         :class:`precompute.optics.MediumOptics` or a :class:`TransportMedium`.
+    geometry, grids
+        The yarn and the tally grids.
     paths_per_cell
-        Fixed budget of paths per incidence cell; or
+        A fixed number of paths per incidence cell; or
     target_rel_stderr
-        run batches until the exit fraction (hemispherical albedo) of every incidence
-        cell has at most this relative standard error at every wavelength where it is
-        at least ``ALBEDO_FLOOR`` of the cell's largest (or ``max_paths_per_cell`` is reached).
+        run rounds of paths until the hemispherical albedo (``exit_fraction``) of every
+        incidence cell has at most this relative standard error at every wavelength where
+        it is at least ``ALBEDO_FLOOR`` of the cell's largest, or a cell reaches
+        ``max_paths_per_cell``.
+    hero_probabilities
+        With ``paths_per_cell``: the probabilities (L,) of choosing each wavelength as a
+        path's hero (default uniform).  Any choice with all of them > 0 is unbiased
+        (docs/transport.md); error-target runs adapt them themselves.
     seed
-        Seed of every random stream: the same seed gives bitwise-identical
-        tallies whatever ``threads`` is.
+        Seed of every random stream.  The same seed gives bitwise-identical tables
+        whatever ``threads`` is.
+    threads
+        Threads of the parallel kernel (default: all numba was started with).
     progress
-        Called with the completed fraction in [0, 1].
+        Called with the completed fraction in [0, 1] (estimated from the error decay in
+        target mode).
     """
     medium = optics if isinstance(optics, TransportMedium) else medium_from_optics(optics)
+    if not isinstance(geometry, YarnGeometry):
+        raise ParameterError("geometry", type(geometry).__name__, "a YarnGeometry")
+    if not isinstance(grids, TransportGrids):
+        raise ParameterError("grids", type(grids).__name__, "a TransportGrids")
     if (paths_per_cell is None) == (target_rel_stderr is None):
-        raise ParameterError("paths_per_cell / target_rel_stderr", (paths_per_cell, target_rel_stderr), "exactly one of them")
-    if paths_per_cell is not None and int(paths_per_cell) < STDERR_GROUPS * 2:
-        raise ParameterError("paths_per_cell", paths_per_cell, f"≥ {STDERR_GROUPS * 2}")
-    if target_rel_stderr is not None and not (0 < target_rel_stderr < 1):
-        raise ParameterError("target_rel_stderr", target_rel_stderr, "(0, 1)")
-    if threads is not None:
-        if not 1 <= int(threads) <= numba.config.NUMBA_NUM_THREADS:
-            raise ParameterError("threads", threads, f"1 … {numba.config.NUMBA_NUM_THREADS}")
-        numba.set_num_threads(int(threads))
+        raise ParameterError("paths_per_cell / target_rel_stderr", (paths_per_cell, target_rel_stderr),
+                             "exactly one of them")
+    if paths_per_cell is not None:
+        paths_per_cell = integer_at_least("paths_per_cell", paths_per_cell, 2)
     else:
-        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
-
-    res = grids.angular_resolution
-    n_in = n_out = res * res
+        if isinstance(target_rel_stderr, bool) or not isinstance(target_rel_stderr, (int, float)) or not (
+            0 < target_rel_stderr < 1
+        ):
+            raise ParameterError("target_rel_stderr", target_rel_stderr, "a number in (0, 1)")
+        max_paths_per_cell = integer_at_least("max_paths_per_cell", max_paths_per_cell, FIRST_ROUND_PATHS)
+    seed = seed_value(seed)
+    threads = thread_count(threads)
     n_wl = len(medium.wavelengths_nm)
-    cell_length = grids.cell_length_mm(geometry.radius_mm)
-    bssrdf = np.zeros((n_in, grids.n_around, grids.n_along + 2, n_out, n_wl), dtype=np.float32)
-    groups = np.zeros((STDERR_GROUPS, n_in, grids.n_around, n_out, n_wl), dtype=np.float32)
-    specular = np.zeros((n_in, n_wl))
-    exit_sum = np.zeros((n_in, n_wl))
-    exit_sq = np.zeros((n_in, n_wl))
-    absorbed = np.zeros((n_in, n_wl))
-    lost = np.zeros((n_in, n_wl))
-    paths_done = np.zeros(n_in, dtype=np.int64)
-    events = 0
+    if hero_probabilities is not None:
+        if paths_per_cell is None:
+            raise ParameterError("hero_probabilities", "given with target_rel_stderr", "only with paths_per_cell")
+        q = np.asarray(hero_probabilities, float)
+        if q.shape != (n_wl,) or not np.all(np.isfinite(q)) or np.any(q <= 0) or abs(q.sum() - 1.0) > 1e-9:
+            raise ParameterError("hero_probabilities", hero_probabilities, f"{n_wl} values > 0 summing to 1")
+
     start = time.perf_counter()
-
-    mean_cos = _mean_cos_per_cell(AngularGrid("hemisphere", res))
-    batch_paths = int(paths_per_cell) if paths_per_cell is not None else 2000
-    pending = np.arange(n_in)
-    batch = 0
-    block = max(2 * numba.get_num_threads(), 8)
-    while len(pending):
-        for first in range(0, len(pending), block):
-            cells = np.ascontiguousarray(pending[first : first + block])
-            m = len(cells)
-            spec = np.zeros((m, n_wl))
-            ex = np.zeros((m, n_wl))
-            ex_sq = np.zeros((m, n_wl))
-            ab = np.zeros((m, n_wl))
-            lo = np.zeros((m, n_wl))
-            ev = np.zeros(m, dtype=np.int64)
-            _kernels.cylinder_kernel(
-                cells, res, mean_cos, batch_paths, seed, batch, geometry.radius_mm, geometry.index,
-                medium.mu_s, medium.mu_a, medium.phase, medium.phase_icdf,
-                grids.n_around, grids.n_along, cell_length, res, STDERR_GROUPS,
-                bssrdf, groups, spec, ex, ex_sq, ab, lo, ev,
-            )
-            specular[cells] += spec
-            exit_sum[cells] += ex
-            exit_sq[cells] += ex_sq
-            absorbed[cells] += ab
-            lost[cells] += lo
-            paths_done[cells] += batch_paths
-            events += int(ev.sum())
-            if progress is not None:
-                if paths_per_cell is not None:
-                    progress(min(1.0, paths_done.sum() / (n_in * batch_paths)))
-                else:
-                    progress(_adaptive_progress(exit_sum, exit_sq, paths_done, target_rel_stderr))
-        batch += 1
+    run = _YarnRun(medium, geometry, grids, seed)
+    if hero_probabilities is not None:
+        run.hero_p[:] = q / q.sum()
+    with numba_threads(threads):
         if paths_per_cell is not None:
-            break
-        rel = _relative_stderr(exit_sum, exit_sq, paths_done)
-        unconverged = np.any((rel > target_rel_stderr) & _counted(exit_sum), axis=1)
-        pending = np.flatnonzero(unconverged & (paths_done < max_paths_per_cell))
-        batch_paths = min(2 * batch_paths, 64_000)
-
-    n = paths_done[:, None].astype(float)
-    norm = _bssrdf_normalisation(grids, geometry)  # (n_out,)
-    bssrdf *= (norm[None, None, None, :, None] / n[:, :, None, None, None]).astype(np.float32)
-    group_paths = n / STDERR_GROUPS
-    groups *= (norm[None, None, None, :, None] / group_paths[None, :, :, None, None]).astype(np.float32)
+            run.trace_round(_split(np.full(run.n_in, paths_per_cell)), progress, 0, run.n_in * paths_per_cell)
+        else:
+            run.trace_to_target(float(target_rel_stderr), max_paths_per_cell, progress)
     if progress is not None:
         progress(1.0)
-    return YarnTransport(
-        wavelengths_nm=medium.wavelengths_nm,
-        geometry=geometry,
-        grids=grids,
-        bssrdf=bssrdf,
-        exit_radiance_groups=groups,
-        specular=specular / n,
-        exit_fraction=exit_sum / n,
-        absorbed_fraction=absorbed / n,
-        lost_fraction=lost / n,
-        albedo_rel_stderr=_relative_stderr(exit_sum, exit_sq, paths_done),
-        paths_per_cell=paths_done,
-        seed=seed,
-        events=events,
-        wall_seconds=time.perf_counter() - start,
-    )
+    return run.result(target_rel_stderr, time.perf_counter() - start)
 
 
-def _relative_stderr(total, total_sq, paths):
+def _split(paths: np.ndarray) -> list[list[int]]:
+    """Each cell's new paths as a list of task sizes of at most TASK_PATHS."""
+    out = []
+    for count in paths:
+        tasks = -(-int(count) // TASK_PATHS)
+        sizes = [int(count) // tasks] * tasks if tasks else []
+        for t in range(int(count) - sum(sizes)):
+            sizes[t] += 1
+        out.append(sizes)
+    return out
+
+
+def _zeroed(shape, dtype) -> np.ndarray:
+    """A zeroed array for the large tallies, allocated so that numpy may back it with huge pages
+    (``np.zeros`` takes zero pages from calloc without them): exits land at random places in
+    hundreds of MB, and 4 KiB pages would make most of them TLB misses."""
+    out = np.empty(shape, dtype)
+    out.fill(0)
+    return out
+
+
+def _balanced_slots(loads: np.ndarray, threads: int) -> np.ndarray:
+    """Items 0 … n−1 (decreasing ``loads``) dealt to ``threads`` slots, each to the least loaded so far;
+    (threads, n) with −1 padding.  Which thread runs an item never changes its results."""
+    slots = [[] for _ in range(threads)]
+    totals = np.zeros(threads)
+    for item in np.argsort(-loads, kind="stable"):
+        s = int(np.argmin(totals))
+        slots[s].append(int(item))
+        totals[s] += loads[item]
+    out = np.full((threads, max(len(s) for s in slots) + 1), -1, dtype=np.int64)
+    for s, items in enumerate(slots):
+        out[s, : len(items)] = items
+    return out
+
+
+def adapted_hero_probabilities(relative_variance: np.ndarray) -> np.ndarray:
+    """Hero-wavelength probabilities q (L,) from the relative variance per path of each wavelength's
+    estimate under uniform choice: q = D/L + (1 − D) v / Σ v (D = HERO_DEFENSIVE)."""
+    n_wl = len(relative_variance)
+    total = relative_variance.sum()
+    if not total > 0:
+        return np.full(n_wl, 1.0 / n_wl)
+    return HERO_DEFENSIVE / n_wl + (1.0 - HERO_DEFENSIVE) * relative_variance / total
+
+
+def _paths_needed(v0: np.ndarray, v1: np.ndarray, n0: np.ndarray, target: float) -> np.ndarray:
+    """Paths per cell (n_in,) for which the mean of n0 paths of relative variance v0 and the rest
+    of relative variance v1 (both (n_in, L)) has relative error ``target`` at every wavelength:
+    (n0 v0 + (N − n0) v1) / N² = t²  ⇔  N = (v1 + √(v1² + 4 t² n0 (v0 − v1))) / (2 t²)."""
+    root = np.sqrt(np.maximum(v1**2 + 4 * target**2 * n0 * (v0 - v1), 0.0))
+    return np.max((v1 + root) / (2 * target**2), axis=1)
+
+
+def _relative_stderr(total: np.ndarray, total_sq: np.ndarray, paths: np.ndarray) -> np.ndarray:
+    """Relative standard error of the mean of per-path values with sums ``total``, ``total_sq``."""
     n = paths[:, None].astype(float)
     mean = total / n
-    var = np.maximum(total_sq / n - mean**2, 0.0) / np.maximum(n - 1, 1)
-    return np.divide(np.sqrt(var), mean, out=np.zeros_like(mean), where=mean > 0)
+    variance = np.maximum(total_sq / n - mean**2, 0.0) / (n - 1)
+    return np.divide(np.sqrt(variance), mean, out=np.zeros_like(mean), where=mean > 0)
 
 
-def _counted(exit_sum):
+def _counted(exit_sum: np.ndarray) -> np.ndarray:
     """Wavelengths whose albedo the error target applies to, per cell."""
     return exit_sum >= ALBEDO_FLOOR * exit_sum.max(axis=1, keepdims=True)
 
 
-def _adaptive_progress(total, total_sq, paths, target) -> float:
-    rel = _relative_stderr(total, total_sq, paths)
-    worst = float(np.max(np.where(_counted(total), rel, 0.0)))
-    if worst <= target:
-        return 1.0
-    # Error falls as 1/√N: fraction of the needed paths done so far.
-    return min(0.99, (target / worst) ** 2)
+class _YarnRun:
+    """The tallies of a yarn simulation while it runs, and the rounds of tasks that fill them."""
 
+    def __init__(self, medium: TransportMedium, geometry: YarnGeometry, grids: TransportGrids, seed: int):
+        self.medium = medium
+        self.kernel_medium = medium.kernel()
+        self.geometry = geometry
+        self.grids = grids
+        self.seed = seed
+        res = grids.angular_resolution
+        self.n_in = self.n_out = res * res
+        n_wl = len(medium.wavelengths_nm)
+        self.cos_max = max_cos_per_cell(res)
+        # float32: the full table is large (n_in × n_around × (n_along + 2) × n_out × L); each bin's
+        # sum carries far more Monte-Carlo noise than float32 rounding
+        self.table = _zeroed((self.n_in, grids.n_around, grids.n_along + 2, self.n_out, n_wl), np.float32)
+        self.table_sq = _zeroed((self.n_in, grids.n_around, self.n_out, n_wl), np.float32)
+        self.specular = np.zeros((self.n_in, n_wl))
+        self.exit_sum = np.zeros((self.n_in, n_wl))
+        self.exit_sq = np.zeros((self.n_in, n_wl))
+        self.absorbed = np.zeros((self.n_in, n_wl))
+        self.lost = np.zeros((self.n_in, n_wl))
+        self.events = np.zeros(self.n_in, dtype=np.int64)
+        self.paths = np.zeros(self.n_in, dtype=np.int64)
+        self.tasks = np.zeros(self.n_in, dtype=np.int64)
+        self.hero_p = np.full((self.n_in, n_wl), 1.0 / n_wl)
+        self.reported = 0.0
 
-def default_thread_count() -> int:
-    return min(os.cpu_count() or 1, numba.config.NUMBA_NUM_THREADS)
+    def trace_round(self, new_tasks: list[list[int]], progress, done_before: int, total: int) -> None:
+        """Run every cell's new tasks, in blocks of cells (one kernel call each) for progress reports."""
+        cells = [c for c in range(self.n_in) if new_tasks[c]]
+        # largest workloads first: each block of cells is then spread evenly over the threads
+        cells.sort(key=lambda c: -sum(new_tasks[c]))
+        threads = numba.get_num_threads()
+        block = max(4 * threads, len(cells) // 8 + 1)
+        done = done_before
+        for first in range(0, len(cells), block):
+            chunk = cells[first : first + block]
+            width = max(len(new_tasks[c]) for c in chunk)
+            sizes = np.zeros((len(chunk), width + 1), dtype=np.int64)
+            for i, c in enumerate(chunk):
+                sizes[i, : len(new_tasks[c])] = new_tasks[c]
+            ids = np.array(chunk, dtype=np.int64)
+            _kernels.yarn_kernel(
+                _balanced_slots(sizes.sum(axis=1), threads), ids, self.tasks[ids].copy(), sizes, self.seed,
+                self.geometry.radius_mm, self.geometry.index, self.kernel_medium, self.hero_p,
+                self.grids.angular_resolution,
+                self.cos_max, self.grids.n_around, self.grids.n_along,
+                self.grids.cell_length_mm(self.geometry.radius_mm), self.grids.angular_resolution, self.table,
+                self.table_sq, self.specular, self.exit_sum, self.exit_sq, self.absorbed, self.lost, self.events,
+            )
+            for c in chunk:
+                self.tasks[c] += len(new_tasks[c])
+                self.paths[c] += sum(new_tasks[c])
+                done += sum(new_tasks[c])
+            if progress is not None:
+                # a top-up round's estimate may be below what was reported: never go back
+                self.reported = max(self.reported, min(0.99, done / total))
+                progress(self.reported)
+
+    def relative_stderr(self) -> np.ndarray:
+        """Relative standard error of every cell's hemispherical albedo, (n_in, L)."""
+        return _relative_stderr(self.exit_sum, self.exit_sq, self.paths)
+
+    def worst_counted_error(self) -> np.ndarray:
+        return np.max(np.where(_counted(self.exit_sum), self.relative_stderr(), 0.0), axis=1)
+
+    def trace_to_target(self, target: float, max_paths: int, progress) -> None:
+        """Rounds of paths until every cell's albedo error is at most ``target`` at every counted
+        wavelength (docs/transport.md, "Error target").
+
+        Round 0 traces FIRST_ROUND_PATHS per cell with hero wavelengths chosen uniformly; its
+        relative variance per path v_λ shows which wavelengths are hard.  From then on hero
+        λ is chosen with probability q_λ = D/L + (1 − D) v̄_λ / Σ v̄ (v̄: mean over cells, D =
+        HERO_DEFENSIVE), which spends paths where the error is.  Round 1 (PROBE_ROUND_PATHS)
+        measures the variance per path v'_λ under q; round 2 then brings every cell to the
+        target by the 1/N law for the pooled mean, (N0 v + N v') / (N0 + N)² ≤ t², times
+        ROUND_MARGIN.  Further rounds, rarely needed, top up from the measured error.
+        """
+        total_guess = int(self.n_in * FIRST_ROUND_PATHS / FIRST_ROUND_SHARE)
+        self.trace_round(_split(np.full(self.n_in, FIRST_ROUND_PATHS)), progress, 0, total_guess)
+        if not np.any(self.worst_counted_error() > target):
+            return
+        counted = _counted(self.exit_sum)
+        n0 = self.paths[:, None].astype(float)
+        mean = self.exit_sum / n0
+        v0 = np.where(counted, self.relative_stderr() ** 2, 0.0) * n0
+        self.hero_p[:] = adapted_hero_probabilities(v0.mean(axis=0))
+        # for the progress bar only: the need if the variance per path fell to v / (L q)
+        guess = _paths_needed(v0, v0 / (len(self.hero_p[0]) * self.hero_p), n0, target)
+        before_sum, before_sq = self.exit_sum.copy(), self.exit_sq.copy()
+        probe = np.minimum(PROBE_ROUND_PATHS, max_paths - self.paths)
+        self.trace_round(_split(probe), progress, int(self.paths.sum()),
+                         int(np.maximum(guess, self.paths + probe).sum()))
+        n1 = probe[:, None].astype(float)
+        mean1 = (self.exit_sum - before_sum) / np.maximum(n1, 1)
+        var1 = np.maximum((self.exit_sq - before_sq) / np.maximum(n1, 1) - mean1**2, 0.0) * n1 / np.maximum(n1 - 1, 1)
+        v1 = np.where(counted & (mean > 0), var1 / np.where(mean > 0, mean, 1.0) ** 2, 0.0)
+        need = _paths_needed(v0, v1, n0, target) * ROUND_MARGIN
+        while True:
+            pending = (self.worst_counted_error() > target) & (self.paths < max_paths)
+            if not np.any(pending):
+                return
+            extra = np.where(pending, np.maximum(np.ceil(need) - self.paths, TASK_PATHS), 0).astype(np.int64)
+            extra = np.minimum(extra, max_paths - self.paths)
+            self.trace_round(_split(extra), progress, int(self.paths.sum()), int(self.paths.sum() + extra.sum()))
+            need = self.paths * (self.worst_counted_error() / target) ** 2 * ROUND_MARGIN
+
+    def result(self, target: float | None, seconds: float) -> YarnTransport:
+        grids = self.grids
+        n = self.paths.astype(float)
+        exit_grid = AngularGrid("hemisphere", grids.angular_resolution)
+        area = grids.cell_length_mm(self.geometry.radius_mm) ** 2
+        # eq. (4) with the exit cell's area: 1 / (F_in · dω_out · ⟨cos θ_out⟩ · A_dB), F_in = paths
+        per_exit = 1.0 / (exit_grid.cell_solid_angle * mean_cos_per_cell(exit_grid) * area)
+        norm = per_exit[None, :, None] / n[:, None, None]
+        bssrdf = self.table
+        bssrdf *= norm[:, None, None].astype(np.float32)
+        second = (self.table_sq * (per_exit[None, :, None] ** 2 / n[:, None, None])[:, None]).astype(np.float32)
+        return YarnTransport(
+            wavelengths_nm=self.medium.wavelengths_nm,
+            geometry=self.geometry,
+            grids=grids,
+            bssrdf=bssrdf,
+            bssrdf_axial_second_moment=second,
+            specular=self.specular / n[:, None],
+            exit_fraction=self.exit_sum / n[:, None],
+            absorbed_fraction=self.absorbed / n[:, None],
+            lost_fraction=self.lost / n[:, None],
+            albedo_rel_stderr=self.relative_stderr(),
+            paths_per_cell=self.paths.copy(),
+            seed=self.seed,
+            target_rel_stderr=target,
+            events=int(self.events.sum()),
+            wall_seconds=seconds,
+        )

@@ -1,80 +1,165 @@
-"""The arrays a transport kernel needs, from medium optics or from a Henyey–Greenstein medium."""
+"""The medium as the transport core sees it: per-wavelength μs, μa and a phase function.
+
+Built from :class:`precompute.optics.MediumOptics` (tabulated Mie phase
+functions) or as a Henyey–Greenstein medium (analytic phase function, for
+comparison with exact solutions).  See docs/transport.md for how the phase
+function is sampled and evaluated.
+"""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import ParameterError
-from ..phase import DEFAULT_COS_THETA, DEFAULT_ICDF_SIZE, henyey_greenstein_phase
+from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase
+from ._interactions import PHASE_HG, PHASE_TABLE
+from ._paths import KernelMedium
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TransportMedium:
-    """Per-wavelength μs, μa (1/mm), phase table on a uniform cos θ grid and its inverse CDF."""
+    """Per-wavelength optics for the transport kernels.
+
+    Attributes
+    ----------
+    wavelengths_nm : (L,) vacuum wavelengths, nm, strictly increasing
+    mu_s, mu_a : (L,) scattering and absorption coefficients, 1/mm; μt = μs + μa > 0
+    hg_g : (L,) Henyey–Greenstein asymmetry in (−1, 1), or None
+    phase_table : (L, M) phase function on the uniform grid of M values of cos θ over
+        [−1, 1], 1/sr, linear between grid points; or None.  Exactly one of ``hg_g`` and
+        ``phase_table`` is given.
+    """
 
     wavelengths_nm: np.ndarray
     mu_s: np.ndarray
     mu_a: np.ndarray
-    phase: np.ndarray
-    phase_icdf: np.ndarray
+    hg_g: np.ndarray | None = None
+    phase_table: np.ndarray | None = None
 
     def __post_init__(self):
+        wavelengths = np.atleast_1d(np.asarray(self.wavelengths_nm, float))
+        if wavelengths.ndim != 1 or not np.all(np.isfinite(wavelengths)) or np.any(np.diff(wavelengths) <= 0):
+            raise ParameterError("wavelengths_nm", self.wavelengths_nm, "finite, strictly increasing")
+        n_wl = len(wavelengths)
+        arrays = {"wavelengths_nm": wavelengths}
         for name in ("mu_s", "mu_a"):
-            value = np.asarray(getattr(self, name), float)
-            if value.shape != self.wavelengths_nm.shape or not np.all(np.isfinite(value)) or np.any(value < 0):
-                raise ParameterError(name, value, f"{len(self.wavelengths_nm)} finite values ≥ 0")
-        if self.phase.shape[0] != len(self.wavelengths_nm) or self.phase_icdf.shape[0] != len(self.wavelengths_nm):
-            raise ParameterError("phase", self.phase.shape, "one table per wavelength")
+            value = np.atleast_1d(np.asarray(getattr(self, name), float))
+            if value.shape != (n_wl,) or not np.all(np.isfinite(value)) or np.any(value < 0):
+                raise ParameterError(name, getattr(self, name), f"{n_wl} finite values ≥ 0 (1/mm)")
+            arrays[name] = value
+        if np.any(arrays["mu_s"] + arrays["mu_a"] <= 0):
+            raise ParameterError("mu_s + mu_a", arrays["mu_s"] + arrays["mu_a"], "> 0 at every wavelength")
+        if (self.hg_g is None) == (self.phase_table is None):
+            raise ParameterError("phase", (self.hg_g, self.phase_table), "exactly one of hg_g and phase_table")
+        if self.hg_g is not None:
+            g = np.atleast_1d(np.asarray(self.hg_g, float))
+            if g.shape != (n_wl,) or not np.all(np.isfinite(g)) or np.any(np.abs(g) >= 1):
+                raise ParameterError("g", self.hg_g, f"{n_wl} values in (-1, 1)")
+            arrays["hg_g"] = g
+        else:
+            table = np.asarray(self.phase_table, float)
+            if table.ndim != 2 or table.shape[0] != n_wl or table.shape[1] < 3:
+                raise ParameterError("phase_table", table.shape, f"({n_wl}, M ≥ 3)")
+            if not np.all(np.isfinite(table)) or np.any(table < 0) or np.any(table.sum(axis=1) <= 0):
+                raise ParameterError("phase_table", "negative, non-finite or all-zero rows", "a phase function ≥ 0")
+            arrays["phase_table"] = table
+        for name, value in arrays.items():
+            object.__setattr__(self, name, np.ascontiguousarray(value))
+
+    @property
+    def mu_t(self) -> np.ndarray:
+        """Extinction coefficient μs + μa, 1/mm."""
+        return self.mu_s + self.mu_a
+
+    @property
+    def albedo(self) -> np.ndarray:
+        """Single-scattering albedo μs / μt."""
+        return self.mu_s / self.mu_t
+
+    def kernel(self) -> KernelMedium:
+        """The arrays of the numba kernels (:class:`._paths.KernelMedium`)."""
+        mu_t = self.mu_t
+        albedo = self.albedo
+        if self.hg_g is not None:
+            kind, hg_g = PHASE_HG, self.hg_g
+            table = cdf = np.zeros((1, 2))
+            guide = np.zeros((1, 1), dtype=np.int64)
+            same_phase = bool(np.all(hg_g == hg_g[0]))
+            phase_max = float(np.max((1 - hg_g**2) / (4 * np.pi * (1 - np.abs(hg_g)) ** 3)))
+        else:
+            kind, hg_g = PHASE_TABLE, np.zeros(1)
+            table, cdf, guide = phase_sampling_tables(self.phase_table)
+            same_phase = bool(np.all(table == table[0]))
+            phase_max = float(table.max())
+            table = np.ascontiguousarray(table.T)  # (M, L): all wavelengths at one μ side by side
+        grey = same_phase and bool(np.all(mu_t == mu_t[0]))
+        return KernelMedium(mu_t, np.log(mu_t), albedo, float(albedo.max()), kind, hg_g, table, phase_max, cdf,
+                            guide, grey)
+
+
+def phase_sampling_tables(phase: np.ndarray):
+    """Exactly normalised piecewise-linear phase tables (L, M), their CDFs (L, M) and guide tables.
+
+    The phase function is taken linear in cos θ between the M uniform grid points and scaled
+    so that 2π ∫ p dμ = 1 for that function (the trapezoidal rule, as in
+    :func:`precompute.phase.normalize_phase`).  ``guide[k, b]`` is the last segment whose
+    cumulative probability at its start is ≤ b / (M − 1).
+    """
+    phase = np.asarray(phase, float)
+    m = phase.shape[1]
+    segment = 0.5 * (phase[:, 1:] + phase[:, :-1]) * (2.0 / (m - 1))
+    total = segment.sum(axis=1)
+    table = np.ascontiguousarray(phase / (2.0 * np.pi * total[:, None]))
+    cdf = np.zeros_like(table)
+    cdf[:, 1:] = np.cumsum(segment / total[:, None], axis=1)
+    cdf[:, -1] = 1.0
+    levels = np.arange(m - 1) / (m - 1)
+    guide = np.empty((len(table), m - 1), dtype=np.int64)
+    for k in range(len(table)):
+        guide[k] = np.clip(np.searchsorted(cdf[k], levels, side="right") - 1, 0, m - 2)
+    return table, np.ascontiguousarray(cdf), guide
 
 
 def medium_from_optics(optics) -> TransportMedium:
-    """Transport arrays from :class:`precompute.optics.MediumOptics` (its cos θ grid must be uniform)."""
-    grid = np.asarray(optics.cos_theta)
+    """The transport medium of :class:`precompute.optics.MediumOptics` (tabulated phase functions).
+
+    A phase table on a non-uniform cos θ grid is resampled linearly onto the uniform grid
+    of as many points.
+    """
+    grid = np.asarray(optics.cos_theta, float)
+    phase = np.asarray(optics.phase, float)
     uniform = np.linspace(-1.0, 1.0, len(grid))
-    if not np.allclose(grid, uniform, atol=1e-12):
-        phase = np.array([np.interp(uniform, grid, row) for row in optics.phase])
-    else:
-        phase = np.asarray(optics.phase, float)
-    return TransportMedium(
-        wavelengths_nm=np.asarray(optics.wavelengths_nm, float),
-        mu_s=np.ascontiguousarray(optics.mu_s, float),
-        mu_a=np.ascontiguousarray(optics.mu_a, float),
-        phase=np.ascontiguousarray(phase),
-        phase_icdf=np.ascontiguousarray(optics.phase_icdf, float),
-    )
+    if not np.allclose(grid, uniform, rtol=0.0, atol=1e-12):
+        phase = np.array([np.interp(uniform, grid, row) for row in phase])
+    return TransportMedium(optics.wavelengths_nm, optics.mu_s, optics.mu_a, phase_table=phase)
 
 
-def henyey_greenstein_icdf(g: float, n_samples: int = DEFAULT_ICDF_SIZE) -> np.ndarray:
-    """Exact inverse CDF of the Henyey–Greenstein μ at ``u_k = k/(n−1)``."""
-    u = np.linspace(0.0, 1.0, n_samples)
-    if abs(g) < 1e-6:
-        return 2.0 * u - 1.0
-    mu = (1.0 + g * g - ((1.0 - g * g) / (1.0 - g + 2.0 * g * u)) ** 2) / (2.0 * g)
-    return np.clip(mu, -1.0, 1.0)
+def henyey_greenstein_medium(albedo, g, mu_t=1.0, wavelengths_nm=None, *, tabulated: bool = False,
+                             samples: int = DEFAULT_PHASE_SAMPLES) -> TransportMedium:
+    """A Henyey–Greenstein medium of single-scattering ``albedo`` and asymmetry ``g`` (scalars or (L,)).
 
-
-def henyey_greenstein_medium(albedo, g, mu_t: float = 1.0, wavelengths_nm=None) -> TransportMedium:
-    """A medium with Henyey–Greenstein scattering, for comparison with exact solutions.
-
-    ``albedo`` and ``g`` may be scalars or per-wavelength arrays; ``mu_t`` in 1/mm.
+    ``mu_t`` is the extinction coefficient in 1/mm (scalar or (L,)); wavelengths default to
+    0, 1, … (labels only).  ``tabulated`` gives the phase function as a table of ``samples``
+    points instead of analytically, to exercise the tabulated sampler.
     """
     albedo = np.atleast_1d(np.asarray(albedo, float))
-    g = np.broadcast_to(np.atleast_1d(np.asarray(g, float)), albedo.shape)
-    if np.any((albedo < 0) | (albedo > 1)) or not np.all(np.isfinite(albedo)):
-        raise ParameterError("albedo", albedo, "[0, 1]")
-    if np.any(np.abs(g) >= 1) or not np.all(np.isfinite(g)):
-        raise ParameterError("g", g, "(-1, 1)")
-    if not (math.isfinite(mu_t) and mu_t > 0):
-        raise ParameterError("mu_t", mu_t, "> 0")
-    wavelengths = np.arange(len(albedo), dtype=float) if wavelengths_nm is None else np.asarray(wavelengths_nm, float)
-    phase = np.array([henyey_greenstein_phase(DEFAULT_COS_THETA, gi) for gi in g])
-    return TransportMedium(
-        wavelengths_nm=wavelengths,
-        mu_s=albedo * mu_t,
-        mu_a=(1.0 - albedo) * mu_t,
-        phase=phase,
-        phase_icdf=np.array([henyey_greenstein_icdf(gi) for gi in g]),
-    )
+    n_wl = albedo.size
+    g = np.broadcast_to(np.atleast_1d(np.asarray(g, float)), (n_wl,)).copy()
+    mu_t = np.broadcast_to(np.atleast_1d(np.asarray(mu_t, float)), (n_wl,)).copy()
+    if not np.all(np.isfinite(albedo)) or np.any((albedo < 0) | (albedo > 1)):
+        raise ParameterError("albedo", albedo.tolist(), "[0, 1]")
+    if not np.all(np.isfinite(g)) or np.any(np.abs(g) >= 1):
+        raise ParameterError("g", g.tolist(), "(-1, 1)")
+    if not np.all(np.isfinite(mu_t)) or np.any(mu_t <= 0):
+        raise ParameterError("mu_t", mu_t.tolist(), "> 0 (1/mm)")
+    wavelengths = np.arange(n_wl, dtype=float) if wavelengths_nm is None else wavelengths_nm
+    if not tabulated:
+        return TransportMedium(wavelengths, albedo * mu_t, (1.0 - albedo) * mu_t, hg_g=g)
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 3:
+        raise ParameterError("samples", samples, "an integer ≥ 3")
+    cos_theta = np.linspace(-1.0, 1.0, int(samples))
+    return TransportMedium(wavelengths, albedo * mu_t, (1.0 - albedo) * mu_t,
+                           phase_table=henyey_greenstein_phase(cos_theta, g))
+

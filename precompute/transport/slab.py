@@ -1,27 +1,37 @@
 """Plane-parallel slab mode of the transport core, to check it against exact adding–doubling.
 
-A collimated beam falls normally on a slab of optical thickness τ (μt = 1/mm,
-thickness τ mm) and index n between two media of index 1.  Reported totals
-include the specular reflection at entry and the unscattered parts, as
-``iadpython.Sample(...).rt()`` does.
+A collimated beam falls normally on a slab of thickness d (mm) and index n
+between two media of index 1.  The totals include the specular reflection at
+entry and the unscattered parts, as ``iadpython.Sample(...).rt()`` reports its
+first two values (UR1, UT1).  Quantities are fractions of the incident flux
+(dimensionless), per wavelength.
 """
 
 from __future__ import annotations
 
-import math
-import os
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from ..errors import ParameterError
 from . import _kernels
+from ._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
+from ._threads import numba_threads
 from .media import TransportMedium, henyey_greenstein_medium
+
+#: Independent random streams of a slab run (fixed, so results do not depend on the thread count).
+SLAB_TASKS = 64
 
 
 @dataclass(frozen=True)
 class SlabResult:
-    """Reflectance and transmittance of a slab (per wavelength arrays, dimensionless)."""
+    """Reflectance and transmittance of a slab, per wavelength (L,), fractions of the incident flux.
+
+    ``R_total = R_specular + R_unscattered + R_diffuse``; ``T_total = T_unscattered + T_diffuse``;
+    ``absorbed`` and ``lost`` (paths ended after the interaction limit) complete the balance.
+    Standard errors are those of the Monte-Carlo means (the specular part is exact).
+    ``events``: collisions simulated.
+    """
 
     R_total: np.ndarray
     T_total: np.ndarray
@@ -37,56 +47,66 @@ class SlabResult:
     paths: int
     events: int
 
-    def as_dict(self, wavelength_index: int = 0) -> dict:
+    def summary(self, wavelength_index: int = 0) -> dict:
+        """Plain numbers at one wavelength (for JSON)."""
         out = {}
-        for key, value in asdict(self).items():
-            out[key] = float(np.asarray(value).reshape(-1)[wavelength_index]) if np.ndim(value) else value
+        for field in fields(self):
+            value = getattr(self, field.name)
+            out[field.name] = float(np.asarray(value)[wavelength_index]) if np.ndim(value) else value
         return out
 
 
 def simulate_slab(medium: TransportMedium, thickness_mm: float, index: float, *, paths: int = 100_000,
-                  seed: int = 0, chunks: int | None = None) -> SlabResult:
-    """Monte-Carlo R and T of a slab with the same core as the yarn simulation."""
-    if not (math.isfinite(thickness_mm) and thickness_mm > 0):
-        raise ParameterError("thickness", thickness_mm, "> 0")
-    if not (math.isfinite(index) and index >= 1.0):
-        raise ParameterError("n", index, "≥ 1")
-    if paths < 2:
-        raise ParameterError("paths", paths, "≥ 2")
-    chunks = chunks or max(2, min(64, paths // 1000))
-    per_chunk = max(1, paths // chunks)
-    sums, events, specular = _kernels.slab_kernel(
-        per_chunk, chunks, seed, float(thickness_mm), float(index),
-        medium.mu_s, medium.mu_a, medium.phase, medium.phase_icdf,
-    )
-    total = sums.sum(axis=0)
-    n = per_chunk * chunks
-    r_d, r_u, t_d, t_u, absorbed, lost, r_sq, t_sq = (total[i] / n for i in range(8))
-    r_scat = r_d + r_u
-    t_all = t_d + t_u
-    r_err = np.sqrt(np.maximum(r_sq - r_scat**2, 0.0) / (n - 1))
-    t_err = np.sqrt(np.maximum(t_sq - t_all**2, 0.0) / (n - 1))
+                  seed: int = 0, threads: int | None = None) -> SlabResult:
+    """Monte-Carlo R and T of a slab of ``medium`` (``thickness_mm`` mm, refractive ``index``).
+
+    Uses the same path core as the yarn simulation.  ``paths`` are split over
+    ``SLAB_TASKS`` independent streams: the same ``seed`` gives bitwise-identical
+    results whatever ``threads`` is.
+    """
+    if not isinstance(medium, TransportMedium):
+        raise ParameterError("medium", type(medium).__name__, "a TransportMedium")
+    thickness_mm = positive_length("thickness", thickness_mm)
+    index = refractive_index("n", index)
+    paths = integer_at_least("paths", paths, 2)
+    seed = seed_value(seed)
+    counts = np.full(SLAB_TASKS, paths // SLAB_TASKS, dtype=np.int64)
+    counts[: paths % SLAB_TASKS] += 1
+    n_wl = len(medium.wavelengths_nm)
+    sums = np.zeros((SLAB_TASKS, 8, n_wl))
+    events = np.zeros(SLAB_TASKS, dtype=np.int64)
+    with numba_threads(thread_count(threads)):
+        _kernels.slab_kernel(counts, seed, thickness_mm, index, medium.kernel(), sums, events)
+    total = sums.sum(axis=0) / paths
+    r_scattered = total[_kernels.SLAB_R_DIFFUSE] + total[_kernels.SLAB_R_UNSCATTERED]
+    t_all = total[_kernels.SLAB_T_DIFFUSE] + total[_kernels.SLAB_T_UNSCATTERED]
+    specular = ((index - 1.0) / (index + 1.0)) ** 2
     return SlabResult(
-        R_total=specular + r_scat,
+        R_total=specular + r_scattered,
         T_total=t_all,
-        R_total_stderr=r_err,
-        T_total_stderr=t_err,
-        R_specular=float(specular),
-        R_unscattered=r_u,
-        R_diffuse=r_d,
-        T_unscattered=t_u,
-        T_diffuse=t_d,
-        absorbed=absorbed,
-        lost=lost,
-        paths=n,
+        R_total_stderr=_stderr(total[_kernels.SLAB_R_SQUARES], r_scattered, paths),
+        T_total_stderr=_stderr(total[_kernels.SLAB_T_SQUARES], t_all, paths),
+        R_specular=specular,
+        R_unscattered=total[_kernels.SLAB_R_UNSCATTERED],
+        R_diffuse=total[_kernels.SLAB_R_DIFFUSE],
+        T_unscattered=total[_kernels.SLAB_T_UNSCATTERED],
+        T_diffuse=total[_kernels.SLAB_T_DIFFUSE],
+        absorbed=total[_kernels.SLAB_ABSORBED],
+        lost=total[_kernels.SLAB_LOST],
+        paths=paths,
         events=int(events.sum()),
     )
 
 
+def _stderr(mean_square, mean, n):
+    return np.sqrt(np.maximum(mean_square - mean**2, 0.0) / (n - 1))
+
+
 def simulate_hg_slab(albedo: float, g: float, tau: float, index: float, **kwargs) -> SlabResult:
-    """Slab of single-scattering ``albedo``, Henyey–Greenstein ``g``, optical thickness ``tau``, index ``index``."""
-    return simulate_slab(henyey_greenstein_medium(albedo, g), tau, index, **kwargs)
-
-
-def default_threads() -> int:
-    return os.cpu_count() or 1
+    """Slab of single-scattering ``albedo``, Henyey–Greenstein ``g``, optical thickness ``tau``
+    (μt = 1/mm, thickness τ mm) and refractive ``index``; keyword arguments as :func:`simulate_slab`."""
+    if isinstance(tau, bool) or not isinstance(tau, (int, float, np.integer, np.floating)) or not (
+        np.isfinite(tau) and tau > 0
+    ):
+        raise ParameterError("tau", tau, "> 0 (optical thickness)")
+    return simulate_slab(henyey_greenstein_medium(albedo, g), float(tau), index, **kwargs)

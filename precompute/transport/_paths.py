@@ -1,0 +1,304 @@
+"""The transport core: one spectral path through a slab or a cylinder, as numba kernels.
+
+Used by every geometry (slab, yarn BSSRDF source, parallel beam); the callers
+start a path just inside the boundary and bin what :func:`trace` hands back.
+
+Spectral estimator (proof in docs/transport.md).  A path picks a hero
+wavelength h with probability q_h (uniform unless the caller adapts it) and is
+sampled with h's analog densities with implicit capture: free flights from
+``μt_h e^{−μt_h s}``, scattering directions from ``p_h``, boundary reflection
+or transmission with the Fresnel probability (wavelength-independent: one real
+boundary index).  For a path x with n collisions and length D inside the
+medium, technique k's density is ``p_k(x) = μt_k^n e^{−μt_k D} Π_j p_k(μ_j) ×
+(common factors)`` and its contribution at wavelength λ is ``f_λ(x) = α_λ^n
+p_λ(x)`` (α = μs/μt).  The one-sample balance-heuristic estimator
+
+    w_λ = f_λ(x) / Σ_k q_k p_k(x) = α_λ^n · r_λ(x),   r_λ = p_λ / Σ_k q_k p_k ≤ 1 / q_λ
+
+is unbiased for every λ and bounded (by L for uniform q).  The path keeps only
+``n``, ``D`` and the running products ``Π_j p_k(μ_j) / p_h(μ_j)``; the weights
+are formed when needed (exit, roulette check), which keeps a collision's cost
+at one table lookup per wavelength.
+
+Absorbed energy: a λ-analog path deposits ``α^{j−1}(1 − α)`` at its j-th
+collision, ``1 − α^n`` in all (times Russian-roulette factors); as a function
+of the whole path it takes the same MIS ratio r_λ(x).
+
+Russian roulette: every ``ROULETTE_PERIOD`` collisions (every collision when
+r ≡ 1), a path whose largest weight fell below ``ROULETTE_THRESHOLD`` survives
+with probability ``ROULETTE_SURVIVAL`` and has its weights divided by it.  The
+decision depends only on the path so far, never on which wavelength is the
+hero, so it is a common factor of all k's densities: unbiased.  Without
+absorption the largest weight is ≥ 1 (Σ_k q_k r_k = 1) and roulette never
+plays.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numba
+
+from ._interactions import (
+    PHASE_HG,
+    fresnel_reflectance,
+    hg_value,
+    reflect,
+    refract,
+    sample_hg,
+    sample_table,
+    turn,
+)
+from ._rng import uniform
+
+SLAB = 0  #: dims = (thickness,): medium 0 ≤ z ≤ thickness, light enters at z = 0 going +z
+CYLINDER = 1  #: dims = (a, b): elliptic cross-section x²/a² + y²/b² ≤ 1, axis z (a = b: circle)
+
+EXITED = 0
+TERMINATED = 1
+LOST = 2
+
+ROULETTE_THRESHOLD = 1e-3
+ROULETTE_SURVIVAL = 0.1
+#: Collisions between roulette checks where the check costs a spectral evaluation.
+ROULETTE_PERIOD = 4
+#: A path still inside after this many interactions (collisions + internal reflections) is
+#: ended and its weight reported as lost, so nothing disappears unreported.
+MAX_INTERACTIONS = 1_000_000
+#: Running phase ratios are rescaled when an upper bound of their largest exceeds RESCALE.
+RESCALE = 1e100
+
+KernelMedium = namedtuple(
+    "KernelMedium",
+    ["mu_t", "log_mu_t", "albedo", "max_albedo", "phase_kind", "hg_g", "phase_by_mu", "phase_max", "cdf", "guide",
+     "grey"],
+)
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def boundary_distance(geometry, dims, pos, d):
+    """Distance from an interior point ``pos`` along unit ``d`` to the boundary (inf if never)."""
+    if geometry == SLAB:
+        if d[2] > 0.0:
+            return (dims[0] - pos[2]) / d[2]
+        if d[2] < 0.0:
+            return -pos[2] / d[2]
+        return math.inf
+    ia2 = 1.0 / (dims[0] * dims[0])
+    ib2 = 1.0 / (dims[1] * dims[1])
+    qa = d[0] * d[0] * ia2 + d[1] * d[1] * ib2
+    if qa < 1e-300:
+        return math.inf
+    qb = pos[0] * d[0] * ia2 + pos[1] * d[1] * ib2
+    qc = pos[0] * pos[0] * ia2 + pos[1] * pos[1] * ib2 - 1.0
+    root = math.sqrt(max(0.0, qb * qb - qa * qc))
+    # the far root, in the form without cancellation for either sign of qb
+    if qb <= 0.0:
+        return (root - qb) / qa
+    return max(0.0, -qc / (qb + root))
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def boundary_normal(geometry, dims, pos, normal):
+    """Put ``pos`` exactly on the boundary it reached and write the outward unit normal there."""
+    if geometry == SLAB:
+        if pos[2] > 0.5 * dims[0]:
+            pos[2] = dims[0]
+            normal[2] = 1.0
+        else:
+            pos[2] = 0.0
+            normal[2] = -1.0
+        normal[0] = 0.0
+        normal[1] = 0.0
+        return
+    ia2 = 1.0 / (dims[0] * dims[0])
+    ib2 = 1.0 / (dims[1] * dims[1])
+    scale = 1.0 / math.sqrt(pos[0] * pos[0] * ia2 + pos[1] * pos[1] * ib2)
+    pos[0] *= scale
+    pos[1] *= scale
+    nx = pos[0] * ia2
+    ny = pos[1] * ib2
+    inv = 1.0 / math.sqrt(nx * nx + ny * ny)
+    normal[0] = nx * inv
+    normal[1] = ny * inv
+    normal[2] = 0.0
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def update_phase_ratios(medium, hero, mu, ratio, bound):
+    """Multiply the running ratios Π p_k / p_h by this scattering's p_k(μ) / p_h(μ); return the
+    updated upper bound of their largest, rescaling them all when it would exceed RESCALE."""
+    n_wl = ratio.shape[0]
+    if medium.phase_kind == PHASE_HG:
+        inv = 1.0 / hg_value(medium.hg_g[hero], mu)
+        for k in range(n_wl):
+            ratio[k] *= hg_value(medium.hg_g[k], mu) * inv
+    else:
+        table = medium.phase_by_mu
+        position = (mu + 1.0) * 0.5 * (table.shape[0] - 1)
+        j = min(max(int(position), 0), table.shape[0] - 2)
+        frac = position - j
+        hero_value = table[j, hero] + (table[j + 1, hero] - table[j, hero]) * frac
+        if hero_value <= 0.0:  # only where the hero's own density vanishes: never drawn
+            return bound
+        inv = 1.0 / hero_value
+        for k in range(n_wl):
+            ratio[k] *= (table[j, k] + (table[j + 1, k] - table[j, k]) * frac) * inv
+    bound *= medium.phase_max * inv
+    if bound > RESCALE:
+        big = 0.0
+        for k in range(n_wl):
+            big = max(big, ratio[k])
+        inv = 1.0 / big
+        for k in range(n_wl):
+            ratio[k] *= inv
+        bound = 1.0
+    return bound
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def mis_ratios(medium, hero, ratio, n, length, hero_p, out):
+    """r_λ = p_λ(x) / Σ_k q_k p_k(x) for the path so far (n collisions, ``length`` mm) into ``out``;
+    q = ``hero_p``, the probabilities with which the hero wavelength was chosen.
+
+    p_k / p_h = ratio_k · (μt_k / μt_h)^n · e^{−(μt_k − μt_h) length}; the exponential factors
+    are scaled by their largest so that nothing overflows (``ratio`` ≤ RESCALE).
+    """
+    n_wl = out.shape[0]
+    if medium.grey:
+        for k in range(n_wl):
+            out[k] = 1.0
+        return
+    top = -math.inf
+    for k in range(n_wl):
+        b = -(medium.mu_t[k] - medium.mu_t[hero]) * length
+        if n > 0:
+            b += n * (medium.log_mu_t[k] - medium.log_mu_t[hero])
+        out[k] = b
+        top = max(top, b)
+    total = 0.0
+    for k in range(n_wl):
+        out[k] = ratio[k] * math.exp(out[k] - top)
+        total += hero_p[k] * out[k]
+    if not 0.0 < total < math.inf:
+        # every term underflowed (extreme phase ratios): the same sum in logarithms
+        for k in range(n_wl):
+            b = -(medium.mu_t[k] - medium.mu_t[hero]) * length
+            if n > 0:
+                b += n * (medium.log_mu_t[k] - medium.log_mu_t[hero])
+            out[k] = b + math.log(ratio[k]) if ratio[k] > 0.0 else -math.inf
+        top = -math.inf
+        for k in range(n_wl):
+            top = max(top, out[k])
+        total = 0.0
+        for k in range(n_wl):
+            out[k] = math.exp(out[k] - top)
+            total += hero_p[k] * out[k]
+    scale = 1.0 / total
+    for k in range(n_wl):
+        out[k] *= scale
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def albedo_power(medium, k, n):
+    """α_k^n (1 for n = 0), by repeated squaring."""
+    return medium.albedo[k] ** n
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, alive, fresh, ratios, weights,
+            absorbed):
+    """Form the path's weights (``weights``, 0 if not ``alive``) and add its absorbed energy;
+    ``fresh``: ``ratios`` already hold the whole path's MIS ratios."""
+    if not fresh:
+        mis_ratios(medium, hero, ratio, n, length, hero_p, ratios)
+    for k in range(weights.shape[0]):
+        now = albedo_power(medium, k, n)
+        mark = albedo_power(medium, k, n_mark)
+        absorbed[k] += ratios[k] * (banked[k] + factor * (mark - now))
+        weights[k] = ratios[k] * factor * now if alive else 0.0
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight,
+          ratio, banked, ratios, normal, weights, absorbed):
+    """Trace one path that has just entered the medium at ``pos`` going along unit ``d``.
+
+    ``eta`` = n_inside / n_outside; ``enter_weight`` the flux it carries (per unit incident
+    flux).  Returns ``(status, collisions)``.  On ``EXITED``: ``pos`` is the exit point, ``d``
+    the refracted direction outside, ``weights`` (L,) the flux leaving per wavelength; on
+    ``LOST`` ``weights`` holds the flux still inside; on ``TERMINATED`` (roulette) it is 0.
+    ``absorbed`` (L,) is incremented by the absorbed flux in every case.  ``ratio``,
+    ``banked``, ``ratios``, ``normal`` are scratch arrays ((L,), (L,), (L,), (3,)).
+    """
+    n_wl = weights.shape[0]
+    for k in range(n_wl):
+        ratio[k] = 1.0
+        banked[k] = 0.0
+    spectral = (not medium.grey) and n_wl > 1
+    mu_t_hero = medium.mu_t[hero]
+    n = 0
+    n_mark = 0
+    length = 0.0
+    factor = enter_weight  # roulette factor times entering flux
+    largest_albedo_power = 1.0  # max_λ α_λ^n, the largest weight when r ≡ 1
+    ratio_bound = 1.0  # an upper bound of max_k ratio[k]
+    interactions = 0
+    status = LOST
+    while interactions < MAX_INTERACTIONS:
+        interactions += 1
+        flight = -math.log(1.0 - uniform(state)) / mu_t_hero if mu_t_hero > 0.0 else math.inf
+        to_boundary = boundary_distance(geometry, dims, pos, d)
+        if flight == math.inf and to_boundary == math.inf:
+            break
+        if flight < to_boundary:
+            pos[0] += flight * d[0]
+            pos[1] += flight * d[1]
+            pos[2] += flight * d[2]
+            length += flight
+            n += 1
+            largest_albedo_power *= medium.max_albedo
+            check = (n % ROULETTE_PERIOD == 0) if spectral else True
+            if check:
+                if spectral:
+                    mis_ratios(medium, hero, ratio, n, length, hero_p, ratios)
+                    largest = 0.0
+                    for k in range(n_wl):
+                        largest = max(largest, ratios[k] * albedo_power(medium, k, n))
+                else:
+                    largest = largest_albedo_power
+                if largest * factor < ROULETTE_THRESHOLD:
+                    if uniform(state) >= ROULETTE_SURVIVAL:
+                        status = TERMINATED
+                        break
+                    for k in range(n_wl):
+                        banked[k] += factor * (albedo_power(medium, k, n_mark) - albedo_power(medium, k, n))
+                    factor /= ROULETTE_SURVIVAL
+                    n_mark = n
+            if medium.phase_kind == PHASE_HG:
+                mu = sample_hg(medium.hg_g[hero], uniform(state))
+            else:
+                mu = sample_table(medium.phase_by_mu, medium.cdf, medium.guide, hero, uniform(state))
+            if spectral:
+                ratio_bound = update_phase_ratios(medium, hero, mu, ratio, ratio_bound)
+            turn(d, mu, state)
+        else:
+            pos[0] += to_boundary * d[0]
+            pos[1] += to_boundary * d[1]
+            pos[2] += to_boundary * d[2]
+            length += to_boundary
+            boundary_normal(geometry, dims, pos, normal)
+            cos_i = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
+            if cos_i > 0.0:  # ≤ 0 only by round-off at a grazing hit: the path stays inside
+                reflectance = fresnel_reflectance(cos_i, eta)
+                if reflectance >= 1.0 or uniform(state) < reflectance:
+                    reflect(d, normal, cos_i)
+                else:
+                    refract(d, normal, cos_i, eta)
+                    status = EXITED
+                    break
+    # a path ended by roulette ends right after a check that formed its ratios
+    _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, status != TERMINATED,
+            status == TERMINATED and spectral, ratios, weights, absorbed)
+    return status, n

@@ -15,6 +15,14 @@ from .osl_shaders import add_script_node
 
 SUN_MODE = "SUN"
 GENERAL_MODE = "GENERAL"
+#: cloth_yarn.osl's inputs for the bake's ``lobe_shape`` (precompute.closure_fit.LobeShape).
+LOBE_SHAPE_SOCKETS = {
+    "FibreReflectionRoughness": "reflection_longitudinal",
+    "FibreReflectionAzimuthal": "reflection_azimuthal",
+    "FibreTransmissionRoughness": "transmission_longitudinal",
+    "FibreTransmissionAzimuthal": "transmission_azimuthal",
+    "RetroreflectionAlpha": "retroreflection_alpha",
+}
 
 
 def _object_to_world(tree, attribute_name: str, vector_type: str, location):
@@ -43,6 +51,10 @@ def _new_material(name: str, shader_name: str):
     tree.links.new(shader.outputs["BSDF"], output.inputs["Surface"])
     tree.links.new(_object_to_world(tree, CLOTH_NORMAL, "NORMAL", (-200, -200)), shader.inputs["ClothNormal"])
     material["clothlight_shader"] = shader_name
+    # Cycles' bump-map correction bends a closure's normal toward the geometric one (and darkens
+    # diffuse lobes about other normals); the cloth normal of the specular lobe is far from a
+    # yarn's geometric normal by design, so the correction would move the lobe the sun mode computes.
+    material.cycles.use_bump_map_correction = False
     return material, shader
 
 
@@ -84,7 +96,8 @@ def build_yarn_material(
     shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
     shader.inputs["ExitResolution"].default_value = tables.exit_resolution
     shader.inputs["LobeTable"].default_value = str(tables.lobe_path)
-    shader.inputs["LobeCount"].default_value = tables.lobe_count
+    for socket, key in LOBE_SHAPE_SOCKETS.items():
+        shader.inputs[socket].default_value = tables.lobe_shape[key]
     shader.inputs["IOR"].default_value = tables.host_index
     shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
     return material

@@ -22,6 +22,7 @@ import sys
 
 def build_parser() -> argparse.ArgumentParser:
     from .validation.rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES
+    from .validation.run import MATERIALS
 
     parser = argparse.ArgumentParser(prog="python -m clothlight.validate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -30,8 +31,9 @@ def build_parser() -> argparse.ArgumentParser:
                                         "before -P)")
     parser.add_argument("--object", metavar="NAME", help="measure this object of the open file (a ClothLight "
                                                           "sample) instead of building the default woven sample")
-    parser.add_argument("--material", nargs="+", choices=("yarn", "baseline"),
-                        help="materials to sweep (default: yarn and baseline with --tables, else baseline)")
+    parser.add_argument("--material", nargs="+", choices=MATERIALS,
+                        help="materials to sweep (default: yarn and baseline with --tables, else baseline); "
+                             "yarn_general is the general-lighting mode, compared with yarn when both run")
     parser.add_argument("--tables", help="bake folder of the yarn material (python -m precompute bake --out DIR)")
     parser.add_argument("--measured", help="measured BRDF CSV (format: clothlight/validation/measured_data.py)")
     parser.add_argument("--incidences", type=float, nargs="+", metavar="DEG", help="θi, degrees (default 0 30 45 60)")
@@ -112,6 +114,10 @@ def main(argv=None) -> int:
         ratios = entry["table1"]
         if ratios:
             print(f"{kind}: B/R {ratios['B/R']:.3g}, G/R {ratios['G/R']:.3g} at normal incidence and view")
+    comparison = results.get("general_vs_sun")
+    if comparison:
+        print(f"general-lighting mode vs sun mode: RMS relative difference {comparison['RGB']['relative_rms']:.1%} "
+              f"(red {comparison['R']['relative_rms']:.1%}) over {comparison['views_compared']} views")
     print(f"sweep: {results['seconds']['total']:.1f} s")
     return 0
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 import pathlib
 from dataclasses import dataclass
 
+from .addon import import_precompute
+
 
 @dataclass(frozen=True)
 class YarnTableFiles:
@@ -20,8 +22,9 @@ class YarnTableFiles:
         Absolute paths of the OpenEXR atlases (docs/table-spec.md).
     incidence_resolution, exit_resolution
         ``N_i`` (sphere grid) and ``N_o`` (hemisphere grid).
-    lobe_count
-        Number of closure lobes in the lobe atlas.
+    lobe_shape
+        Roughness of the general-lighting mode's shaped lobes, keyed as
+        ``precompute.closure_fit.LobeShape`` (the bake's ``summary.json``).
     host_index
         Refractive index of the yarn host, for the specular Fresnel term.
     """
@@ -30,7 +33,7 @@ class YarnTableFiles:
     lobe_path: pathlib.Path
     incidence_resolution: int
     exit_resolution: int
-    lobe_count: int
+    lobe_shape: dict
     host_index: float
 
     def __post_init__(self):
@@ -56,13 +59,18 @@ def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:
     if not summary_path.is_file():
         raise FileNotFoundError(f"{folder} is not a ClothLight bake: no summary.json")
     summary = json.loads(summary_path.read_text())
-    if not str(summary.get("schema", "")).startswith("clothlight-table/"):
-        raise ValueError(f"{summary_path}: not a ClothLight bake summary (schema {summary.get('schema')!r})")
+    expected_schema = import_precompute("tables").SCHEMA
+    schema = str(summary.get("schema", ""))
+    if not schema.startswith("clothlight-table/"):
+        raise ValueError(f"{summary_path}: not a ClothLight bake summary (schema {schema!r})")
+    if schema != expected_schema:
+        raise ValueError(f"{summary_path}: tables of schema {schema!r}, this ClothLight reads "
+                         f"{expected_schema!r}: bake them again")
     return YarnTableFiles(
         brdf_path=folder / "brdf.exr",
         lobe_path=folder / "lobes.exr",
         incidence_resolution=int(summary["incidence_resolution"]),
         exit_resolution=int(summary["exit_resolution"]),
-        lobe_count=int(summary["lobe_count"]),
+        lobe_shape={key: float(value) for key, value in summary["lobe_shape"].items()},
         host_index=float(summary["host_index"]),
     )

@@ -88,11 +88,22 @@ float cl_fresnel_dielectric(float cos_i, float eta)
     return 0.5 * (rs * rs + rp * rp);
 }
 
-// Cook-Torrance specular BRDF (1/sr) about the normal Nc, Blinn's form (paper refs [10], [21]):
+// Smith's Lambda of the Beckmann distribution of rms slope m for a direction at cos_theta to the
+// normal (Walter et al. 2007, eq. 27 in closed form): G1 = 1 / (1 + Lambda).
+float cl_beckmann_lambda(float cos_theta, float m)
+{
+    float c = clamp(cos_theta, 1e-6, 1.0);
+    float a = c / (m * sqrt(max(1.0 - c * c, 1e-12)));
+    return 0.5 * (erf(a) - 1.0) + exp(-a * a) / (2.0 * a * sqrt(M_PI));
+}
+
+// Cook-Torrance specular BRDF (1/sr) about the normal Nc (paper section 5.2, refs [10], [21]):
 // f = F(v.h) D(h) G / (4 (n.l)(n.v)) with the normalized Beckmann distribution
-// D = exp(-tan^2(a)/m^2) / (pi m^2 cos^4(a)), a = angle(n, h), m = rms slope,
-// and the V-cavity attenuation G = min(1, 2(n.h)(n.v)/(v.h), 2(n.h)(n.l)/(v.h)).
-// L and V point away from the surface.
+// D = exp(-tan^2(a)/m^2) / (pi m^2 cos^4(a)), a = angle(n, h), m = rms slope, the exact dielectric
+// Fresnel F, and as geometric attenuation the height-correlated Smith term of the same Beckmann
+// surface, G = 1 / (1 + Lambda(v) + Lambda(l)).  Cook and Torrance's V-cavity G is not the
+// shadowing of a Beckmann surface, and Smith's is what Cycles' own Beckmann closures use, so the
+// exact (sun) and the general-lighting modes share one specular term.  L and V point away.
 float cl_cook_torrance(vector Nc, vector L, vector V, float m, float eta)
 {
     float nl = dot(Nc, L);
@@ -105,8 +116,19 @@ float cl_cook_torrance(vector Nc, vector L, vector V, float m, float eta)
     float cos2 = nh * nh;
     float tan2 = (1.0 - cos2) / cos2;
     float D = exp(-tan2 / (m * m)) / (M_PI * m * m * cos2 * cos2);
-    float G = min(1.0, min(2.0 * nh * nv / vh, 2.0 * nh * nl / vh));
+    float G = 1.0 / (1.0 + cl_beckmann_lambda(nv, m) + cl_beckmann_lambda(nl, m));
     return cl_fresnel_dielectric(vh, eta) * D * G / (4.0 * nl * nv);
+}
+
+// The cloth's specular radiance per irradiance (1/sr) at a yarn surface point of outward geometric
+// normal Ng_out: Cook-Torrance about the cloth normal Nc times (n_c.l).  A yarn surface turned away
+// from the light reflects none of it (the light would have to cross the yarn first); Cycles' own
+// reflection closures answer the same, so both lighting modes agree.
+float cl_cloth_specular(vector Nc, vector Ng_out, vector L, vector V, float m, float eta)
+{
+    if (dot(Ng_out, L) <= 0.0)
+        return 0.0;
+    return cl_cook_torrance(Nc, L, V, m, eta) * max(dot(Nc, L), 0.0);
 }
 
 // True when the sun (world direction L) is hidden from P by ANOTHER yarn.  Ng_out is the outward
@@ -182,21 +204,7 @@ color cl_yarn_rho(string file, int incidence_resolution, int exit_resolution, ve
     return mix(mix(c00, c10, ax), mix(c01, c11, ax), ay);
 }
 
-// Direction of closure-mixture lobe k in the yarn frame; the order of
-// precompute.closure_fit.closure_lobe_directions(): +x +y +z -x -y -z, then the cube diagonals
-// (sx, sy, sz) / sqrt(3) with sx, sy, sz running over (+1, -1) and sz varying fastest.
-vector cl_lobe_direction(int k)
-{
-    if (k < 6) {
-        float sign = (k < 3) ? 1.0 : -1.0;
-        int axis = k % 3;
-        return vector(axis == 0 ? sign : 0.0, axis == 1 ? sign : 0.0, axis == 2 ? sign : 0.0);
-    }
-    int d = k - 6;
-    float sx = (d & 4) ? -1.0 : 1.0;
-    float sy = (d & 2) ? -1.0 : 1.0;
-    float sz = (d & 1) ? -1.0 : 1.0;
-    return vector(sx, sy, sz) / sqrt(3.0);
-}
+// Number of closure-mixture lobes: the tiles of lobes.exr (precompute.closure_fit.LOBES).
+#define CL_LOBE_COUNT 5
 
 #endif

@@ -54,7 +54,7 @@ import numpy as np
 
 from . import __version__
 from .cache import canonical_json, cache_key, default_cache_dir, lookup, source_digest, store
-from .closure_fit import closure_lobe_directions, fit_closure_weights
+from .closure_fit import LOBES, LobeShape, fit_closure_weights
 from .color import (
     DEFAULT_ILLUMINANT,
     DEFAULT_OBSERVER,
@@ -425,8 +425,8 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
         rho, clipped_share = clip_to_gamut(rho_unclipped)
         stderr = spectral_stderr_to_rgb(arrays["rho_stderr"], wavelengths, colour["illuminant"], colour["observer"])
         albedo, _ = clip_to_gamut(to_rgb(arrays["hemispherical_albedo"]))
-        weights, fit_error = fit_closure_weights(rho, AngularGrid("sphere", n_i))
-        lobes = closure_lobe_directions()
+        lobe_shape = LobeShape()
+        weights, fit_error = fit_closure_weights(brdf_atlas(rho), n_i, lobe_shape)
         rho_normal = _normal_rgb(brdf_atlas(rho), n_i)
         rho_normal_unclipped = _normal_rgb(brdf_atlas(rho_unclipped), n_i)
         header = {
@@ -457,10 +457,11 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             "closure_lobes": lobe_atlas(weights),
         }
         for kind, image in images.items():
-            extra = {"lobe_count": len(lobes)} if kind == "closure_lobes" else {}
+            extra = {"lobe_count": len(LOBES)} if kind == "closure_lobes" else {}
             metadata = {**header, "table": kind, "layout": {**layout, **extra}}
             if kind == "closure_lobes":
-                metadata["lobe_directions"] = lobes.tolist()
+                metadata["lobes"] = list(LOBES)
+                metadata["lobe_shape"] = lobe_shape.to_dict()
             write_table(folder / TABLE_FILES[kind], image, metadata)
         _link_or_copy(spectral_folder / SPECTRAL_FILE, folder / SPECTRAL_FILE)
         summary = {
@@ -470,12 +471,13 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             "files": {**TABLE_FILES, "spectral": SPECTRAL_FILE},
             "incidence_resolution": n_i,
             "exit_resolution": n_o,
-            "lobe_count": len(lobes),
+            "lobe_count": len(LOBES),
+            "lobe_shape": lobe_shape.to_dict(),
             "rho_normal_rgb": rho_normal.tolist(),
             "table1_ratios_normal": _json_ratios(rho_normal),
             "table1_ratios_normal_unclipped": _json_ratios(rho_normal_unclipped),
             "table1_ratios_paper_real_red_cotton": {"B/R": 0.08, "G/R": 0.011},
-            "closure_fit_relative_rms_median": float(np.median(fit_error)),
+            "closure_fit_relative_error_median_rgb": np.median(fit_error, axis=0).tolist(),
             "seconds": {**spectral["seconds"], "tables": time.perf_counter() - start},
         }
         (folder / SUMMARY_FILE).write_text(json.dumps(json.loads(canonical_json(summary)), indent=1))

@@ -1,107 +1,180 @@
 """A yarn BRDF as a mixture of Cycles closures, for rendering under arbitrary lighting.
 
 Cycles' OSL supports only its built-in closures, so a shader cannot evaluate a
-tabulated BRDF for lights Cycles samples itself.  For each exit direction ω_o
-the yarn BRDF ρ(·, ω_o) (``rho = L_o / E⊥``, 1/sr, over the full sphere of
-incidence, see docs/transport.md) is approximated by non-negative combinations
-of clamped-cosine lobes about fixed directions m_k of the yarn frame::
+tabulated BRDF for the lights Cycles samples itself.  For each exit direction
+ω_o the yarn BRDF ρ(·, ω_o) (``rho = L_o / E⊥``, 1/sr, over the full sphere of
+incidence; docs/transport.md) is approximated by a non-negative combination of
+five closures laid in the yarn frame (x = yarn axis, z = outward normal)::
 
-    ρ(ω_i, ω_o) ≈ Σ_k w_k(ω_o) · max(0, m_k · ω_i) / π
+    ρ(ω_i, ω_o) ≈ Σ_k w_k(ω_o) · f_k(ω_o, ω_i)
 
-A clamped-cosine lobe about any direction is exactly what Cycles'
-``translucent(-m_k)`` closure returns under a distant light (its response
-follows the clipped cosine about its normal even past 90° of the geometric
-normal, unlike ``diffuse()``), so the weights ``w_k`` — one set per exit cell
-and colour channel — are all the general-lighting shader needs.  The paper (§7)
-names inter-reflection and general lighting as its open limitation; this
-mixture is how ClothLight lifts it.
+=====================  ==========================================  ==============================
+lobe                   Cycles closure                              what it carries
+=====================  ==========================================  ==============================
+``diffuse``            ``diffuse(z)``                              light scattered many times, lit
+                                                                   from the front
+``translucent``        ``translucent(z)``                          the same, lit from behind
+``fibre_reflection``   ``hair_reflection(z, r₁, r₂, x, 0)``        the fibre's specular cone
+                                                                   (internal reflections of a
+                                                                   cylinder keep the angle to its
+                                                                   axis: ω_i·x = −ω_o·x)
+``fibre_transmission`` ``hair_transmission(z, r₁, r₂, x, 0)``      light through the yarn, on the
+                                                                   same cone, forward
+``retroreflection``    ``microfacet("ggx", ω_o, α, ·, 0)``         back-scatter about the view
+=====================  ==========================================  ==============================
+
+f_k are Cycles' own responses (:mod:`precompute.cycles_closures`, checked
+against renders), so the weights ``w_k`` — one set per exit cell and colour
+channel, stored as ``lobes.exr`` — are all the general-lighting shader needs.
+The paper's medium makes a yarn of red light close to a glass rod (μ_t·R ≈ 0.16
+at 700 nm), and the two fibre lobes are the shape such a rod gives its light;
+the paper (§7) names general lighting and inter-reflection as its open limitation,
+and this mixture is how ClothLight lifts it.
+
+The weights are fitted to ρ *as the sun-mode shader reads it* (bilinear between
+cell centres, :func:`precompute.table_layout.interpolate_rho`) at sub-cell
+sample directions, by non-negative least squares on the relative residual
+``(fit − ρ) / (ρ + mean ρ)``: an absolute fit would spend everything on the
+few cells of direct transmission, whose values are ~50× the rest.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy.optimize import nnls
 
+from . import cycles_closures
 from .errors import ParameterError
 from .grids import AngularGrid
+from .table_layout import interpolate_rho
+
+#: The lobes in the order of ``lobes.exr``'s tiles and of the shader's sum.
+LOBES = ("diffuse", "translucent", "fibre_reflection", "fibre_transmission", "retroreflection")
+YARN_AXIS = np.array([1.0, 0.0, 0.0])
+YARN_NORMAL = np.array([0.0, 0.0, 1.0])
 
 
-def closure_lobe_directions() -> np.ndarray:
-    """The 14 lobe directions (K, 3) in the yarn frame: the 6 axes and the 8 cube diagonals.
+@dataclass(frozen=True)
+class LobeShape:
+    """Roughness of the shaped lobes, the same for every exit cell (shader parameters).
 
-    x = yarn axis, y = n × t, z = outward normal (docs/table-spec.md).
+    Attributes
+    ----------
+    reflection_longitudinal, reflection_azimuthal
+        ``hair_reflection`` roughness r₁ (Cauchy width of the half angle to the
+        fibre's normal plane, radians) and r₂ (azimuthal, dimensionless, 0.001–1).
+    transmission_longitudinal, transmission_azimuthal
+        The same for ``hair_transmission`` (r₂: Cauchy width about the forward
+        azimuth, radians).
+    retroreflection_alpha
+        GGX α of the back-scatter lobe.
+
+    The defaults were chosen on the paper's red cotton by a coordinate search that
+    minimised the fit's relative residual over these candidates (radians or α):
+    r₁ ∈ {0.05, 0.1, 0.2}, r₂ ∈ {0.3, 0.6, 1.0}, α ∈ {0.1, 0.2, 0.4}.
     """
-    axes = np.vstack([np.eye(3), -np.eye(3)])
-    diagonals = np.array([[sx, sy, sz] for sx in (1, -1) for sy in (1, -1) for sz in (1, -1)], float)
-    return np.vstack([axes, diagonals / math.sqrt(3.0)])
+
+    reflection_longitudinal: float = 0.05
+    reflection_azimuthal: float = 0.3
+    transmission_longitudinal: float = 0.1
+    transmission_azimuthal: float = 1.0
+    retroreflection_alpha: float = 0.4
+
+    def __post_init__(self):
+        for name, value in asdict(self).items():
+            if not (isinstance(value, (int, float)) and 0.001 <= value <= 1.0):
+                raise ParameterError(name, value, "a roughness in [0.001, 1]")
+
+    def to_dict(self) -> dict:
+        return asdict(self)
 
 
-def cell_averaged_lobes(grid: AngularGrid, lobes: np.ndarray, subsamples: int = 4) -> np.ndarray:
-    """Mean of ``max(0, m_k · ω) / π`` over each cell of ``grid``: shape (n_cells, K), 1/sr.
+def lobe_responses(view: np.ndarray, light: np.ndarray, shape: LobeShape = LobeShape()) -> np.ndarray:
+    """Cycles' response f_k(ω_o, ω_i) of every lobe, 1/sr, shape (…, len(LOBES)).
 
-    Cells are averaged over a ``subsamples × subsamples`` lattice in the
-    equal-area square, i.e. uniformly in solid angle, matching how the tables
-    average ρ over an incidence cell.
+    ``view`` (3,) is ω_o and ``light`` (…, 3) the directions ω_i toward the
+    light, both in the yarn frame.
     """
+    view = np.asarray(view, float)
+    light = np.asarray(light, float)
+    cc = cycles_closures
+    return np.stack([
+        cc.diffuse_eval(YARN_NORMAL, light),
+        cc.translucent_eval(YARN_NORMAL, light),
+        cc.hair_reflection_eval(YARN_NORMAL, YARN_AXIS, view, light,
+                                shape.reflection_longitudinal, shape.reflection_azimuthal),
+        cc.hair_transmission_eval(YARN_NORMAL, YARN_AXIS, view, light,
+                                  shape.transmission_longitudinal, shape.transmission_azimuthal),
+        cc.ggx_reflection_eval(view, view, light, shape.retroreflection_alpha),
+    ], axis=-1)
+
+
+def incidence_samples(grid: AngularGrid, subsamples: int) -> np.ndarray:
+    """Directions (n_cells·subsamples², 3) on a ``subsamples × subsamples`` lattice inside every
+    cell of the equal-area square of ``grid``: uniform in solid angle."""
     if subsamples < 1:
         raise ParameterError("subsamples", subsamples, "an integer ≥ 1")
     n = grid.resolution
     offsets = (np.arange(subsamples) + 0.5) / subsamples
     cell = np.arange(n)
-    s = (cell[None, :, None, None] + offsets[None, None, None, :]) / n  # (1, n_i, 1, sub)
-    t = (cell[:, None, None, None] + offsets[None, None, :, None]) / n  # (n_j, 1, sub, 1)
-    s, t = np.broadcast_arrays(s, t)  # (n_j, n_i, sub, sub)
-    directions = grid.square_to_direction(s, t)  # (n_j, n_i, sub, sub, 3)
-    response = np.maximum(0.0, directions @ lobes.T) / math.pi
-    return response.mean(axis=(2, 3)).reshape(n * n, len(lobes))
+    s = (cell[None, :, None, None] + offsets[None, None, None, :]) / n
+    t = (cell[:, None, None, None] + offsets[None, None, :, None]) / n
+    s, t = np.broadcast_arrays(s, t)
+    return grid.square_to_direction(s, t).reshape(-1, 3)
 
 
 def fit_closure_weights(
-    rho: np.ndarray, incidence_grid: AngularGrid, lobes: np.ndarray | None = None
+    atlas: np.ndarray,
+    incidence_resolution: int,
+    shape: LobeShape = LobeShape(),
+    subsamples: int = 3,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Non-negative lobe weights per exit cell and channel, and the fit's relative RMS error.
+    """Non-negative lobe weights per exit cell and channel, and the fit's relative error.
 
     Parameters
     ----------
-    rho
-        Yarn BRDF, shape (n_incidence_cells, n_exit_cells, C), 1/sr.
-    incidence_grid
-        The sphere grid of ``rho``'s first axis.
-    lobes
-        Lobe directions (K, 3); default :func:`closure_lobe_directions`.
+    atlas
+        A BRDF atlas (:func:`precompute.table_layout.brdf_atlas`), 1/sr.
+    incidence_resolution
+        N_i of the atlas.
+    shape
+        Roughness of the shaped lobes.
+    subsamples
+        Incidence samples per cell side.
 
     Returns
     -------
     weights
-        Shape (n_exit_cells, K, C), dimensionless (the lobe's albedo).
-    relative_rms
-        Shape (n_exit_cells, C): RMS of the residual over incidence cells divided
-        by the RMS of ρ.
+        Shape (n_exit_cells, len(LOBES), C), dimensionless (each lobe integrates to at
+        most 1, so a weight is the lobe's albedo).
+    relative_error
+        Shape (n_exit_cells, C): RMS over the samples of ``(fit − ρ) / (ρ + mean ρ)``.
     """
-    rho = np.asarray(rho, float)
-    if rho.ndim != 3 or rho.shape[0] != incidence_grid.n_cells:
-        raise ParameterError("rho", rho.shape, f"(n_incidence_cells={incidence_grid.n_cells}, n_exit, channels)")
-    if not np.all(np.isfinite(rho)):
-        raise ParameterError("rho", "non-finite values", "finite values")
-    lobes = closure_lobe_directions() if lobes is None else np.asarray(lobes, float)
-    design = cell_averaged_lobes(incidence_grid, lobes)
-    n_exit, channels = rho.shape[1], rho.shape[2]
-    weights = np.zeros((n_exit, len(lobes), channels))
-    relative_rms = np.zeros((n_exit, channels))
-    for exit_cell in range(n_exit):
+    atlas = np.asarray(atlas, float)
+    if atlas.ndim != 3 or atlas.shape[0] != atlas.shape[1] or atlas.shape[0] % incidence_resolution:
+        raise ParameterError("atlas", atlas.shape, f"a square BRDF atlas of {incidence_resolution}² tiles")
+    if not np.all(np.isfinite(atlas)) or atlas.min() < 0:
+        raise ParameterError("atlas", "negative or non-finite values", "finite values ≥ 0")
+    exit_grid = AngularGrid("hemisphere", atlas.shape[0] // incidence_resolution)
+    light = incidence_samples(AngularGrid("sphere", incidence_resolution), subsamples)
+    channels = atlas.shape[2]
+    weights = np.zeros((exit_grid.n_cells, len(LOBES), channels))
+    relative_error = np.zeros((exit_grid.n_cells, channels))
+    for exit_cell, view in enumerate(exit_grid.cell_centers()):
+        target = interpolate_rho(atlas, incidence_resolution, light, np.broadcast_to(view, light.shape))
+        design = lobe_responses(view, light, shape)
         for channel in range(channels):
-            target = rho[:, exit_cell, channel]
-            w, residual_norm = nnls(design, target)
+            scale = 1.0 / (target[:, channel] + target[:, channel].mean() + 1e-30)
+            w, residual = nnls(design * scale[:, None], target[:, channel] * scale)
             weights[exit_cell, :, channel] = w
-            scale = math.sqrt(np.mean(target**2))
-            relative_rms[exit_cell, channel] = residual_norm / math.sqrt(len(target)) / scale if scale > 0 else 0.0
-    return weights, relative_rms
+            relative_error[exit_cell, channel] = residual / math.sqrt(len(light))
+    return weights, relative_error
 
 
-def evaluate_closure_mixture(weights: np.ndarray, directions_in: np.ndarray, lobes: np.ndarray | None = None):
-    """ρ reconstructed from ``weights`` (n_exit, K, C) for incidence directions (…, 3): (…, n_exit, C)."""
-    lobes = closure_lobe_directions() if lobes is None else np.asarray(lobes, float)
-    response = np.maximum(0.0, np.asarray(directions_in, float) @ lobes.T) / math.pi  # (..., K)
-    return np.einsum("...k,ekc->...ec", response, weights)
+def evaluate_closure_mixture(weights: np.ndarray, view: np.ndarray, light: np.ndarray,
+                             shape: LobeShape = LobeShape()) -> np.ndarray:
+    """ρ rebuilt from one exit cell's ``weights`` (len(LOBES), C) for ``light`` (…, 3): (…, C)."""
+    return lobe_responses(view, light, shape) @ np.asarray(weights, float)

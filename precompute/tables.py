@@ -30,7 +30,7 @@ import numpy as np
 import OpenEXR
 
 #: Bump when the layout or the meaning of any header field changes (docs/table-spec.md).
-SCHEMA = "clothlight-table/2"
+SCHEMA = "clothlight-table/3"
 SCHEMA_KEY = "clothlight_schema"
 KIND_KEY = "clothlight_table"
 VERSION_KEY = "clothlight_code_version"

@@ -1,57 +1,94 @@
 """The closure-mixture fit that lets the yarn shader work under any lighting."""
 
-import math
-
 import numpy as np
 import pytest
 
 from precompute.closure_fit import (
-    cell_averaged_lobes,
-    closure_lobe_directions,
+    LOBES,
+    LobeShape,
     evaluate_closure_mixture,
     fit_closure_weights,
+    incidence_samples,
+    lobe_responses,
 )
 from precompute.errors import ParameterError
 from precompute.grids import AngularGrid
+from precompute.table_layout import brdf_atlas, interpolate_rho
+
+N_I, N_O = 12, 4
 
 
-def test_lobe_directions_are_unit_and_distinct():
-    lobes = closure_lobe_directions()
-    assert lobes.shape == (14, 3)
-    np.testing.assert_allclose(np.linalg.norm(lobes, axis=1), 1.0)
-    assert len({tuple(np.round(v, 6)) for v in lobes}) == 14
+def atlas_of(function):
+    """The BRDF atlas of ``function(view, light) -> (…, 3)`` sampled at the cell centres."""
+    lights = AngularGrid("sphere", N_I).cell_centers()
+    views = AngularGrid("hemisphere", N_O).cell_centers()
+    rho = np.stack([function(view, lights) for view in views], axis=1)
+    return brdf_atlas(rho), views
 
 
-def test_a_clamped_cosine_lobe_integrates_to_its_albedo():
-    # ∫ max(0, m·ω)/π cos-free dω over the sphere = 1: a lobe of weight w returns albedo w under uniform light.
-    grid = AngularGrid("sphere", 24)
-    design = cell_averaged_lobes(grid, closure_lobe_directions(), subsamples=3)
-    np.testing.assert_allclose(design.sum(axis=0) * grid.cell_solid_angle, 1.0, rtol=2e-3)
+def test_samples_are_uniform_in_solid_angle():
+    samples = incidence_samples(AngularGrid("sphere", 6), 3)
+    assert samples.shape == (6 * 6 * 9, 3)
+    np.testing.assert_allclose(np.linalg.norm(samples, axis=1), 1.0)
+    # The mean of a uniform sample of the sphere is near 0 and its second moments are 1/3.
+    np.testing.assert_allclose(samples.mean(axis=0), 0.0, atol=0.01)
+    np.testing.assert_allclose((samples**2).mean(axis=0), 1 / 3, atol=0.01)
 
 
-def test_an_exact_mixture_is_recovered():
-    grid = AngularGrid("sphere", 8)
-    rng = np.random.default_rng(3)
-    true_weights = rng.random((5, 14, 3)) * (rng.random((5, 14, 3)) < 0.4)
-    design = cell_averaged_lobes(grid, closure_lobe_directions())
-    rho = np.einsum("ik,ekc->iec", design, true_weights)
-    weights, relative_rms = fit_closure_weights(rho, grid)
+def test_a_smooth_mixture_is_recovered():
+    true = np.zeros((len(LOBES), 3))
+    true[LOBES.index("diffuse")] = [0.5, 0.2, 0.1]
+    true[LOBES.index("translucent")] = [0.3, 0.0, 0.2]
+    atlas, _ = atlas_of(lambda view, lights: lobe_responses(view, lights) @ true)
+    weights, error = fit_closure_weights(atlas, N_I)
+    assert weights.shape == (N_O * N_O, len(LOBES), 3)
     assert weights.min() >= 0.0
-    np.testing.assert_allclose(np.einsum("ik,ekc->iec", design, weights), rho, atol=1e-9)
-    assert relative_rms.max() < 1e-6
+    # The bilinear table of two clamped cosines is close to them but not exact near the horizon.
+    np.testing.assert_allclose(weights[:, :2, :], np.broadcast_to(true[:2], weights[:, :2, :].shape), atol=0.05)
+    assert np.abs(weights[:, 2:, :]).max() < 0.1
+    assert np.median(error) < 0.1
+
+
+def test_a_fibre_cone_goes_to_the_fibre_lobe():
+    shape = LobeShape(reflection_longitudinal=0.3, reflection_azimuthal=0.6)
+    albedo = np.array([0.6, 0.3, 0.1])
+
+    def cone(view, lights):
+        return lobe_responses(view, lights, shape)[..., [LOBES.index("fibre_reflection")]] * albedo
+
+    atlas, views = atlas_of(cone)
+    weights, error = fit_closure_weights(atlas, N_I, shape)
+    share = weights[:, LOBES.index("fibre_reflection"), 0] / weights[:, :, 0].sum(axis=1)
+    assert np.median(share) > 0.7
+    assert np.median(error[:, 0]) < 0.2
+    # The mixture puts the light on the cone: at the cone direction it is brighter than across it.
+    view = views[5]
+    on_cone = np.array([-view[0], view[1], np.sqrt(max(0.0, 1 - view[0] ** 2 - view[1] ** 2))])
+    across = np.array([view[0], -view[1], view[2]]) if abs(view[0]) > 0.2 else np.array([0.9, 0.0, 0.44])
+    rebuilt = evaluate_closure_mixture(weights[5], view, np.stack([on_cone, across]), shape)
+    assert rebuilt[0, 0] > rebuilt[1, 0]
 
 
 def test_fit_reports_the_error_of_what_it_cannot_represent():
-    grid = AngularGrid("sphere", 8)
-    centers = grid.cell_centers()
-    # A narrow lobe is not a sum of clamped cosines: the fit error must say so.
-    narrow = np.exp(-((1.0 - centers[:, 2]) / 0.02))[:, None, None] / math.pi
-    weights, relative_rms = fit_closure_weights(narrow, grid)
-    assert relative_rms[0, 0] > 0.2
-    recon = evaluate_closure_mixture(weights, centers)[:, 0, 0]
-    assert np.all(recon >= 0.0)
+    # A narrow spot lit from a fixed direction off every lobe's axis is not in the mixture's span.
+    spot = np.array([0.6, -0.6, -0.53]) / np.linalg.norm([0.6, -0.6, -0.53])
+
+    def narrow(view, lights):
+        return np.repeat(np.exp((lights @ spot - 1.0) / 0.01)[:, None], 3, axis=1)
+
+    atlas, views = atlas_of(narrow)
+    weights, error = fit_closure_weights(atlas, N_I)
+    assert weights.min() >= 0.0
+    table_at_spot = interpolate_rho(atlas, N_I, spot, views)[:, 0]
+    rebuilt_at_spot = np.array([evaluate_closure_mixture(w, v, spot)[0] for w, v in zip(weights, views)])
+    assert np.all(rebuilt_at_spot < 0.5 * table_at_spot)
+    assert np.median(error) > 0.1
 
 
-def test_fit_refuses_tables_of_the_wrong_shape():
-    with pytest.raises(ParameterError, match="rho"):
-        fit_closure_weights(np.ones((10, 4, 3)), AngularGrid("sphere", 8))
+def test_fit_refuses_bad_tables_and_shapes():
+    with pytest.raises(ParameterError, match="atlas"):
+        fit_closure_weights(np.ones((10, 4, 3)), N_I)
+    with pytest.raises(ParameterError, match="atlas"):
+        fit_closure_weights(-np.ones((N_I * N_O, N_I * N_O, 3)), N_I)
+    with pytest.raises(ParameterError, match="retroreflection_alpha"):
+        LobeShape(retroreflection_alpha=0.0)

@@ -13,7 +13,7 @@ import numpy as np
 import OpenEXR
 import pytest
 
-from precompute.closure_fit import closure_lobe_directions
+from precompute.closure_fit import LOBES, LobeShape, lobe_responses
 from precompute.grids import AngularGrid
 from precompute.table_layout import brdf_atlas, interpolate_rho, lobe_atlas
 
@@ -50,11 +50,11 @@ def synthetic_tables(tmp_path_factory):
     rho = analytic_rho(wi[:, None, :], wo[None, :, :])
     atlas = brdf_atlas(rho)
     write_exr(folder / "rho.exr", atlas)
-    weights = np.zeros((N_O * N_O, 14, 3))
-    weights[:, 2, :] = [0.5, 0.25, 0.125]  # lobe +z: a Lambertian reflector
-    weights[:, 5, 0] = 0.4  # lobe -z, red only: light from behind
+    # Every lobe with its own colour, the same for every exit cell.
+    weights = np.zeros((N_O * N_O, len(LOBES), 3))
+    weights[:, :, :] = [[0.5, 0.25, 0.125], [0.4, 0.0, 0.1], [0.3, 0.2, 0.0], [0.6, 0.1, 0.3], [0.2, 0.5, 0.1]]
     write_exr(folder / "lobes.exr", lobe_atlas(weights))
-    tables = YarnTableFiles(folder / "rho.exr", folder / "lobes.exr", N_I, N_O, 14, 1.557)
+    tables = YarnTableFiles(folder / "rho.exr", folder / "lobes.exr", N_I, N_O, LobeShape().to_dict(), 1.557)
     return tables, atlas, weights
 
 
@@ -133,12 +133,16 @@ def test_sun_mode_reproduces_the_table_spec_and_the_analytic_rho(
 
 
 @pytest.mark.blender
-@pytest.mark.parametrize("sun_direction", [unit([0.3, -0.2, 0.9]), unit([0.2, 0.3, -0.9])], ids=["front", "behind"])
-def test_general_mode_lobes_are_clamped_cosines_under_a_sun(tmp_path, synthetic_tables, sun_direction):
+@pytest.mark.parametrize(
+    "view_zenith, view_azimuth, sun_direction",
+    [(20.0, 40.0, unit([0.3, -0.2, 0.9])),  # front: diffuse, fibre cone, retro-reflection
+     (35.0, 10.0, unit([-0.5, 0.1, 0.85])),  # close to the fibre's specular cone
+     (20.0, 40.0, unit([0.2, 0.3, -0.9]))],  # behind: translucent, fibre transmission
+    ids=["front", "cone", "behind"])
+def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_zenith, view_azimuth, sun_direction):
     tables, _, weights = synthetic_tables
-    scene, _ = patch_scene(tables, GENERAL_MODE, 20.0, 40.0, sun_direction)
+    scene, wo = patch_scene(tables, GENERAL_MODE, view_zenith, view_azimuth, sun_direction)
     pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
-    lobes = closure_lobe_directions()
-    response = np.maximum(0.0, lobes @ sun_direction) / math.pi
-    expected = SUN_IRRADIANCE * np.einsum("k,kc->c", response, weights[0])
+    expected = SUN_IRRADIANCE * lobe_responses(wo, sun_direction) @ weights[0]
+    assert expected.min() > 1e-3
     np.testing.assert_allclose(pixels.mean(axis=0), expected, rtol=0.01, atol=1e-4)

@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass
 import bpy
 import numpy as np
 
-from ..materials import SUN_MODE, build_baseline_material, build_yarn_material, shader_node
+from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
 from ..mesh_attributes import YARN_TANGENT
 from ..yarn_tables import yarn_tables_from_bake
 from .framing import ParameterError
@@ -33,9 +33,14 @@ from .report import swatch_exposure, write_report, write_swatch_png
 from .rig import RigSettings, build_rig
 
 #: Materials a sweep can measure, in the order they are swept and plotted.
-MATERIALS = ("yarn", "baseline")
+MATERIALS = ("yarn", "yarn_general", "baseline")
+#: What a sweep measures when no materials are named and tables are given.
+DEFAULT_MATERIALS = ("yarn", "baseline")
+#: Materials that read the yarn tables.
+YARN_MATERIALS = ("yarn", "yarn_general")
 MATERIAL_LABELS = {
     "yarn": "ClothLight yarn BRDF",
+    "yarn_general": "ClothLight yarn BRDF, general-lighting closure mixture",
     "baseline": "baseline: Lambert (0.6/π, 0, 0) + Cook–Torrance m = 0.8",
 }
 #: The paper's Table 1 (§6.1): B/R and G/R at normal illumination and view.
@@ -89,14 +94,14 @@ class ValidationRun:
     def __init__(self, sample=None, out_dir="clothlight_validation", *, materials=None, tables_dir=None,
                  measured_csv=None, settings: RigSettings = RigSettings(), swatches: bool = True):
         if materials is None:
-            materials = MATERIALS if tables_dir is not None else ("baseline",)
+            materials = DEFAULT_MATERIALS if tables_dir is not None else ("baseline",)
         materials = tuple(materials)
         unknown = [m for m in materials if m not in MATERIALS]
         if not materials or unknown or len(set(materials)) != len(materials):
             raise ParameterError("materials", materials, f"distinct names from {MATERIALS}")
         self.materials = tuple(m for m in MATERIALS if m in materials)
         self.tables = None
-        if "yarn" in self.materials:
+        if set(YARN_MATERIALS) & set(self.materials):
             if tables_dir is None and isinstance(sample, bpy.types.Object):
                 tables_dir = tables_of_sample(sample)
             if tables_dir is None:
@@ -125,7 +130,7 @@ class ValidationRun:
         rig = build_rig(self.sample, self.settings)
         created = []
         try:
-            if "yarn" in self.materials and YARN_TANGENT not in rig.sample.data.attributes:
+            if set(YARN_MATERIALS) & set(self.materials) and YARN_TANGENT not in rig.sample.data.attributes:
                 raise ParameterError("sample", getattr(self.sample, "name", self.sample),
                                      f"a mesh with the '{YARN_TANGENT}' attribute for the yarn material")
             self.out_dir.mkdir(parents=True, exist_ok=True)
@@ -176,6 +181,9 @@ class ValidationRun:
     def _build_material(self, kind: str):
         if kind == "yarn":
             return build_yarn_material(self.tables, name="ClothLight Gonioreflectometer Yarn", mode=SUN_MODE)
+        if kind == "yarn_general":
+            return build_yarn_material(self.tables, name="ClothLight Gonioreflectometer Yarn General",
+                                       mode=GENERAL_MODE)
         return build_baseline_material(name="ClothLight Gonioreflectometer Baseline", mode=SUN_MODE)
 
     def _assemble(self, rig, curves, swatches, seconds, total_seconds) -> dict:
@@ -219,6 +227,8 @@ class ValidationRun:
             if kind in swatches:
                 entry["swatches"] = swatches[kind]
             results["materials"][kind] = entry
+        if "yarn" in curves and "yarn_general" in curves:
+            results["general_vs_sun"] = compare_sweeps(curves["yarn_general"], curves["yarn"])
         if self.measurement is not None:
             m = self.measurement
             results["measurement"] = {
@@ -267,6 +277,33 @@ def compare_with_measurement(views, measurement) -> dict | None:
                                 "shape_correlation": shape_correlation(a, b)}
         metrics[quantity] = by_channel
     return metrics
+
+
+def compare_sweeps(views, reference_views) -> dict:
+    """How far one sweep's calibrated BRDF is from another's, over the views they share.
+
+    Per channel and for R, G, B together: ``relative_rms`` (RMS difference over the RMS of the
+    reference, :func:`.measured_data.relative_rms_error`) and ``rms_view_ratio`` (RMS over views
+    of model / reference − 1: every view counts alike, dark ones too), and the view of the worst
+    red ratio.  This is the check of the yarn shader's general-lighting mode against its exact
+    sun mode."""
+    reference = {(v.theta_i_deg, v.theta_v_deg): np.array(v.brdf_rgb) for v in reference_views}
+    shared = [v for v in views if (v.theta_i_deg, v.theta_v_deg) in reference]
+    model = np.array([v.brdf_rgb for v in shared])
+    exact = np.array([reference[(v.theta_i_deg, v.theta_v_deg)] for v in shared])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(exact > 0, model / exact, np.nan)
+    comparison = {"views_compared": len(shared)}
+    for name, columns in (("R", [0]), ("G", [1]), ("B", [2]), ("RGB", [0, 1, 2])):
+        deviation = ratio[:, columns] - 1.0
+        comparison[name] = {"relative_rms": relative_rms_error(model[:, columns], exact[:, columns]),
+                            "rms_view_ratio": float(np.sqrt(np.nanmean(deviation**2)))
+                            if np.any(np.isfinite(deviation)) else None}
+    if np.any(np.isfinite(ratio[:, 0])):
+        worst = int(np.nanargmax(np.abs(ratio[:, 0] - 1.0)))
+        comparison["worst_red"] = {"theta_i_deg": shared[worst].theta_i_deg,
+                                   "theta_v_deg": shared[worst].theta_v_deg, "ratio": float(ratio[worst, 0])}
+    return comparison
 
 
 def run_validation(sample=None, out_dir="clothlight_validation", *,

@@ -120,13 +120,14 @@ float cl_cook_torrance(vector Nc, vector L, vector V, float m, float eta)
     return cl_fresnel_dielectric(vh, eta) * D * G / (4.0 * nl * nv);
 }
 
-// The cloth's specular radiance per irradiance (1/sr) at a yarn surface point of outward geometric
-// normal Ng_out: Cook-Torrance about the cloth normal Nc times (n_c.l).  A yarn surface turned away
-// from the light reflects none of it (the light would have to cross the yarn first); Cycles' own
-// reflection closures answer the same, so both lighting modes agree.
-float cl_cloth_specular(vector Nc, vector Ng_out, vector L, vector V, float m, float eta)
+// The cloth's specular radiance per irradiance (1/sr) at a yarn surface point of outward shading
+// normal N_out: Cook-Torrance about the cloth normal Nc times (n_c.l).  A yarn surface turned away
+// from the light reflects none of it (the light would have to cross the yarn first); Cycles
+// answers the same for its reflection closures (it takes a light behind the shading normal as
+// transmission), so both lighting modes agree.
+float cl_cloth_specular(vector Nc, vector N_out, vector L, vector V, float m, float eta)
 {
-    if (dot(Ng_out, L) <= 0.0)
+    if (dot(N_out, L) <= 0.0)
         return 0.0;
     return cl_cook_torrance(Nc, L, V, m, eta) * max(dot(Nc, L), 0.0);
 }

@@ -67,7 +67,6 @@ from .color import (
     white_balance_factors,
 )
 from .errors import ParameterError
-from .grids import AngularGrid
 from .medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from .optics import medium_optics
 from .table_layout import brdf_atlas, interpolate_rho, lobe_atlas
@@ -425,9 +424,10 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
         rho, clipped_share = clip_to_gamut(rho_unclipped)
         stderr = spectral_stderr_to_rgb(arrays["rho_stderr"], wavelengths, colour["illuminant"], colour["observer"])
         albedo, _ = clip_to_gamut(to_rgb(arrays["hemispherical_albedo"]))
+        atlas = brdf_atlas(rho)
         lobe_shape = LobeShape()
-        weights, fit_error = fit_closure_weights(brdf_atlas(rho), n_i, lobe_shape)
-        rho_normal = _normal_rgb(brdf_atlas(rho), n_i)
+        weights, fit_error = fit_closure_weights(atlas, n_i, lobe_shape)
+        rho_normal = _normal_rgb(atlas, n_i)
         rho_normal_unclipped = _normal_rgb(brdf_atlas(rho_unclipped), n_i)
         header = {
             "code_version": __version__,
@@ -451,7 +451,7 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
         }
         layout = {"incidence_resolution": n_i, "exit_resolution": n_o}
         images = {
-            "brdf": brdf_atlas(rho),
+            "brdf": atlas,
             "brdf_stderr": brdf_atlas(stderr),
             "albedo": albedo.reshape(n_i, n_i, 3),
             "closure_lobes": lobe_atlas(weights),

@@ -65,7 +65,8 @@ class LobeShape:
     ----------
     reflection_longitudinal, reflection_azimuthal
         ``hair_reflection`` roughness r₁ (Cauchy width of the half angle to the
-        fibre's normal plane, radians) and r₂ (azimuthal, dimensionless, 0.001–1).
+        fibre's normal plane, radians) and r₂ (azimuthal, dimensionless); Cycles clamps
+        both to ``cycles_closures.HAIR_ROUGHNESS_RANGE``, which every value must lie in.
     transmission_longitudinal, transmission_azimuthal
         The same for ``hair_transmission`` (r₂: Cauchy width about the forward
         azimuth, radians).
@@ -89,9 +90,10 @@ class LobeShape:
     retroreflection_alpha: float = 0.4
 
     def __post_init__(self):
+        low, high = cycles_closures.HAIR_ROUGHNESS_RANGE
         for name, value in asdict(self).items():
-            if not (isinstance(value, (int, float)) and 0.001 <= value <= 1.0):
-                raise ParameterError(name, value, "a roughness in [0.001, 1]")
+            if not (isinstance(value, (int, float)) and low <= value <= high):
+                raise ParameterError(name, value, f"a roughness in [{low:g}, {high:g}]")
 
     def to_dict(self) -> dict:
         return asdict(self)

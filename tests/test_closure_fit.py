@@ -46,6 +46,8 @@ def test_a_smooth_mixture_is_recovered():
     # The bilinear table of two clamped cosines is close to them but not exact near the horizon.
     np.testing.assert_allclose(weights[:, :2, :], np.broadcast_to(true[:2], weights[:, :2, :].shape), atol=0.05)
     assert np.abs(weights[:, 2:, :]).max() < 0.1
+    # The residual left is the table's own bilinear blur of the cosines' kink at the horizon
+    # (0.058 at N_i = 12), well below the 0.17 of a fibre cone fitted with its own lobe.
     assert np.median(error) < 0.1
 
 

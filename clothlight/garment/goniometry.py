@@ -1,0 +1,249 @@
+"""Where the cloth gonioreflectometer looks and how its pixels become a cloth BSDF (paper §7).
+
+Pure NumPy, no Blender.  The yarn-scale rig (:mod:`clothlight.validation`) measures in the plane
+of incidence; a garment material needs the cloth's whole BSDF: incidence over the sphere,
+views over both sides, azimuths included.  This module lays that measurement out.
+
+Frames.  The cloth lies in the x-y plane with its macroscopic normal +z and its warp along +x
+(:mod:`clothlight.weave.geometry`).  The *front* frame is the world frame; the *back* frame is
+the cloth seen from below, (x, −y, −z): a half-turn about the warp, so it stays right-handed and
+the warp stays +x.  Each side's table is indexed like a yarn table (docs/table-spec.md), in
+that side's frame: incidence over the sphere, exit over the side's hemisphere.
+
+Many incidences per render.  A sun-mode ClothLight material emits ρ(ω_i, ω_o)·E for the sun
+direction on its socket and traces its own shadow rays, so the sun can differ from face to face:
+the sample is cut into a G × G grid of square *regions*, each lit from one incidence cell's
+centre (a face attribute), and one orthographic camera per exit cell sees them all.  A region's
+*patch* at its centre is a whole number of weave repeats, so its mean over any translate is
+the cloth's mean; the band around it (the *guard*) holds the yarn surface that the patch's
+pixels see when the view is tilted (within h·tan θ_v of the mid-plane point), lit by the same
+sun.  Shadow rays only ask whether yarns block them, not what the blockers' sun is, so they may
+cross region borders freely.
+
+Calibration (the in-plane rig's, :mod:`clothlight.validation.measure`, generalised).  A pixel's
+value is the mean radiance L_p over its square (Cycles' box filter of one pixel); the patch's
+radiant intensity toward the camera is Σ_p w_p L_p s², with w_p the fraction of pixel p whose
+rays cross the mid-plane inside the patch and s the pixel side.  A patch of area A with BSDF f
+under a sun of irradiance E gives I = f E |cos θ_i| A |cos θ_v|, so the table's quantity, the
+ρ of the yarn tables (L = ρ E, ρ = f |cos θ_i|), is
+
+    ρ(ω_i, ω_o) = Σ_p w_p L_p s² / (E A |cos θ_v|) = Σ_p w_p L_p / (E Σ_p w_p)      [1/sr],
+
+the second form because Σ_p w_p s² is the patch's projected area A |cos θ_v|: the weighted mean
+radiance over the patch, which leaves the lattice's counting error at the patch's edges only to
+second order.
+
+Directions are unit 3-vectors; lengths are millimetres.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..addon import import_precompute
+
+ParameterError = import_precompute("errors").ParameterError
+AngularGrid = import_precompute("grids").AngularGrid
+
+SIDES = ("front", "back")
+#: Rotation taking a side's frame to the world: front = identity, back = half-turn about x.
+SIDE_TO_WORLD = {"front": np.diag([1.0, 1.0, 1.0]), "back": np.diag([1.0, -1.0, -1.0])}
+#: Sub-pixel lattice (per pixel side) on which the patch weights are counted.
+WEIGHT_SUBSAMPLES = 4
+
+
+def side_to_world(directions, side: str) -> np.ndarray:
+    """Directions (…, 3) given in ``side``'s frame, in the world (cloth) frame; its own inverse."""
+    if side not in SIDES:
+        raise ParameterError("side", side, f"one of {SIDES}")
+    return np.asarray(directions, float) @ SIDE_TO_WORLD[side].T
+
+
+def incidence_directions(incidence_resolution: int, side: str) -> np.ndarray:
+    """World directions toward the sun (N_i², 3) at the centres of the side's incidence cells.
+
+    An odd N_i keeps every centre off the cloth plane (the octahedral square's diagonal
+    |u| + |v| = 1 falls between centres), where the sun would graze the slab forever."""
+    return side_to_world(AngularGrid("sphere", incidence_resolution).cell_centers(), side)
+
+
+def exit_directions(exit_resolution: int, side: str) -> np.ndarray:
+    """World directions toward the camera (N_o², 3) at the centres of the side's exit cells."""
+    return side_to_world(AngularGrid("hemisphere", exit_resolution).cell_centers(), side)
+
+
+def max_tilt(directions) -> float:
+    """tan of the largest zenith angle (from ±z) among ``directions``: how far a ray crossing a
+    slab travels sideways per unit of thickness."""
+    d = np.asarray(directions, float).reshape(-1, 3)
+    cos = np.abs(d[:, 2])
+    if cos.min() <= 0.0:
+        raise ParameterError("directions", "a direction in the cloth plane", "directions off the cloth plane")
+    return float(np.max(np.sqrt(1.0 - cos**2) / cos))
+
+
+@dataclass(frozen=True)
+class RegionLayout:
+    """G × G square regions of pitch ``pitch_mm`` centred on ``center`` (x, y, mid-plane z), each
+    with a centred square patch of side ``patch_mm``.  Region k = row·G + column, row 0 at −y."""
+
+    grid: int
+    pitch_mm: float
+    patch_mm: float
+    center: tuple[float, float, float]
+
+    @property
+    def half_extent_mm(self) -> float:
+        return self.grid * self.pitch_mm / 2.0
+
+    def region_centers(self) -> np.ndarray:
+        """(G², 2) x, y of every region's centre, mm."""
+        offsets = (np.arange(self.grid) + 0.5) * self.pitch_mm - self.half_extent_mm
+        x, y = np.meshgrid(offsets + self.center[0], offsets + self.center[1])
+        return np.stack([x.ravel(), y.ravel()], axis=-1)
+
+    def region_of(self, xy) -> np.ndarray:
+        """Region index of points (…, 2), or −1 outside the grid."""
+        xy = np.asarray(xy, float)
+        local = (xy - np.asarray(self.center[:2])) + self.half_extent_mm
+        cell = np.floor(local / self.pitch_mm).astype(int)
+        inside = np.all((cell >= 0) & (cell < self.grid), axis=-1)
+        return np.where(inside, cell[..., 1] * self.grid + cell[..., 0], -1)
+
+    def patch_of(self, xy) -> np.ndarray:
+        """Index of the patch containing each point (…, 2), or −1 when in no patch."""
+        xy = np.asarray(xy, float)
+        region = self.region_of(xy)
+        centers = self.region_centers()[np.clip(region, 0, None)]
+        inside = np.all(np.abs(xy - centers) <= self.patch_mm / 2.0, axis=-1)
+        return np.where((region >= 0) & inside, region, -1)
+
+
+def plan_regions(count: int, patch_mm: float, half_thickness_mm: float, view_tilt: float,
+                 margin_mm: float, center=(0.0, 0.0, 0.0)) -> RegionLayout:
+    """The smallest square grid of at least ``count`` regions whose guards hold what the patch's
+    pixels see: a guard of h·tan θ_v,max + ``margin_mm`` around every patch."""
+    for name, value in (("patch_mm", patch_mm), ("half_thickness_mm", half_thickness_mm),
+                        ("margin_mm", margin_mm), ("view_tilt", view_tilt)):
+        if not (math.isfinite(value) and value >= 0.0) or (name == "patch_mm" and value == 0.0):
+            raise ParameterError(name, value, "a finite value ≥ 0 (patch: > 0)")
+    grid = math.ceil(math.sqrt(count))
+    pitch = patch_mm + 2.0 * (half_thickness_mm * view_tilt + margin_mm)
+    return RegionLayout(grid, pitch, patch_mm, tuple(float(c) for c in center))
+
+
+def required_sample_half_size_mm(layout: RegionLayout, half_thickness_mm: float, view_tilt: float,
+                                 light_tilt: float, edge_band_mm: float) -> float:
+    """How far the sample must reach from the layout's centre so that neither a view ray through
+    a patch nor a shadow ray from what it sees meets the sample's edge, mm (as
+    :func:`clothlight.validation.framing.required_half_extent_mm`, in every azimuth)."""
+    h = half_thickness_mm
+    return layout.half_extent_mm + h * view_tilt + 2.0 * h * light_tilt + edge_band_mm
+
+
+@dataclass(frozen=True)
+class OrthographicView:
+    """An orthographic camera looking at ``center`` from ``toward_camera``: its image axes
+    (``right``, ``up``, both unit and perpendicular to the view), pixel side ``pixel_mm`` and
+    image size ``width`` × ``height`` pixels.  ``up`` is the world +z projected onto the image
+    plane (+y when looking along z), so the cloth's foreshortening runs along it."""
+
+    toward_camera: tuple[float, float, float]
+    center: tuple[float, float, float]
+    right: tuple[float, float, float]
+    up: tuple[float, float, float]
+    pixel_mm: float
+    width: int
+    height: int
+
+    @property
+    def ortho_scale(self) -> float:
+        """Blender's orthographic scale: the image's larger side, mm."""
+        return self.pixel_mm * max(self.width, self.height)
+
+    def camera_matrix(self, distance: float) -> np.ndarray:
+        """The camera object's 4 × 4 world matrix at ``distance`` from the centre (Blender cameras
+        look along local −z with local +y up)."""
+        w = np.asarray(self.toward_camera)
+        matrix = np.eye(4)
+        matrix[:3, 0], matrix[:3, 1], matrix[:3, 2] = self.right, self.up, w
+        matrix[:3, 3] = np.asarray(self.center) + distance * w
+        return matrix
+
+    def midplane_points(self, columns, rows) -> np.ndarray:
+        """Where the rays through image points (``columns``, ``rows``: pixel units from the
+        top-left corner, so pixel (i, j) has its centre at (i + ½, j + ½)) cross the plane z =
+        centre z: (…, 2) x, y, mm."""
+        w, r, u, c = (np.asarray(v) for v in (self.toward_camera, self.right, self.up, self.center))
+        a = (np.asarray(columns, float) - self.width / 2.0) * self.pixel_mm
+        b = (self.height / 2.0 - np.asarray(rows, float)) * self.pixel_mm
+        on_plane = c + a[..., None] * r + b[..., None] * u
+        # Slide along the view direction back to the mid-plane.
+        t = (on_plane[..., 2] - c[2]) / w[2]
+        return (on_plane - t[..., None] * w)[..., :2]
+
+
+def view_of(toward_camera, layout: RegionLayout, pixels_per_patch: int) -> OrthographicView:
+    """The camera that sees every region of ``layout`` from ``toward_camera`` with at least
+    ``pixels_per_patch`` pixels across each patch's foreshortened side."""
+    w = np.asarray(toward_camera, float)
+    w = w / np.linalg.norm(w)
+    if abs(w[2]) < 1e-6:
+        raise ParameterError("toward_camera", tuple(w), "a view off the cloth plane")
+    up = np.array([0.0, 0.0, 1.0]) - w[2] * w
+    up = np.array([0.0, 1.0, 0.0]) if np.linalg.norm(up) < 1e-6 else up / np.linalg.norm(up)
+    right = np.cross(up, w)
+    pixel = layout.patch_mm * abs(w[2]) / pixels_per_patch
+    half = layout.half_extent_mm
+    corners = np.array([[sx * half, sy * half, 0.0] for sx in (-1, 1) for sy in (-1, 1)])
+    width = 2.0 * np.max(np.abs(corners @ right)) / pixel
+    height = 2.0 * np.max(np.abs(corners @ up)) / pixel
+    return OrthographicView(tuple(w), layout.center, tuple(right), tuple(up), float(pixel),
+                            int(math.ceil(width)) + 2, int(math.ceil(height)) + 2)
+
+
+def patch_weights(view: OrthographicView, layout: RegionLayout,
+                  subsamples: int = WEIGHT_SUBSAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """Which patch each pixel sees and how much of it: (index, weight), both (height, width);
+    index −1 where no patch is seen, weight the fraction of the pixel whose rays cross the
+    mid-plane inside that patch, counted on a ``subsamples`` × ``subsamples`` lattice.
+
+    Guards wider than a pixel keep any pixel from reaching two patches; ParameterError if not."""
+    offsets = (np.arange(subsamples) + 0.5) / subsamples
+    rows, columns = np.mgrid[0:view.height, 0:view.width]
+    index = np.full((view.height, view.width), -1)
+    count = np.zeros((view.height, view.width))
+    for dy in offsets:
+        for dx in offsets:
+            patch = layout.patch_of(view.midplane_points(columns + dx, rows + dy))
+            hit = patch >= 0
+            if np.any(hit & (index >= 0) & (index != patch)):
+                raise ParameterError("layout", f"guard {layout.pitch_mm - layout.patch_mm:.3g} mm",
+                                     f"guards wider than a pixel ({view.pixel_mm:.3g} mm)")
+            index = np.where(hit, patch, index)
+            count += hit
+    return index, count / subsamples**2
+
+
+def patch_rho(pixels: np.ndarray, index: np.ndarray, weight: np.ndarray, view: OrthographicView,
+              layout: RegionLayout, sun_irradiance: float) -> tuple[np.ndarray, np.ndarray]:
+    """ρ (G², C) of every patch from a render's linear ``pixels`` (H, W, C + alpha) and the
+    :func:`patch_weights` of its view (module docstring), 1/sr; and every patch's coverage, the
+    fraction of it hidden by yarn along the view (the mean film alpha over its projection)."""
+    pixels = np.asarray(pixels, float)
+    seen = index >= 0
+    patches = index[seen]
+    w = weight[seen]
+    n = layout.grid**2
+    # Σ_p w_p s² is the patch's projected area A |cos θ_v| up to the lattice's counting error at
+    # its edges: dividing by the counted area instead leaves only second-order edge errors.
+    counted = np.bincount(patches, w, n)
+    if np.any(counted <= 0.0):
+        raise ParameterError("view", view.toward_camera, "a view that sees every patch")
+    rho = np.stack([np.bincount(patches, w * pixels[..., c][seen], n) for c in range(pixels.shape[-1] - 1)],
+                   axis=-1) / counted[:, None] / sun_irradiance
+    coverage = np.bincount(patches, w * pixels[..., -1][seen], n) / counted
+    return rho, coverage

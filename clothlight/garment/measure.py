@@ -1,0 +1,227 @@
+"""The cloth gonioreflectometer in Blender: the woven sample under every sun at once, one render
+per view (layout and calibration: :mod:`.goniometry`).
+
+A scene of its own (nothing of the user's is touched): a woven sample large enough for the
+regions and their shadow rays, wearing the sun-mode yarn material with the sun direction read
+from a face attribute, and one orthographic camera.  Render settings are the validation rig's
+(:func:`clothlight.measurement_render.configure_measurement_render`), with Cycles' box filter of
+one pixel so that a pixel holds the mean radiance over its square, as the calibration assumes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+from mathutils import Matrix
+
+from ..materials import SUN_MODE, build_yarn_material, shader_node
+from ..measurement_render import configure_measurement_render, render_to_array
+from ..sample_object import build_sample_object
+from ..validation.rig import VALIDATION_WEAVE, sample_bounds
+from ..weave import WeaveParameters
+from .goniometry import (
+    SIDES,
+    ParameterError,
+    exit_directions,
+    incidence_directions,
+    max_tilt,
+    patch_rho,
+    patch_weights,
+    plan_regions,
+    required_sample_half_size_mm,
+    view_of,
+)
+
+SCENE_NAME = "ClothLight Cloth Gonioreflectometer"
+#: Face attribute: world direction toward the sun that lights the face's region.
+SUN_DIRECTION_ATTRIBUTE = "clothlight_sun_direction"
+
+
+@dataclass(frozen=True)
+class GoniometerSettings:
+    """What the cloth gonioreflectometer measures and how finely.
+
+    Attributes
+    ----------
+    incidence_resolution
+        N_i of the tables' incidence sphere grid (odd: no cell centre in the cloth plane).
+    exit_resolution
+        N_o of each side's exit hemisphere grid.
+    pixels_per_patch
+        Pixels across a patch's foreshortened side.
+    samples
+        Cycles samples per pixel.
+    patch_repeats
+        Weave repeats along a patch's side.
+    seed
+        Cycles' random seed.
+    weave
+        The weave measured (its yarn counts are set here, to fit the regions); None: the
+        validation weave.
+    """
+
+    incidence_resolution: int = 9
+    exit_resolution: int = 8
+    pixels_per_patch: int = 16
+    samples: int = 4
+    patch_repeats: int = 1
+    seed: int = 0
+    weave: WeaveParameters | None = None
+
+    def __post_init__(self):
+        for name, low in (("incidence_resolution", 3), ("exit_resolution", 2), ("pixels_per_patch", 4),
+                          ("samples", 1), ("patch_repeats", 1), ("seed", 0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+                raise ParameterError(name, value, f"an integer ≥ {low}")
+        if self.incidence_resolution % 2 == 0:
+            raise ParameterError("incidence_resolution", self.incidence_resolution,
+                                 "an odd number (an even grid puts cell centres in the cloth plane)")
+
+    def to_dict(self) -> dict:
+        record = dataclasses.asdict(self)
+        record["weave"] = None if self.weave is None else dict(_sample_weave(self).__dict__)
+        return {key: (value.tolist() if isinstance(value, np.ndarray) else value) for key, value in record.items()}
+
+
+def _sample_weave(settings: GoniometerSettings) -> WeaveParameters:
+    return settings.weave or VALIDATION_WEAVE
+
+
+@dataclass
+class ClothMeasurement:
+    """ρ per side (N_i², N_o², 3) in that side's frame, 1/sr; the coverage per side and exit cell
+    (N_o²,), the fraction of the cloth hidden by yarn along that view; and the layout used."""
+
+    rho: dict
+    coverage: dict
+    patch_mm: float
+    sample_size_mm: tuple[float, float]
+    half_thickness_mm: float
+    render_seconds: float
+
+
+def _half_thickness(weave: WeaveParameters) -> tuple[float, float, float]:
+    """(half thickness, spacing, repeat) of ``weave``, mm, from a small sample built and removed."""
+    probe = build_sample_object(dataclasses.replace(weave, warp_count=4, weft_count=4),
+                                name="ClothLight Thickness Probe", collection=bpy.data.collections.new("probe"))
+    try:
+        bounds = sample_bounds(probe)
+        return bounds.half_thickness, float(weave.spacing_mm), max(bounds.period)
+    finally:
+        collection = probe.users_collection[0]
+        mesh = probe.data
+        bpy.data.objects.remove(probe)
+        bpy.data.meshes.remove(mesh)
+        bpy.data.collections.remove(collection)
+
+
+def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *, render_dir,
+                  progress: Callable[[int, int, str], None] | None = None) -> ClothMeasurement:
+    """Measure the cloth BSDF of ``settings.weave`` made of the yarn of ``tables`` (a
+    :class:`clothlight.yarn_tables.YarnTableFiles`); renders go to ``render_dir``.
+
+    ``progress(done, total, what)`` is called after every render (2 N_o² of them)."""
+    import pathlib
+    import time
+
+    weave = _sample_weave(settings)
+    n_i, n_o = settings.incidence_resolution, settings.exit_resolution
+    half_thickness, spacing, repeat = _half_thickness(weave)
+    view_tilt = max(max_tilt(exit_directions(n_o, side)) for side in SIDES)
+    light_tilt = max(max_tilt(incidence_directions(n_i, side)) for side in SIDES)
+    patch_mm = settings.patch_repeats * repeat
+    pixel_mm = patch_mm * min(abs(d[2]) for side in SIDES for d in exit_directions(n_o, side)) / settings.pixels_per_patch
+    layout = plan_regions(n_i * n_i, patch_mm, half_thickness, view_tilt, margin_mm=2.0 * pixel_mm)
+    half_size = required_sample_half_size_mm(layout, half_thickness, view_tilt, light_tilt, edge_band_mm=spacing)
+    # Whole repeats keep the sample symmetric about its centre, where the layout is centred.
+    yarns = int(math.ceil(2.0 * half_size / repeat)) * int(round(repeat / spacing))
+    weave = dataclasses.replace(weave, warp_count=yarns, weft_count=yarns)
+
+    scene = bpy.data.scenes.new(SCENE_NAME)
+    created = []
+    try:
+        sample = build_sample_object(weave, name=f"{SCENE_NAME} Sample", collection=scene.collection)
+        created += [sample, sample.data]
+        bounds = sample_bounds(sample)
+        layout = dataclasses.replace(layout, center=bounds.center)
+        configure_measurement_render(scene, resolution=(16, 16), samples=settings.samples, seed=settings.seed)
+        scene.cycles.pixel_filter_type = "BOX"
+        scene.cycles.filter_width = 1.0
+        scene.cycles.max_bounces = 0
+        scene.world = None
+        scene.render.use_persistent_data = True
+        with bpy.context.temp_override(scene=scene):
+            material = build_yarn_material(tables, name=f"{SCENE_NAME} Yarn", mode=SUN_MODE)
+        created.append(material)
+        _drive_sun_from_attribute(material)
+        sample.data.materials.clear()
+        sample.data.materials.append(material)
+        attribute = sample.data.attributes.new(SUN_DIRECTION_ATTRIBUTE, "FLOAT_VECTOR", "FACE")
+        centers = np.empty(3 * len(sample.data.polygons))
+        sample.data.polygons.foreach_get("center", centers)
+        region = layout.region_of(centers.reshape(-1, 3)[:, :2])
+        # Faces outside the regions are never measured; any sun will do for them.
+        region = np.where((region >= 0) & (region < n_i * n_i), region, 0)
+
+        camera_data = bpy.data.cameras.new(f"{SCENE_NAME} Camera")
+        camera = bpy.data.objects.new(f"{SCENE_NAME} Camera", camera_data)
+        created += [camera, camera_data]
+        scene.collection.objects.link(camera)
+        scene.camera = camera
+        camera_data.type = "ORTHO"
+        camera_data.sensor_fit = "AUTO"
+        distance = 10.0 + 2.0 * half_size
+        camera_data.clip_start = 0.01
+        camera_data.clip_end = 2.0 * distance
+
+        rho, coverage = {}, {}
+        total, done = 2 * n_o * n_o, 0
+        start = time.perf_counter()
+        for side in SIDES:
+            suns = incidence_directions(n_i, side)
+            attribute.data.foreach_set("vector", suns[region].astype(np.float32).ravel())
+            sample.data.update()
+            rho[side] = np.zeros((n_i * n_i, n_o * n_o, 3))
+            coverage[side] = np.zeros(n_o * n_o)
+            for exit_cell, toward_camera in enumerate(exit_directions(n_o, side)):
+                view = view_of(toward_camera, layout, settings.pixels_per_patch)
+                camera.matrix_world = Matrix(view.camera_matrix(distance).tolist())
+                camera_data.ortho_scale = view.ortho_scale
+                scene.render.resolution_x, scene.render.resolution_y = view.width, view.height
+                pixels = render_to_array(scene, pathlib.Path(render_dir) / f"{side}_exit{exit_cell:03d}.exr")
+                index, weight = patch_weights(view, layout)
+                patch, cover = patch_rho(pixels, index, weight, view, layout, sun_irradiance=1.0)
+                rho[side][:, exit_cell] = patch[: n_i * n_i]
+                coverage[side][exit_cell] = float(np.mean(cover[: n_i * n_i]))
+                done += 1
+                if progress is not None:
+                    progress(done, total, f"{side}: exit cell {exit_cell + 1} of {n_o * n_o}")
+        return ClothMeasurement(rho, coverage, patch_mm, (2 * bounds.half_size[0], 2 * bounds.half_size[1]),
+                                half_thickness, time.perf_counter() - start)
+    finally:
+        removers = {"OBJECT": bpy.data.objects, "MESH": bpy.data.meshes, "CAMERA": bpy.data.cameras,
+                    "MATERIAL": bpy.data.materials}
+        for block in created:
+            try:
+                removers[block.id_type].remove(block)
+            except ReferenceError:
+                pass
+        bpy.data.scenes.remove(scene)
+
+
+def _drive_sun_from_attribute(material) -> None:
+    """Feed the sun-mode shader's SunDirection from the faces' sun attribute; irradiance 1 W/m²."""
+    tree = material.node_tree
+    shader = shader_node(material)
+    node = tree.nodes.new("ShaderNodeAttribute")
+    node.attribute_type = "GEOMETRY"
+    node.attribute_name = SUN_DIRECTION_ATTRIBUTE
+    node.location = (-200, 400)
+    tree.links.new(node.outputs["Vector"], shader.inputs["SunDirection"])
+    shader.inputs["SunIrradiance"].default_value = (1.0, 1.0, 1.0, 1.0)

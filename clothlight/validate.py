@@ -35,6 +35,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="materials to sweep (default: yarn and baseline with --tables, else baseline); "
                              "yarn_general is the general-lighting mode, compared with yarn when both run")
     parser.add_argument("--tables", help="bake folder of the yarn material (python -m precompute bake --out DIR)")
+    parser.add_argument("--cloth-tables", help="cloth bake folder of the garment material (python -m clothlight.garment "
+                                               "bake --out DIR)")
     parser.add_argument("--measured", help="measured BRDF CSV (format: clothlight/validation/measured_data.py)")
     parser.add_argument("--incidences", type=float, nargs="+", metavar="DEG", help="θi, degrees (default 0 30 45 60)")
     parser.add_argument("--views", type=float, nargs="+", metavar="DEG",
@@ -96,6 +98,7 @@ def main(argv=None) -> int:
                                samples=args.samples, seed=args.seed, patch_mm=args.patch_mm)
         with stdout_to_stderr() if args.json else contextlib.nullcontext():
             results = run_validation(sample, args.out, materials=args.material, tables_dir=args.tables,
+                                     cloth_dir=args.cloth_tables,
                                      measured_csv=args.measured, settings=settings, swatches=not args.no_swatches,
                                      progress=progress)
     except (ParameterError, WeaveParameterError, MeasurementFormatError) as error:
@@ -118,6 +121,11 @@ def main(argv=None) -> int:
     if comparison:
         print(f"general-lighting mode vs sun mode: RMS relative difference {comparison['RGB']['relative_rms']:.1%} "
               f"(red {comparison['R']['relative_rms']:.1%}) over {comparison['views_compared']} views")
+    comparison = results.get("garment_vs_yarn")
+    if comparison:
+        print(f"garment material (flat patch) vs yarn sample: RMS relative difference "
+              f"{comparison['RGB']['relative_rms']:.1%} (red {comparison['R']['relative_rms']:.1%}) over "
+              f"{comparison['views_compared']} views")
     print(f"sweep: {results['seconds']['total']:.1f} s")
     return 0
 

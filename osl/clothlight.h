@@ -208,4 +208,23 @@ color cl_yarn_rho(string file, int incidence_resolution, int exit_resolution, ve
 // Number of closure-mixture lobes: the tiles of lobes.exr (precompute.closure_fit.LOBES).
 #define CL_LOBE_COUNT 5
 
+// The general-lighting closure mixture of a baked rho for the view wo (frame x, y, z; V the world
+// view): five Cycles closures weighted per exit cell, in the order of precompute.closure_fit.LOBES.
+closure color cl_closure_mixture(string lobe_table, int exit_resolution, vector wo, vector V, vector x,
+                                 vector z, float reflection_r1, float reflection_r2, float transmission_r1,
+                                 float transmission_r2, float retroreflection_alpha)
+{
+    float so, to;
+    cl_hemisphere_to_square(wo, so, to);
+    int n = exit_resolution;
+    return cl_tile_lookup(lobe_table, 0, 0, CL_LOBE_COUNT, 1, n, so, to) * diffuse(z)
+        + cl_tile_lookup(lobe_table, 1, 0, CL_LOBE_COUNT, 1, n, so, to) * translucent(z)
+        + cl_tile_lookup(lobe_table, 2, 0, CL_LOBE_COUNT, 1, n, so, to)
+            * hair_reflection(z, reflection_r1, reflection_r2, x, 0.0)
+        + cl_tile_lookup(lobe_table, 3, 0, CL_LOBE_COUNT, 1, n, so, to)
+            * hair_transmission(z, transmission_r1, transmission_r2, x, 0.0)
+        + cl_tile_lookup(lobe_table, 4, 0, CL_LOBE_COUNT, 1, n, so, to)
+            * microfacet("ggx", V, retroreflection_alpha, 1.0, 0);
+}
+
 #endif

@@ -44,6 +44,7 @@ KINDS = {
     "brdf_stderr": lambda n_i, n_o, k: (n_i * n_o, n_i * n_o),
     "albedo": lambda n_i, n_o, k: (n_i, n_i),
     "closure_lobes": lambda n_i, n_o, k: (n_o, k * n_o),
+    "coverage": lambda n_i, n_o, k: (n_o, n_o),
 }
 #: Metadata every table must carry (besides ``table`` and ``layout``) to be reproducible.
 REQUIRED_METADATA = ("code_version", "cache_key", "medium", "transport", "paths", "colour", "units")

@@ -189,6 +189,16 @@ class Rig:
         if self.theta_i_deg is not None:
             sync_sun(material, self.sun)
 
+    def replace_sample(self, obj) -> None:
+        """Measure the mesh object ``obj`` (taken over by the rig, removed with it) instead of the
+        sample, e.g. a flat patch wearing a cloth-scale material; it must fit the same framing."""
+        self.scene.collection.objects.link(obj)
+        self._owned += [obj.data, obj]
+        self.sample.hide_render = True
+        self.sample = obj
+        if self.material is not None:
+            self.use_material(self.material)
+
     def set_incidence(self, theta_i_deg: float) -> None:
         """Sun at zenith θi on the −x side (θi = 180°: straight from behind), and the material told."""
         _aim(self.sun, toward_sun(theta_i_deg), self.patch_center, 0.0)

@@ -24,16 +24,17 @@ import bpy
 import numpy as np
 
 from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
+from ..garment.material import build_garment_material, cloth_tables_from_bake
 from ..mesh_attributes import YARN_TANGENT
 from ..yarn_tables import yarn_tables_from_bake
 from .framing import ParameterError
 from .measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
 from .measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
 from .report import swatch_exposure, write_report, write_swatch_png
-from .rig import RigSettings, build_rig
+from .rig import RigSettings, build_rig, calibration_plane
 
 #: Materials a sweep can measure, in the order they are swept and plotted.
-MATERIALS = ("yarn", "yarn_general", "baseline")
+MATERIALS = ("yarn", "yarn_general", "baseline", "garment")
 #: What a sweep measures when no materials are named and tables are given.
 DEFAULT_MATERIALS = ("yarn", "baseline")
 #: Materials that read the yarn tables.
@@ -42,6 +43,7 @@ MATERIAL_LABELS = {
     "yarn": "ClothLight yarn BRDF",
     "yarn_general": "ClothLight yarn BRDF, general-lighting closure mixture",
     "baseline": "baseline: Lambert (0.6/π, 0, 0) + Cook–Torrance m = 0.8",
+    "garment": "ClothLight cloth BSDF on a flat patch (garment material, sun mode)",
 }
 #: The paper's Table 1 (§6.1): B/R and G/R at normal illumination and view.
 PAPER_TABLE1 = {
@@ -81,6 +83,9 @@ class ValidationRun:
     tables_dir
         A bake folder (``python -m precompute bake --out DIR``, or a cache entry): the yarn material's
         tables.  None: those of the sample object's ClothLight yarn material, if it has one.
+    cloth_dir
+        A cloth bake folder (``python -m clothlight.garment bake``): the garment material's
+        tables, swept on a flat patch in place of the sample.
     measured_csv
         A measurement file (:mod:`.measured_data` format), or None.
     settings
@@ -92,7 +97,7 @@ class ValidationRun:
     """
 
     def __init__(self, sample=None, out_dir="clothlight_validation", *, materials=None, tables_dir=None,
-                 measured_csv=None, settings: RigSettings = RigSettings(), swatches: bool = True):
+                 cloth_dir=None, measured_csv=None, settings: RigSettings = RigSettings(), swatches: bool = True):
         if materials is None:
             materials = DEFAULT_MATERIALS if tables_dir is not None else ("baseline",)
         materials = tuple(materials)
@@ -111,6 +116,15 @@ class ValidationRun:
                 self.tables = yarn_tables_from_bake(tables_dir)
             except (FileNotFoundError, ValueError, KeyError) as error:
                 raise ParameterError("tables_dir", str(tables_dir), f"a complete bake folder ({error})") from None
+        self.cloth_tables = None
+        if "garment" in self.materials:
+            try:
+                self.cloth_tables = cloth_tables_from_bake(cloth_dir) if cloth_dir is not None else None
+            except (FileNotFoundError, ValueError, KeyError) as error:
+                raise ParameterError("cloth_dir", str(cloth_dir), f"a complete cloth bake folder ({error})") from None
+            if self.cloth_tables is None:
+                raise ParameterError("cloth_dir", None, "a cloth bake folder (python -m clothlight.garment bake) "
+                                                        "for the garment material")
         self.measured_csv = None if measured_csv is None else pathlib.Path(measured_csv)
         if self.measured_csv is not None and not self.measured_csv.is_file():
             raise ParameterError("measured_csv", str(measured_csv), "an existing measurement file")
@@ -142,6 +156,8 @@ class ValidationRun:
                 with bpy.context.temp_override(scene=rig.scene):
                     material = self._build_material(kind)
                 created.append(material)
+                if kind == "garment":
+                    rig.replace_sample(garment_patch(rig))
                 rig.use_material(material)
                 views = []
                 for theta_i in self.settings.incidences_deg:
@@ -181,6 +197,8 @@ class ValidationRun:
     def _build_material(self, kind: str):
         if kind == "yarn":
             return build_yarn_material(self.tables, name="ClothLight Gonioreflectometer Yarn", mode=SUN_MODE)
+        if kind == "garment":
+            return build_garment_material(self.cloth_tables, name="ClothLight Gonioreflectometer Garment", mode=SUN_MODE)
         if kind == "yarn_general":
             return build_yarn_material(self.tables, name="ClothLight Gonioreflectometer Yarn General",
                                        mode=GENERAL_MODE)
@@ -199,6 +217,7 @@ class ValidationRun:
                            "thickness_mm": 2 * rig.bounds.half_thickness,
                            "weave": _weave_description(rig.sample)},
                 "tables_dir": str(self.tables.brdf_path.parent) if self.tables else None,
+                "cloth_dir": str(self.cloth_tables.paths["brdf"]["front"].parent) if self.cloth_tables else None,
                 "measured_csv": str(self.measured_csv) if self.measured_csv else None,
             },
             "units": {
@@ -229,6 +248,8 @@ class ValidationRun:
             results["materials"][kind] = entry
         if "yarn" in curves and "yarn_general" in curves:
             results["general_vs_sun"] = compare_sweeps(curves["yarn_general"], curves["yarn"])
+        if "yarn" in curves and "garment" in curves:
+            results["garment_vs_yarn"] = compare_sweeps(curves["garment"], curves["yarn"])
         if self.measurement is not None:
             m = self.measurement
             results["measurement"] = {
@@ -240,6 +261,19 @@ class ValidationRun:
                              for theta_i in s.incidences_deg},
             }
         return results
+
+
+def garment_patch(rig):
+    """A flat square as large as the rig's sample, with a UV map whose u runs along the warp (+x):
+    the cloth the garment material is measured on."""
+    size = 2.0 * min(rig.bounds.half_size)
+    plane = calibration_plane(size, name="ClothLight Gonioreflectometer Garment Patch")
+    plane.location = rig.bounds.center
+    uv = plane.data.uv_layers.new(name="UVMap")
+    corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+    for loop in plane.data.loops:
+        uv.data[loop.index].uv = corners[loop.vertex_index]
+    return plane
 
 
 def tables_of_sample(sample) -> str | None:

@@ -55,7 +55,7 @@ def woven_mesh_data(params: WeaveParameters, name: str = DEFAULT_NAME) -> bpy.ty
     return mesh
 
 
-def _weave_record(params: WeaveParameters) -> dict:
+def weave_record(params: WeaveParameters) -> dict:
     return {
         "units": "mm",
         "spacing_mm": params.spacing_mm,
@@ -91,5 +91,5 @@ def build_sample_object(params: WeaveParameters = WeaveParameters(), name: str =
         if old.users == 0:
             bpy.data.meshes.remove(old)
     mesh.name = name
-    obj[WEAVE_PROPERTY] = _weave_record(params)
+    obj[WEAVE_PROPERTY] = weave_record(params)
     return obj

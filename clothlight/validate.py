@@ -121,11 +121,12 @@ def main(argv=None) -> int:
     if comparison:
         print(f"general-lighting mode vs sun mode: RMS relative difference {comparison['RGB']['relative_rms']:.1%} "
               f"(red {comparison['R']['relative_rms']:.1%}) over {comparison['views_compared']} views")
-    comparison = results.get("garment_vs_yarn")
-    if comparison:
-        print(f"garment material (flat patch) vs yarn sample: RMS relative difference "
-              f"{comparison['RGB']['relative_rms']:.1%} (red {comparison['R']['relative_rms']:.1%}) over "
-              f"{comparison['views_compared']} views")
+    for kind, mode in (("garment", "sun mode"), ("garment_general", "general lighting")):
+        comparison = results.get(f"{kind}_vs_yarn")
+        if comparison:
+            print(f"garment material ({mode}, flat patch) vs yarn sample: RMS relative difference "
+                  f"{comparison['RGB']['relative_rms']:.1%} (red {comparison['R']['relative_rms']:.1%}) over "
+                  f"{comparison['views_compared']} views")
     print(f"sweep: {results['seconds']['total']:.1f} s")
     return 0
 

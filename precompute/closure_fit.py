@@ -72,6 +72,9 @@ class LobeShape:
         azimuth, radians).
     retroreflection_alpha
         GGX α of the back-scatter lobe.
+    gloss_alpha
+        GGX α of the ``gloss`` lobe about the normal: not one of the yarn's :data:`LOBES`; the
+        garment mixture's stand-in for the cloth's Cook–Torrance sheen (§5.2).
 
     The defaults were chosen on the paper's red cotton: a coordinate search over
     r₁ ∈ {0.05, 0.1, 0.2}, r₂ ∈ {0.3, 0.6, 1.0}, α ∈ {0.1, 0.2, 0.4} minimised the
@@ -88,6 +91,7 @@ class LobeShape:
     transmission_longitudinal: float = 0.04
     transmission_azimuthal: float = 0.06
     retroreflection_alpha: float = 0.4
+    gloss_alpha: float = 0.5
 
     def __post_init__(self):
         low, high = cycles_closures.HAIR_ROUGHNESS_RANGE
@@ -99,8 +103,10 @@ class LobeShape:
         return asdict(self)
 
 
-def lobe_responses(view: np.ndarray, light: np.ndarray, shape: LobeShape = LobeShape()) -> np.ndarray:
-    """Cycles' response f_k(ω_o, ω_i) of every lobe, 1/sr, shape (…, len(LOBES)).
+def lobe_responses(view: np.ndarray, light: np.ndarray, shape: LobeShape = LobeShape(),
+                   lobes: tuple[str, ...] = LOBES) -> np.ndarray:
+    """Cycles' response f_k(ω_o, ω_i) of each of ``lobes`` (names from :data:`LOBES`), 1/sr,
+    shape (…, len(lobes)).
 
     ``view`` (3,) is ω_o and ``light`` (…, 3) the directions ω_i toward the
     light, both in the yarn frame.
@@ -108,15 +114,22 @@ def lobe_responses(view: np.ndarray, light: np.ndarray, shape: LobeShape = LobeS
     view = np.asarray(view, float)
     light = np.asarray(light, float)
     cc = cycles_closures
-    return np.stack([
-        cc.diffuse_eval(YARN_NORMAL, light),
-        cc.translucent_eval(YARN_NORMAL, light),
-        cc.hair_reflection_eval(YARN_NORMAL, YARN_AXIS, view, light,
-                                shape.reflection_longitudinal, shape.reflection_azimuthal),
-        cc.hair_transmission_eval(YARN_NORMAL, YARN_AXIS, view, light,
-                                  shape.transmission_longitudinal, shape.transmission_azimuthal),
-        cc.ggx_reflection_eval(view, view, light, shape.retroreflection_alpha),
-    ], axis=-1)
+    response = {
+        "diffuse": lambda: cc.diffuse_eval(YARN_NORMAL, light),
+        "translucent": lambda: cc.translucent_eval(YARN_NORMAL, light),
+        "fibre_reflection": lambda: cc.hair_reflection_eval(YARN_NORMAL, YARN_AXIS, view, light,
+                                                            shape.reflection_longitudinal,
+                                                            shape.reflection_azimuthal),
+        "fibre_transmission": lambda: cc.hair_transmission_eval(YARN_NORMAL, YARN_AXIS, view, light,
+                                                                shape.transmission_longitudinal,
+                                                                shape.transmission_azimuthal),
+        "retroreflection": lambda: cc.ggx_reflection_eval(view, view, light, shape.retroreflection_alpha),
+        "gloss": lambda: cc.ggx_reflection_eval(YARN_NORMAL, view, light, shape.gloss_alpha),
+    }
+    unknown = [name for name in lobes if name not in response]
+    if unknown or not lobes:
+        raise ParameterError("lobes", lobes, f"names from {tuple(response)}")
+    return np.stack([response[name]() for name in lobes], axis=-1)
 
 
 def incidence_samples(grid: AngularGrid, subsamples: int) -> np.ndarray:
@@ -138,6 +151,8 @@ def fit_closure_weights(
     incidence_resolution: int,
     shape: LobeShape = LobeShape(),
     subsamples: int = 3,
+    lobes: tuple[str, ...] = LOBES,
+    views: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Non-negative lobe weights per exit cell and channel, and the fit's relative error.
 
@@ -151,28 +166,34 @@ def fit_closure_weights(
         Roughness of the shaped lobes.
     subsamples
         Incidence samples per cell side.
+    lobes
+        The lobes to fit (names from :data:`LOBES`, in the order of the result).
+    views
+        Exit directions (n, 3) to fit at; None: the centres of the atlas' exit cells.
 
     Returns
     -------
     weights
-        Shape (n_exit_cells, len(LOBES), C), dimensionless (each lobe integrates to at
+        Shape (n_views, len(lobes), C), dimensionless (each lobe integrates to at
         most 1, so a weight is the lobe's albedo).
     relative_error
-        Shape (n_exit_cells, C): RMS over the samples of ``(fit − ρ) / (ρ + mean ρ)``.
+        Shape (n_views, C): RMS over the samples of ``(fit − ρ) / (ρ + mean ρ)``.
     """
     atlas = np.asarray(atlas, float)
     if atlas.ndim != 3 or atlas.shape[0] != atlas.shape[1] or atlas.shape[0] % incidence_resolution:
         raise ParameterError("atlas", atlas.shape, f"a square BRDF atlas of {incidence_resolution}² tiles")
     if not np.all(np.isfinite(atlas)) or atlas.min() < 0:
         raise ParameterError("atlas", "negative or non-finite values", "finite values ≥ 0")
-    exit_grid = AngularGrid("hemisphere", atlas.shape[0] // incidence_resolution)
+    if views is None:
+        views = AngularGrid("hemisphere", atlas.shape[0] // incidence_resolution).cell_centers()
+    views = np.asarray(views, float).reshape(-1, 3)
     light = incidence_samples(AngularGrid("sphere", incidence_resolution), subsamples)
     channels = atlas.shape[2]
-    weights = np.zeros((exit_grid.n_cells, len(LOBES), channels))
-    relative_error = np.zeros((exit_grid.n_cells, channels))
-    for exit_cell, view in enumerate(exit_grid.cell_centers()):
+    weights = np.zeros((len(views), len(lobes), channels))
+    relative_error = np.zeros((len(views), channels))
+    for exit_cell, view in enumerate(views):
         target = interpolate_rho(atlas, incidence_resolution, light, np.broadcast_to(view, light.shape))
-        design = lobe_responses(view, light, shape)
+        design = lobe_responses(view, light, shape, lobes)
         for channel in range(channels):
             scale = 1.0 / (target[:, channel] + target[:, channel].mean() + 1e-30)
             w, residual = nnls(design * scale[:, None], target[:, channel] * scale)
@@ -182,6 +203,6 @@ def fit_closure_weights(
 
 
 def evaluate_closure_mixture(weights: np.ndarray, view: np.ndarray, light: np.ndarray,
-                             shape: LobeShape = LobeShape()) -> np.ndarray:
-    """ρ rebuilt from one exit cell's ``weights`` (len(LOBES), C) for ``light`` (…, 3): (…, C)."""
-    return lobe_responses(view, light, shape) @ np.asarray(weights, float)
+                             shape: LobeShape = LobeShape(), lobes: tuple[str, ...] = LOBES) -> np.ndarray:
+    """ρ rebuilt from one exit cell's ``weights`` (len(lobes), C) for ``light`` (…, 3): (…, C)."""
+    return lobe_responses(view, light, shape, lobes) @ np.asarray(weights, float)

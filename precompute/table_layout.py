@@ -97,6 +97,14 @@ def _bilinear_in_tile(atlas, tile_col, tile_row, tile_size, s, t):
     return (c00 * (1 - ax) + c10 * ax) * (1 - ay) + (c01 * (1 - ax) + c11 * ax) * ay
 
 
+def interpolate_exit_tile(tile: np.ndarray, wo: np.ndarray) -> np.ndarray:
+    """A per-exit-cell quantity (one ``N_o × N_o`` tile, (N_o, N_o, C)) at exit directions ``wo``
+    (…, 3), interpolated as the shader reads a tile: (…, C)."""
+    tile = np.asarray(tile, float)
+    st = AngularGrid("hemisphere", tile.shape[0]).direction_to_square(np.asarray(wo, float))
+    return _bilinear_in_tile(tile, 0, 0, tile.shape[0], st[..., 0], st[..., 1])
+
+
 def interpolate_rho(atlas: np.ndarray, incidence_resolution: int, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     """ρ(ω_i, ω_o) from a BRDF atlas exactly as the shader interpolates it.
 

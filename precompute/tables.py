@@ -44,7 +44,8 @@ KINDS = {
     "brdf_stderr": lambda n_i, n_o, k: (n_i * n_o, n_i * n_o),
     "albedo": lambda n_i, n_o, k: (n_i, n_i),
     "closure_lobes": lambda n_i, n_o, k: (n_o, k * n_o),
-    "coverage": lambda n_i, n_o, k: (n_o, n_o),
+    # Garment closure weights, front and back side stacked (docs/table-spec.md, "Cloth tables").
+    "cloth_lobes": lambda n_i, n_o, k: (2 * n_o, k * n_o),
 }
 #: Metadata every table must carry (besides ``table`` and ``layout``) to be reproducible.
 REQUIRED_METADATA = ("code_version", "cache_key", "medium", "transport", "paths", "colour", "units")
@@ -82,8 +83,8 @@ def expected_shape(metadata: dict) -> tuple[int, int, int]:
         lobes = int(layout.get("lobe_count", 0))
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"layout metadata {layout!r} lacks incidence_resolution / exit_resolution ({exc})") from None
-    if kind == "closure_lobes" and lobes < 1:
-        raise ValueError(f"a closure_lobes table needs layout.lobe_count ≥ 1, not {lobes}")
+    if kind in ("closure_lobes", "cloth_lobes") and lobes < 1:
+        raise ValueError(f"a {kind} table needs layout.lobe_count ≥ 1, not {lobes}")
     return (*KINDS[kind](n_i, n_o, lobes), 3)
 
 

@@ -8,6 +8,11 @@
   evaluated exactly, §5), and the virtual gonioreflectometer of §4 in the scene "ClothLight
   Gonioreflectometer": a copy of the sample, a sun at θi = 30° and an orthographic camera at
   θv = 0°, framed and set up for measurement (Cycles OSL on the CPU, no denoising, linear EXR).
+* ``draped_garment_general.blend`` — a square of the paper's plain-woven red cotton draped over
+  a sphere (Blender's cloth simulation, frozen), wearing the garment material: the cloth BSDF
+  measured on the woven sample (``python -m clothlight.garment bake``, paper §7) in general-
+  lighting mode, under a sky with a lamp behind the cloth so that the back-lit fabric glows
+  (paper Figure 9b).  Its tables are in ``example_blends/tables/red_cotton_cloth/``.
 * ``twill_closeup_general.blend`` — a 2/2 twill of the same yarn close up, in general-lighting
   mode (the closure mixture, §5, lit by everything Cycles has) under a physical sky: sun and
   sky light from every direction, as an HDRI would give.
@@ -34,6 +39,9 @@ if str(REPO_ROOT) not in sys.path:  # a development script: the installed extens
 import bpy  # noqa: E402
 from mathutils import Vector  # noqa: E402
 
+from clothlight.garment.bake import bake_cloth  # noqa: E402
+from clothlight.garment.drape import draped_cloth  # noqa: E402
+from clothlight.garment.material import apply_garment_material, cloth_tables_from_bake  # noqa: E402
 from clothlight.jobs import BakeJob, preset_request  # noqa: E402
 from clothlight.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
 from clothlight.render_setup import use_cycles_osl_on_cpu  # noqa: E402
@@ -66,14 +74,29 @@ def example_tables(out_dir: pathlib.Path) -> pathlib.Path:
     return folder
 
 
+def example_cloth_tables(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pathlib.Path:
+    """The cloth BSDF of the paper's weave of that yarn (default gonioreflectometer; cached),
+    copied next to the blends."""
+    measured, _ = bake_cloth(tables_dir, progress=lambda done, total, what: print(
+        f"\rmeasuring the cloth BSDF: {done}/{total}", end="", file=sys.stderr))
+    print(file=sys.stderr)
+    folder = out_dir / "tables" / f"{PRESET}_cloth"
+    folder.mkdir(parents=True, exist_ok=True)
+    for path in measured.iterdir():
+        if path.suffix in (".exr", ".json") and path.name != "entry.json":
+            shutil.copy2(path, folder / path.name)
+    return folder
+
+
 def relative_tables(material, blend_dir: pathlib.Path) -> None:
-    """Point a yarn material's table sockets at ``//``-relative paths (valid wherever the folder goes)."""
+    """Point a ClothLight material's table sockets at ``//``-relative paths (valid wherever the
+    folder goes)."""
     for node in material.node_tree.nodes:
         if node.type == "SCRIPT":
-            for socket in ("Table", "LobeTable"):
-                if socket in node.inputs:
-                    path = pathlib.Path(node.inputs[socket].default_value)
-                    node.inputs[socket].default_value = "//" + path.relative_to(blend_dir).as_posix()
+            for socket in node.inputs:
+                if socket.name.endswith("Table") and socket.default_value:
+                    path = pathlib.Path(socket.default_value)
+                    socket.default_value = "//" + path.relative_to(blend_dir).as_posix()
 
 
 def millimetre_scene(scene) -> None:
@@ -183,6 +206,36 @@ def twill_closeup_general(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pa
     return path
 
 
+def draped_garment_general(out_dir: pathlib.Path, cloth_dir: pathlib.Path) -> pathlib.Path:
+    fresh_file()
+    scene = bpy.context.scene
+    scene.name = "Draped Garment"
+    use_cycles_osl_on_cpu(scene)
+    scene.cycles.samples = 128
+    scene.render.resolution_x, scene.render.resolution_y = 640, 480
+    cloth, form = draped_cloth(scene)
+    apply_garment_material(cloth, cloth_tables_from_bake(cloth_dir), mode=GENERAL_MODE, name="ClothLight Red Cotton Garment")
+    relative_tables(cloth.data.materials[0], out_dir)
+    grey = bpy.data.materials.new("Form")
+    grey.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.6, 0.6, 0.6, 1.0)
+    form.data.materials.append(grey)
+    add_sun(scene, "Sun", (0.4, -0.6, 0.7), irradiance=3.0)
+    # A lamp low behind the cloth: the fabric between it and the camera glows (Figure 9b).
+    lamp = bpy.data.objects.new("Back Light", bpy.data.lights.new("Back Light", "AREA"))
+    lamp.data.energy = 150.0
+    lamp.data.size = 0.6
+    lamp.location = (0.0, 1.4, 0.2)
+    lamp.rotation_euler = (Vector((0.0, -1.0, 0.0)) - Vector((0.0, 0.0, 0.0))).to_track_quat("-Z", "Y").to_euler()
+    scene.collection.objects.link(lamp)
+    add_camera(scene, "Camera", (0.9, -2.3, 1.0), (0.0, 0.0, 0.05), lens_mm=45.0)
+    world = bpy.data.worlds.new("Studio")
+    world.color = (0.05, 0.05, 0.06)
+    scene.world = world
+    path = out_dir / "draped_garment_general.blend"
+    save(path)
+    return path
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=pathlib.Path, default=REPO_ROOT / "example_blends")
@@ -192,6 +245,7 @@ def main(argv=None) -> None:
     tables_dir = example_tables(out_dir)
     paper_sample_validation(out_dir, tables_dir)
     twill_closeup_general(out_dir, tables_dir)
+    draped_garment_general(out_dir, example_cloth_tables(out_dir, tables_dir))
 
 
 if __name__ == "__main__":

@@ -15,7 +15,8 @@ pytestmark = pytest.mark.blender
 
 
 def test_the_examples_are_there():
-    assert {p.name for p in BLENDS} >= {"paper_sample_validation.blend", "twill_closeup_general.blend"}
+    assert {p.name for p in BLENDS} >= {"paper_sample_validation.blend", "twill_closeup_general.blend",
+                                        "draped_garment_general.blend"}
 
 
 def _table_paths():
@@ -24,9 +25,9 @@ def _table_paths():
             continue
         for node in material.node_tree.nodes:
             if node.type == "SCRIPT":
-                for socket in ("Table", "LobeTable"):
-                    if socket in node.inputs:
-                        yield node.inputs[socket].default_value
+                for socket in node.inputs:
+                    if socket.name.endswith("Table"):
+                        yield socket.default_value
 
 
 def render_pixels(scene, path: pathlib.Path) -> np.ndarray:

@@ -1,8 +1,10 @@
 """Bake a cloth BSDF (measure → tables), or find it in the cache.
 
-The key holds everything the tables depend on: the yarn tables' own cache key, the
-gonioreflectometer's settings (weave included) and a digest of the code that measures and
-writes them (the shaders included: the measurement renders the yarn material).
+Two cache entries, as for a yarn (``precompute.bake``: spectral → tables): the measurement
+(``measurement.npz``: ρ per side and coverage), keyed by the yarn tables' own cache key, the
+gonioreflectometer's settings (weave included) and the code that measures (the yarn shader
+included: the measurement renders it); and the tables written from it, keyed by that key and
+the code that fits and writes them.  Changing the fit re-renders nothing.
 """
 
 from __future__ import annotations
@@ -12,48 +14,78 @@ import pathlib
 import tempfile
 from collections.abc import Callable
 
+import numpy as np
+
 from ..addon import import_precompute
 from ..yarn_tables import yarn_tables_from_bake
-from .measure import GoniometerSettings, measure_cloth
+from .goniometry import SIDES
+from .measure import ClothMeasurement, GoniometerSettings, measure_cloth
 from .tables import SUMMARY_FILE, write_cloth_tables
 
 cache = import_precompute("cache")
 
-CACHE_NAMESPACE = "cloth"
+MEASUREMENT_NAMESPACE = "cloth_measurement"
+TABLES_NAMESPACE = "cloth_tables"
+MEASUREMENT_FILE = "measurement.npz"
 _ROOT = pathlib.Path(__file__).resolve().parents[2]
-CODE_SOURCES = (
-    "clothlight/garment/goniometry.py", "clothlight/garment/measure.py", "clothlight/garment/tables.py",
-    "clothlight/materials.py", "clothlight/measurement_render.py", "clothlight/weave/geometry.py",
-    "osl/cloth_yarn.osl", "osl/clothlight.h", "precompute/closure_fit.py", "precompute/table_layout.py",
+MEASUREMENT_SOURCES = (
+    "clothlight/garment/goniometry.py", "clothlight/garment/measure.py", "clothlight/materials.py",
+    "clothlight/measurement_render.py", "clothlight/weave/geometry.py", "osl/cloth_yarn.osl", "osl/clothlight.h",
 )
+TABLE_SOURCES = ("clothlight/garment/tables.py", "precompute/closure_fit.py", "precompute/table_layout.py",
+                 "precompute/cycles_closures.py")
 
 
-def cloth_inputs(yarn_bake_dir, settings: GoniometerSettings) -> dict:
-    """Everything a cloth bake depends on (its cache key is their hash)."""
+def measurement_inputs(yarn_bake_dir, settings: GoniometerSettings) -> dict:
+    """Everything a cloth measurement depends on (its cache key is their hash)."""
     summary = json.loads((pathlib.Path(yarn_bake_dir) / "summary.json").read_text())
     return {"yarn_tables": summary["cache_key"], "goniometer": settings.to_dict(),
-            "code_digest": cache.source_digest(_ROOT, CODE_SOURCES)}
+            "code_digest": cache.source_digest(_ROOT, MEASUREMENT_SOURCES)}
+
+
+def save_measurement(path, measurement: ClothMeasurement) -> None:
+    arrays = {f"rho_{side}": measurement.rho[side] for side in SIDES}
+    arrays.update({f"coverage_{side}": measurement.coverage[side] for side in SIDES})
+    np.savez_compressed(path, **arrays, patch_mm=measurement.patch_mm,
+                        sample_size_mm=np.asarray(measurement.sample_size_mm),
+                        half_thickness_mm=measurement.half_thickness_mm, render_seconds=measurement.render_seconds)
+
+
+def load_measurement(path) -> ClothMeasurement:
+    with np.load(path) as data:
+        return ClothMeasurement({side: data[f"rho_{side}"] for side in SIDES},
+                                {side: data[f"coverage_{side}"] for side in SIDES},
+                                float(data["patch_mm"]), tuple(float(v) for v in data["sample_size_mm"]),
+                                float(data["half_thickness_mm"]), float(data["render_seconds"]))
 
 
 def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(), *, cache_dir=None,
                progress: Callable[[int, int, str], None] | None = None) -> tuple[pathlib.Path, bool]:
-    """The folder of the cloth tables for the yarn bake ``yarn_bake_dir`` and ``settings``,
-    measured unless the cache has them; and whether it did (False: a cache hit)."""
+    """The folder of the cloth tables for the yarn bake ``yarn_bake_dir`` and ``settings``; and
+    whether this call rendered the measurement (False: it was in the cache)."""
     tables = yarn_tables_from_bake(yarn_bake_dir)
     cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else cache.default_cache_dir()
-    inputs = cloth_inputs(yarn_bake_dir, settings)
-    key = cache.cache_key(inputs)
-    folder = cache.lookup(cache_dir, CACHE_NAMESPACE, key)
-    if folder is not None:
-        return folder, False
+    measured_in = measurement_inputs(yarn_bake_dir, settings)
+    measured_key = cache.cache_key(measured_in)
+    measured_folder = cache.lookup(cache_dir, MEASUREMENT_NAMESPACE, measured_key)
+    rendered = measured_folder is None
+    if rendered:
+        def measure(target: pathlib.Path) -> None:
+            with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
+                save_measurement(target / MEASUREMENT_FILE,
+                                 measure_cloth(tables, settings, render_dir=renders, progress=progress))
 
-    def write(target: pathlib.Path) -> None:
-        with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
-            measurement = measure_cloth(tables, settings, render_dir=renders, progress=progress)
-        write_cloth_tables(target, measurement, settings, tables, cache_key=key, code_digest=inputs["code_digest"])
+        measured_folder, _ = cache.store(cache_dir, MEASUREMENT_NAMESPACE, measured_key, measured_in, measure)
+    tables_in = {"measurement": measured_key, "code_digest": cache.source_digest(_ROOT, TABLE_SOURCES)}
+    key = cache.cache_key(tables_in)
+    folder = cache.lookup(cache_dir, TABLES_NAMESPACE, key)
+    if folder is None:
+        def write(target: pathlib.Path) -> None:
+            write_cloth_tables(target, load_measurement(measured_folder / MEASUREMENT_FILE), settings, tables,
+                               cache_key=key, code_digest=tables_in["code_digest"])
 
-    folder, _ = cache.store(cache_dir, CACHE_NAMESPACE, key, inputs, write)
-    return folder, True
+        folder, _ = cache.store(cache_dir, TABLES_NAMESPACE, key, tables_in, write)
+    return folder, rendered
 
 
 def read_summary(folder) -> dict:

@@ -1,6 +1,15 @@
-"""The garment material: ``osl/cloth_garment.osl`` reading a cloth bake, on any mesh with UVs.
+"""The garment material: a cloth bake on any mesh with UVs.
 
-The warp follows the mesh's UV tangent (u along the warp), the front is the side the mesh's
+Two modes, as for the yarn material:
+
+* :data:`~clothlight.materials.GENERAL_MODE` (any lighting, what artists render with): the
+  closure mixture of ``lobes.exr`` as plain Cycles nodes — diffuse, translucent, hair
+  transmission and GGX gloss closures weighted by image lookups at the view direction, plus a
+  transparent closure for the open weave.  No OSL: it renders with Cycles' SVM on the CPU or any GPU.
+* :data:`~clothlight.materials.SUN_MODE` (validation): ``osl/cloth_garment.osl`` evaluates the
+  measured ρ for the scene's sun exactly (needs Cycles OSL on the CPU).
+
+The warp follows the mesh's UV tangent (u along the warp); the front is the side the mesh's
 normals face.  Tables are checked before any render (Cycles would render them magenta).
 """
 
@@ -12,24 +21,25 @@ from dataclasses import dataclass
 
 import bpy
 
-from ..materials import GENERAL_MODE, LOBE_SHAPE_SOCKETS, SUN_MODE
+from ..materials import GENERAL_MODE, SUN_MODE
 from ..osl_shaders import add_script_node
 from .goniometry import SIDES
-from .tables import SUMMARY_FILE, SUMMARY_SCHEMA, TABLE_FILES
+from .tables import BRDF_FILES, LOBE_FILE, LOBE_TILES, SUMMARY_FILE, SUMMARY_SCHEMA
 
 SHADER = "cloth_garment"
-#: The script node's table sockets, by table kind and side.
-TABLE_SOCKETS = {"brdf": "{Side}Table", "lobes": "{Side}LobeTable", "coverage": "{Side}CoverageTable"}
+MATERIAL_KIND = "clothlight_garment"
 
 
 @dataclass(frozen=True)
 class ClothTableFiles:
-    """The checked files of a cloth bake: ``paths[kind][side]`` (absolute), grid sizes and the
-    closure-mixture lobe shape (``summary.json``)."""
+    """The checked files of a cloth bake (absolute paths), grid sizes and lobe shape
+    (``summary.json``)."""
 
-    paths: dict
+    brdf_paths: dict
+    lobe_path: pathlib.Path
     incidence_resolution: int
     exit_resolution: int
+    lobe_resolution: int
     lobe_shape: dict
 
 
@@ -44,47 +54,147 @@ def cloth_tables_from_bake(folder) -> ClothTableFiles:
     if summary.get("schema") != SUMMARY_SCHEMA:
         raise ValueError(f"{summary_path}: schema {summary.get('schema')!r}, this ClothLight reads "
                          f"{SUMMARY_SCHEMA!r}: bake the cloth again")
-    paths = {kind: {side: folder / name for side, name in sides.items()} for kind, sides in TABLE_FILES.items()}
-    missing = [str(path) for sides in paths.values() for path in sides.values() if not path.is_file()]
+    if list(summary.get("lobe_tiles", [])) != list(LOBE_TILES):
+        raise ValueError(f"{summary_path}: lobe tiles {summary.get('lobe_tiles')}, this ClothLight reads "
+                         f"{list(LOBE_TILES)}: bake the cloth again")
+    brdf_paths = {side: folder / name for side, name in BRDF_FILES.items()}
+    missing = [str(path) for path in (*brdf_paths.values(), folder / LOBE_FILE) if not path.is_file()]
     if missing:
         raise FileNotFoundError(f"cloth bake {folder} lacks {missing}")
-    return ClothTableFiles(paths, int(summary["incidence_resolution"]), int(summary["exit_resolution"]),
+    return ClothTableFiles(brdf_paths, folder / LOBE_FILE, int(summary["incidence_resolution"]),
+                           int(summary["exit_resolution"]), int(summary["lobe_grid_resolution"]),
                            {key: float(value) for key, value in summary["lobe_shape"].items()})
 
 
 def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garment", *, mode: str = GENERAL_MODE,
                            uv_map: str = ""):
-    """The garment material reading ``tables``; ``mode`` :data:`GENERAL_MODE` (any lighting) or
-    :data:`SUN_MODE` (exact under the scene's sun: :func:`clothlight.materials.sync_sun`);
-    ``uv_map``: the UV map whose tangent is the warp (empty: the active one)."""
+    """The garment material reading ``tables`` in ``mode`` (module docstring); ``uv_map``: the UV
+    map whose tangent is the warp (empty: the active one).  Sun mode: set the sun with
+    :func:`clothlight.materials.sync_sun`."""
     if mode not in (SUN_MODE, GENERAL_MODE):
         raise ValueError(f"mode must be {SUN_MODE!r} or {GENERAL_MODE!r}, not {mode!r}")
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
     tree = material.node_tree
     tree.nodes.clear()
-    shader = add_script_node(tree, SHADER)
-    shader.location = (300, 0)
     output = tree.nodes.new("ShaderNodeOutputMaterial")
-    output.location = (600, 0)
-    tree.links.new(shader.outputs["BSDF"], output.inputs["Surface"])
+    output.location = (1400, 0)
     tangent = tree.nodes.new("ShaderNodeTangent")
     tangent.direction_type = "UV_MAP"
     tangent.uv_map = uv_map
-    tangent.location = (0, 0)
-    tree.links.new(tangent.outputs["Tangent"], shader.inputs["Warp"])
-    for kind, pattern in TABLE_SOCKETS.items():
+    tangent.location = (-800, -200)
+    if mode == SUN_MODE:
+        shader = add_script_node(tree, SHADER)
+        shader.location = (1100, 0)
+        tree.links.new(tangent.outputs["Tangent"], shader.inputs["Warp"])
         for side in SIDES:
-            shader.inputs[pattern.format(Side=side.capitalize())].default_value = str(tables.paths[kind][side])
-    shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
-    shader.inputs["ExitResolution"].default_value = tables.exit_resolution
-    for socket, key in LOBE_SHAPE_SOCKETS.items():
-        shader.inputs[socket].default_value = tables.lobe_shape[key]
-    shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
-    material["clothlight_shader"] = SHADER
-    # Light crossing the open weave must not be taken for the back of an opaque surface.
-    material.use_transparent_shadow = True
+            shader.inputs[f"{side.capitalize()}Table"].default_value = str(tables.brdf_paths[side])
+        shader.inputs["LobeTable"].default_value = str(tables.lobe_path)
+        shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
+        shader.inputs["ExitResolution"].default_value = tables.exit_resolution
+        shader.inputs["LobeResolution"].default_value = tables.lobe_resolution
+        shader.inputs["LobeTiles"].default_value = len(LOBE_TILES)
+        surface = shader.outputs["BSDF"]
+    else:
+        surface = _closure_mixture(tree, tables, tangent.outputs["Tangent"])
+    tree.links.new(surface, output.inputs["Surface"])
+    material[MATERIAL_KIND] = mode
     material.cycles.use_bump_map_correction = False
     return material
+
+
+def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket):
+    """The general mode's nodes; returns the summed closure's socket.
+
+    Frame: z = the shading normal (Cycles turns it toward the viewer, so the back side gets its
+    own frame, a half-turn about the warp), x = the UV tangent made normal to it, y = z × x.
+    Each tile of ``lobes.exr`` is looked up at the view's (ω_x, ω_y), held between the tile's
+    outermost pixel centres (tables.projected_view_grid), in the front or back row block."""
+    nodes, links = tree.nodes, tree.links
+
+    def math_node(operation, a, b=None, location=(0, 0), vector=True):
+        node = nodes.new("ShaderNodeVectorMath" if vector else "ShaderNodeMath")
+        node.operation = operation
+        node.location = location
+        for index, value in enumerate((a, b)):
+            if value is None:
+                continue
+            if isinstance(value, bpy.types.NodeSocket):
+                links.new(value, node.inputs[index])
+            else:
+                node.inputs[index].default_value = value
+        return node
+
+    geometry = nodes.new("ShaderNodeNewGeometry")
+    geometry.location = (-800, 200)
+    normal, incoming = geometry.outputs["Normal"], geometry.outputs["Incoming"]
+    along_normal = math_node("DOT_PRODUCT", tangent_socket, normal, (-600, -200)).outputs["Value"]
+    normal_part = math_node("SCALE", normal, None, (-450, -200))
+    links.new(along_normal, normal_part.inputs["Scale"])
+    warp = math_node("NORMALIZE", math_node("SUBTRACT", tangent_socket, normal_part.outputs[0], (-300, -200)).outputs[0],
+                     None, (-150, -200)).outputs[0]
+    weft = math_node("CROSS_PRODUCT", normal, warp, (0, -300)).outputs[0]
+    view = nodes.new("ShaderNodeCombineXYZ")
+    view.location = (150, 100)
+    links.new(math_node("DOT_PRODUCT", incoming, warp, (0, 100)).outputs["Value"], view.inputs["X"])
+    links.new(math_node("DOT_PRODUCT", incoming, weft, (0, 0)).outputs["Value"], view.inputs["Y"])
+
+    # Image coordinates (Blender's v runs up from the bottom row; the front block is on top):
+    # u = (k + inset + span (ω_x + 1)/2) / K,  v = 1 − (inset + span (1 − ω_y)/2 + back) / 2.
+    n, tiles = tables.lobe_resolution, len(LOBE_TILES)
+    inset, span = 0.5 / n, (n - 1.0) / n
+    scale = (span / (2.0 * tiles), span / 4.0, 0.0)
+    offset = (0.0, 1.0 - (inset + span / 2.0) / 2.0, 0.0)
+    base = nodes.new("ShaderNodeVectorMath")
+    base.operation = "MULTIPLY_ADD"
+    base.location = (300, 100)
+    links.new(view.outputs[0], base.inputs[0])
+    base.inputs[1].default_value = scale
+    base.inputs[2].default_value = offset
+    back = nodes.new("ShaderNodeCombineXYZ")
+    back.location = (300, -100)
+    links.new(math_node("MULTIPLY", geometry.outputs["Backfacing"], 0.5, (150, -100), vector=False).outputs[0],
+              back.inputs["Y"])
+    coordinates = math_node("SUBTRACT", base.outputs[0], back.outputs[0], (450, 0)).outputs[0]
+
+    image = bpy.data.images.load(str(tables.lobe_path), check_existing=True)
+    image.colorspace_settings.name = "Non-Color"
+    weights = {}
+    for k, tile in enumerate(LOBE_TILES):
+        shifted = math_node("ADD", coordinates, ((k + inset + span / 2.0) / tiles, 0.0, 0.0), (600, 300 - 200 * k))
+        texture = nodes.new("ShaderNodeTexImage")
+        texture.image = image
+        texture.interpolation = "Linear"
+        texture.extension = "EXTEND"
+        texture.location = (750, 300 - 200 * k)
+        links.new(shifted.outputs[0], texture.inputs["Vector"])
+        weights[tile] = texture.outputs["Color"]
+
+    closures = []
+    for node_type, tile in (("ShaderNodeBsdfDiffuse", "diffuse"), ("ShaderNodeBsdfTranslucent", "translucent"),
+                            ("ShaderNodeBsdfHair", "fibre_transmission"), ("ShaderNodeBsdfAnisotropic", "gloss"),
+                            ("ShaderNodeBsdfTransparent", "open_weave")):
+        closure = nodes.new(node_type)
+        closure.location = (1000, 300 - 200 * len(closures))
+        links.new(weights[tile], closure.inputs["Color"])
+        closures.append(closure)
+    hair = closures[2]
+    hair.component = "Transmission"
+    hair.inputs["Offset"].default_value = 0.0
+    hair.inputs["RoughnessU"].default_value = tables.lobe_shape["transmission_longitudinal"]
+    hair.inputs["RoughnessV"].default_value = tables.lobe_shape["transmission_azimuthal"]
+    links.new(warp, hair.inputs["Tangent"])
+    gloss = closures[3]
+    gloss.distribution = "GGX"
+    gloss.inputs["Roughness"].default_value = tables.lobe_shape["gloss_alpha"] ** 0.5  # Cycles: α = roughness²
+    gloss.inputs["Anisotropy"].default_value = 0.0
+    total = closures[0].outputs[0]
+    for closure in closures[1:]:
+        add = nodes.new("ShaderNodeAddShader")
+        add.location = (1200, closure.location[1])
+        links.new(total, add.inputs[0])
+        links.new(closure.outputs[0], add.inputs[1])
+        total = add.outputs[0]
+    return total
 
 
 def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_MODE, name: str | None = None):

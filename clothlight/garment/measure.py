@@ -21,7 +21,7 @@ from mathutils import Matrix
 
 from ..materials import SUN_MODE, build_yarn_material, shader_node
 from ..measurement_render import configure_measurement_render, render_to_array
-from ..sample_object import build_sample_object
+from ..sample_object import build_sample_object, weave_record
 from ..validation.rig import VALIDATION_WEAVE, sample_bounds
 from ..weave import WeaveParameters
 from .goniometry import (
@@ -84,9 +84,10 @@ class GoniometerSettings:
                                  "an odd number (an even grid puts cell centres in the cloth plane)")
 
     def to_dict(self) -> dict:
-        record = dataclasses.asdict(self)
-        record["weave"] = None if self.weave is None else dict(_sample_weave(self).__dict__)
-        return {key: (value.tolist() if isinstance(value, np.ndarray) else value) for key, value in record.items()}
+        """JSON-ready; the weave as the sample records it (its yarn counts are set at measurement)."""
+        record = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
+        record["weave"] = weave_record(_sample_weave(self))
+        return record
 
 
 def _sample_weave(settings: GoniometerSettings) -> WeaveParameters:

@@ -7,12 +7,15 @@ self-describing OpenEXR conventions of docs/table-spec.md:
     A BRDF atlas (incidence over the sphere × exit over the side's hemisphere) of the cloth's
     ρ = f |cos θ_i|, 1/sr: incidence from the side's own hemisphere is reflection, from the other
     one transmission through the cloth.  Read exactly like a yarn's (``cl_yarn_rho``).
-``<side>_lobes.exr``
-    The general-lighting closure mixture fitted to it per exit cell
-    (:func:`precompute.closure_fit.fit_closure_weights`).
-``<side>_coverage.exr``
-    Per exit cell, the fraction of the cloth hidden by yarn along that view: the rest is open
-    weave that light crosses unscattered (a ``transparent()`` closure in the garment shader).
+
+and for both sides together:
+
+``lobes.exr``
+    The general-lighting closure mixture: per view, the weights of :data:`GARMENT_LOBES`
+    fitted to each side's ρ (:func:`precompute.closure_fit.fit_closure_weights`), and the open
+    weave, 1 − the fraction of the cloth hidden by yarn along the view, through which light
+    passes unscattered (a transparent closure).  Laid out for a node-based material
+    (:func:`lobe_image`): views on a square grid over the projected hemisphere, front side on top.
 
 ``summary.json`` (schema :data:`SUMMARY_SCHEMA`) says how they were made and holds the checks:
 the energy balance per incidence cell and the fit errors.
@@ -36,17 +39,61 @@ closure_fit = import_precompute("closure_fit")
 AngularGrid = import_precompute("grids").AngularGrid
 
 SUMMARY_SCHEMA = "clothlight-cloth/1"
+#: The garment material's closure mixture (names of precompute.closure_fit lobes, in tile order).
+#: At cloth scale the fibre reflection cone and the retro-reflection lobe barely lower the fit
+#: error (red cotton, median relative error front 0.248 with the yarn's five, 0.249 with diffuse,
+#: translucent and fibre transmission, 0.263 with diffuse and translucent alone), and every
+#: closure costs render time; a gloss lobe about the normal carries the cloth's specular peak.
+GARMENT_LOBES = ("diffuse", "translucent", "fibre_transmission", "gloss")
 SUMMARY_FILE = "summary.json"
-TABLE_FILES = {kind: {side: f"{side}_{kind}.exr" for side in SIDES} for kind in ("brdf", "lobes", "coverage")}
+#: Tiles of ``lobes.exr``, left to right: the fitted lobes, then the open weave.
+LOBE_TILES = (*GARMENT_LOBES, "open_weave")
+#: Views per side of the lobe image's projected-hemisphere grid.
+LOBE_GRID_RESOLUTION = 16
+BRDF_FILES = {side: f"{side}_brdf.exr" for side in SIDES}
+LOBE_FILE = "lobes.exr"
 UNITS = {"rho": "1/sr (ρ = f |cos θ_i|: radiance per irradiance on a plane facing the sun)",
          "coverage": "fraction of the cloth's area hidden by yarn along the view",
          "lengths": "mm", "angles": "unit vectors in the side's frame"}
 
 
-def coverage_image(coverage: np.ndarray) -> np.ndarray:
-    """Per-exit-cell coverage (N_o²,) as an (N_o, N_o, 3) image laid out like one lobe tile."""
+def projected_view_grid(resolution: int) -> np.ndarray:
+    """Views (resolution², 3) of the lobe image's grid, row-major from the top-left pixel: pixel
+    (column i, row j) looks along ω with (ω_x, ω_y) = (−1 + 2i/(n − 1), 1 − 2j/(n − 1)), the
+    hemisphere seen from above with its rim on the image's border; corners outside the unit
+    disk are taken to the rim.  Pixel centres span the square edge to edge, so a lookup held
+    between them (the material's mapping) never mixes tiles."""
+    n = int(resolution)
+    if n < 2:
+        raise ValueError(f"a projected view grid needs ≥ 2 views per side, not {resolution}")
+    line = np.linspace(-1.0, 1.0, n)
+    x, y = np.meshgrid(line, -line)
+    radius = np.hypot(x, y)
+    scale = np.where(radius > 1.0, 1.0 / np.maximum(radius, 1e-12), 1.0)
+    x, y = x * scale, y * scale
+    z = np.sqrt(np.clip(1.0 - x * x - y * y, 0.0, 1.0))
+    views = np.stack([x, y, np.maximum(z, 1e-3)], axis=-1).reshape(-1, 3)
+    return views / np.linalg.norm(views, axis=-1, keepdims=True)
+
+
+def lobe_image(tiles: dict) -> np.ndarray:
+    """``tiles[side]`` (n², len(LOBE_TILES), 3) weights on :func:`projected_view_grid` → the
+    image (2n, len(LOBE_TILES)·n, 3): tile k in column block k, front in the top row block."""
+    blocks = []
+    for side in SIDES:
+        weights = np.asarray(tiles[side], float)
+        n = int(round(math.sqrt(weights.shape[0])))
+        k = weights.shape[1]
+        blocks.append(weights.reshape(n, n, k, 3).transpose(0, 2, 1, 3).reshape(n, k * n, 3))
+    return np.concatenate(blocks, axis=0)
+
+
+def coverage_along(coverage: np.ndarray, views: np.ndarray) -> np.ndarray:
+    """A side's per-exit-cell coverage (N_o²,) at ``views`` (…, 3) in its frame, interpolated
+    between cell centres as a shader reads an exit tile."""
     coverage = np.asarray(coverage, float)
-    return table_layout.lobe_atlas(np.repeat(coverage[:, None, None], 3, axis=-1))
+    tile = table_layout.lobe_atlas(coverage[:, None, None])
+    return table_layout.interpolate_exit_tile(tile, views)[..., 0]
 
 
 def energy_balance(rho: dict, coverage: dict, incidence_resolution: int) -> dict:
@@ -74,8 +121,7 @@ def energy_balance(rho: dict, coverage: dict, incidence_resolution: int) -> dict
             values = table_layout.interpolate_rho(atlases[side], n_i, np.broadcast_to(local, exits.shape), exits)
             parts[name] = weight @ values / cos_i
         toward_light = side_to_world(direction, lit)
-        cell = exit_grid.cell_of(toward_light)
-        parts["open"] = 1.0 - float(coverage[lit][cell])
+        parts["open"] = 1.0 - float(coverage_along(coverage[lit], toward_light))
         for name, value in parts.items():
             result[name].append(value)
         result["total"].append(parts["reflected"] + parts["transmitted"] + parts["open"])
@@ -94,7 +140,7 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
     header = {key: yarn[key] for key in precompute_tables.REQUIRED_METADATA if key not in ("cache_key",)}
     header.update(
         cache_key=cache_key,
-        code_digest={"yarn": yarn.get("code_digest"), "cloth": code_digest},
+        code_digest={"yarn": yarn.get("code_digest"), "cloth_tables": code_digest},
         yarn_cache_key=yarn["cache_key"],
         goniometer=settings.to_dict(),
         sample={"patch_mm": measurement.patch_mm, "size_mm": list(measurement.sample_size_mm),
@@ -102,19 +148,21 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
         units={**yarn["units"], **UNITS},
     )
     layout = {"incidence_resolution": n_i, "exit_resolution": n_o}
-    fit_error = {}
+    views = projected_view_grid(LOBE_GRID_RESOLUTION)
+    fit_error, tiles = {}, {}
     for side in SIDES:
         atlas = table_layout.brdf_atlas(measurement.rho[side])
-        weights, error = closure_fit.fit_closure_weights(atlas, n_i, shape)
+        precompute_tables.write_table(folder / BRDF_FILES[side], atlas,
+                                      {**header, "side": side, "layout": layout, "table": "brdf"})
+        weights, error = closure_fit.fit_closure_weights(atlas, n_i, shape, lobes=GARMENT_LOBES, views=views)
         fit_error[side] = np.median(error, axis=0).tolist()
-        side_header = {**header, "side": side, "layout": layout}
-        precompute_tables.write_table(folder / TABLE_FILES["brdf"][side], atlas, {**side_header, "table": "brdf"})
-        precompute_tables.write_table(
-            folder / TABLE_FILES["lobes"][side], table_layout.lobe_atlas(weights),
-            {**side_header, "table": "closure_lobes", "layout": {**layout, "lobe_count": len(closure_fit.LOBES)},
-             "lobes": list(closure_fit.LOBES), "lobe_shape": shape.to_dict()})
-        precompute_tables.write_table(folder / TABLE_FILES["coverage"][side], coverage_image(measurement.coverage[side]),
-                                      {**side_header, "table": "coverage"})
+        open_weave = 1.0 - coverage_along(measurement.coverage[side], views)
+        tiles[side] = np.concatenate([weights, np.repeat(open_weave[:, None, None], 3, axis=-1)], axis=1)
+    precompute_tables.write_table(
+        folder / LOBE_FILE, lobe_image(tiles),
+        {**header, "table": "cloth_lobes", "tiles": list(LOBE_TILES), "lobe_shape": shape.to_dict(),
+         "layout": {"incidence_resolution": n_i, "exit_resolution": LOBE_GRID_RESOLUTION,
+                    "lobe_count": len(LOBE_TILES), "views": "projected hemisphere, front rows on top"}})
     energy = energy_balance(measurement.rho, measurement.coverage, n_i)
     total = energy["total"]
     worst = np.unravel_index(int(np.argmax(total)), total.shape)
@@ -122,14 +170,15 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
         **header,
         "schema": SUMMARY_SCHEMA,
         "table_schema": precompute_tables.SCHEMA,
-        "files": TABLE_FILES,
+        "files": {"brdf": BRDF_FILES, "lobes": LOBE_FILE},
         "incidence_resolution": n_i,
         "exit_resolution": n_o,
-        "lobe_count": len(closure_fit.LOBES),
+        "lobe_tiles": list(LOBE_TILES),
+        "lobe_grid_resolution": LOBE_GRID_RESOLUTION,
         "lobe_shape": shape.to_dict(),
         "closure_fit_relative_error_median_rgb": fit_error,
-        "coverage_normal": {side: float(measurement.coverage[side][AngularGrid("hemisphere", n_o).cell_of(
-            np.array([0.0, 0.0, 1.0]))]) for side in SIDES},
+        "coverage_normal": {side: float(coverage_along(measurement.coverage[side], np.array([0.0, 0.0, 1.0])))
+                            for side in SIDES},
         "energy": {
             "max_total": float(total.max()),
             "worst_incidence_front_frame": side_to_world(AngularGrid("sphere", n_i).cell_centers(), "front")[worst[0]].tolist(),

@@ -26,7 +26,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
-from ..materials import sync_sun
+from ..materials import shader_node, sync_sun
 from ..measurement_render import configure_measurement_render, render_to_array
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from ..sample_object import build_sample_object
@@ -186,8 +186,7 @@ class Rig:
         for index in range(len(mesh.materials)):
             mesh.materials[index] = material
         self.material = material
-        if self.theta_i_deg is not None:
-            sync_sun(material, self.sun)
+        self._sync_sun()
 
     def replace_sample(self, obj) -> None:
         """Measure the mesh object ``obj`` (taken over by the rig, removed with it) instead of the
@@ -203,7 +202,12 @@ class Rig:
         """Sun at zenith θi on the −x side (θi = 180°: straight from behind), and the material told."""
         _aim(self.sun, toward_sun(theta_i_deg), self.patch_center, 0.0)
         self.theta_i_deg = float(theta_i_deg)
-        if self.material is not None:
+        self._sync_sun()
+
+    def _sync_sun(self) -> None:
+        """Tell a material with a ClothLight script node where the sun is (node-only materials
+        are lit by the sun lamp itself)."""
+        if self.material is not None and self.theta_i_deg is not None and shader_node(self.material) is not None:
             sync_sun(self.material, self.sun)
 
     def set_view(self, theta_v_deg: float) -> None:

@@ -34,7 +34,7 @@ from .report import swatch_exposure, write_report, write_swatch_png
 from .rig import RigSettings, build_rig, calibration_plane
 
 #: Materials a sweep can measure, in the order they are swept and plotted.
-MATERIALS = ("yarn", "yarn_general", "baseline", "garment")
+MATERIALS = ("yarn", "yarn_general", "baseline", "garment", "garment_general")
 #: What a sweep measures when no materials are named and tables are given.
 DEFAULT_MATERIALS = ("yarn", "baseline")
 #: Materials that read the yarn tables.
@@ -44,7 +44,10 @@ MATERIAL_LABELS = {
     "yarn_general": "ClothLight yarn BRDF, general-lighting closure mixture",
     "baseline": "baseline: Lambert (0.6/π, 0, 0) + Cook–Torrance m = 0.8",
     "garment": "ClothLight cloth BSDF on a flat patch (garment material, sun mode)",
+    "garment_general": "ClothLight cloth BSDF on a flat patch (garment material, general-lighting mixture)",
 }
+#: Materials that read a cloth bake, swept on a flat patch in place of the sample.
+GARMENT_MATERIALS = ("garment", "garment_general")
 #: The paper's Table 1 (§6.1): B/R and G/R at normal illumination and view.
 PAPER_TABLE1 = {
     "real red cotton": {"B/R": 0.08, "G/R": 0.011},
@@ -117,7 +120,7 @@ class ValidationRun:
             except (FileNotFoundError, ValueError, KeyError) as error:
                 raise ParameterError("tables_dir", str(tables_dir), f"a complete bake folder ({error})") from None
         self.cloth_tables = None
-        if "garment" in self.materials:
+        if set(GARMENT_MATERIALS) & set(self.materials):
             try:
                 self.cloth_tables = cloth_tables_from_bake(cloth_dir) if cloth_dir is not None else None
             except (FileNotFoundError, ValueError, KeyError) as error:
@@ -156,7 +159,7 @@ class ValidationRun:
                 with bpy.context.temp_override(scene=rig.scene):
                     material = self._build_material(kind)
                 created.append(material)
-                if kind == "garment":
+                if kind in GARMENT_MATERIALS and rig.sample.name != GARMENT_PATCH:
                     rig.replace_sample(garment_patch(rig))
                 rig.use_material(material)
                 views = []
@@ -197,8 +200,9 @@ class ValidationRun:
     def _build_material(self, kind: str):
         if kind == "yarn":
             return build_yarn_material(self.tables, name="ClothLight Gonioreflectometer Yarn", mode=SUN_MODE)
-        if kind == "garment":
-            return build_garment_material(self.cloth_tables, name="ClothLight Gonioreflectometer Garment", mode=SUN_MODE)
+        if kind in GARMENT_MATERIALS:
+            return build_garment_material(self.cloth_tables, name=f"ClothLight Gonioreflectometer {kind}",
+                                          mode=SUN_MODE if kind == "garment" else GENERAL_MODE)
         if kind == "yarn_general":
             return build_yarn_material(self.tables, name="ClothLight Gonioreflectometer Yarn General",
                                        mode=GENERAL_MODE)
@@ -217,7 +221,7 @@ class ValidationRun:
                            "thickness_mm": 2 * rig.bounds.half_thickness,
                            "weave": _weave_description(rig.sample)},
                 "tables_dir": str(self.tables.brdf_path.parent) if self.tables else None,
-                "cloth_dir": str(self.cloth_tables.paths["brdf"]["front"].parent) if self.cloth_tables else None,
+                "cloth_dir": str(self.cloth_tables.lobe_path.parent) if self.cloth_tables else None,
                 "measured_csv": str(self.measured_csv) if self.measured_csv else None,
             },
             "units": {
@@ -248,8 +252,9 @@ class ValidationRun:
             results["materials"][kind] = entry
         if "yarn" in curves and "yarn_general" in curves:
             results["general_vs_sun"] = compare_sweeps(curves["yarn_general"], curves["yarn"])
-        if "yarn" in curves and "garment" in curves:
-            results["garment_vs_yarn"] = compare_sweeps(curves["garment"], curves["yarn"])
+        for kind in GARMENT_MATERIALS:
+            if "yarn" in curves and kind in curves:
+                results[f"{kind}_vs_yarn"] = compare_sweeps(curves[kind], curves["yarn"])
         if self.measurement is not None:
             m = self.measurement
             results["measurement"] = {
@@ -263,11 +268,14 @@ class ValidationRun:
         return results
 
 
+GARMENT_PATCH = "ClothLight Gonioreflectometer Garment Patch"
+
+
 def garment_patch(rig):
     """A flat square as large as the rig's sample, with a UV map whose u runs along the warp (+x):
     the cloth the garment material is measured on."""
     size = 2.0 * min(rig.bounds.half_size)
-    plane = calibration_plane(size, name="ClothLight Gonioreflectometer Garment Patch")
+    plane = calibration_plane(size, name=GARMENT_PATCH)
     plane.location = rig.bounds.center
     uv = plane.data.uv_layers.new(name="UVMap")
     corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]

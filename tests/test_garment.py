@@ -1,0 +1,246 @@
+"""The garment material and the cloth gonioreflectometer in Blender.
+
+The garment shader reads cloth tables exactly as the table spec says, per side and along the UV
+tangent, with the open weave transparent; the gonioreflectometer's cloth BSDF of the shipped red
+cotton has the weave's symmetries, conserves energy, agrees with the in-plane validation rig at
+normal incidence and view, and is cached.
+"""
+
+import json
+import pathlib
+import math
+
+import numpy as np
+import OpenEXR
+import pytest
+
+from clothlight.garment.goniometry import side_to_world
+from clothlight.garment.tables import BRDF_FILES, GARMENT_LOBES, LOBE_FILE, LOBE_TILES, lobe_image, projected_view_grid
+from precompute.closure_fit import LobeShape, lobe_responses
+from precompute.grids import AngularGrid
+from precompute.table_layout import brdf_atlas, interpolate_rho
+
+bpy = pytest.importorskip("bpy")
+
+from clothlight.garment.bake import bake_cloth  # noqa: E402
+from clothlight.garment.material import (  # noqa: E402
+    ClothTableFiles,
+    apply_garment_material,
+    build_garment_material,
+    cloth_tables_from_bake,
+)
+from clothlight.garment.measure import GoniometerSettings  # noqa: E402
+from clothlight.materials import GENERAL_MODE, SUN_MODE, sync_sun  # noqa: E402
+from clothlight.measurement_render import configure_measurement_render, render_to_array  # noqa: E402
+from clothlight.validation.framing import ParameterError  # noqa: E402
+from clothlight.validation.rig import RigSettings  # noqa: E402
+from clothlight.validation.run import ValidationRun, run_validation  # noqa: E402
+from test_yarn_shader import _rotation_to, unit, write_exr  # noqa: E402
+
+pytestmark = pytest.mark.blender
+
+N_I, N_O, N_LOBES = 5, 6, 8
+SUN_IRRADIANCE = 2.0
+COVERAGE = {"front": 0.8, "back": 0.6}
+YARN_BAKE = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "red_cotton"
+
+
+def analytic_rho(wi, wo, side):
+    wi, wo = np.broadcast_arrays(wi, wo)
+    scale = 1.0 if side == "front" else 0.5
+    r = scale * (0.30 + 0.10 * wi[..., 0] + 0.08 * wi[..., 2] + 0.05 * wo[..., 0] * wo[..., 2])
+    g = scale * (0.10 + 0.05 * wi[..., 1] ** 2 + 0.04 * wo[..., 2])
+    b = np.full_like(r, 0.02 if side == "front" else 0.07)
+    return np.stack([r, g, b], axis=-1)
+
+
+def lobe_weights(view, side):
+    """Weights (len(LOBE_TILES), 3) at a view (side frame): the diffuse one linear in (ω_x, ω_y)
+    (bilinear lookups reproduce it exactly, so the view mapping is checked), the others constant."""
+    view = np.asarray(view, float)
+    sign = 1.0 if side == "front" else -1.0
+    diffuse = np.array([0.5 + 0.2 * view[..., 0], 0.3 + sign * 0.15 * view[..., 1], 0.1 + 0.05 * view[..., 0]])
+    weights = np.zeros(view.shape[:-1] + (len(LOBE_TILES), 3))
+    weights[..., 0, :] = np.moveaxis(diffuse, 0, -1)
+    weights[..., 1, :] = [0.4, 0.0, 0.1] if side == "front" else [0.1, 0.2, 0.0]
+    weights[..., 2, :] = [0.3, 0.2, 0.0]
+    weights[..., 3, :] = [0.2, 0.1, 0.3]
+    weights[..., 4, :] = 1.0 - COVERAGE[side]
+    return weights
+
+
+@pytest.fixture(scope="module")
+def synthetic_cloth(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cloth")
+    wi = AngularGrid("sphere", N_I).cell_centers()
+    wo = AngularGrid("hemisphere", N_O).cell_centers()
+    atlases = {}
+    for side in ("front", "back"):
+        atlases[side] = brdf_atlas(analytic_rho(wi[:, None, :], wo[None, :, :], side))
+        write_exr(folder / BRDF_FILES[side], atlases[side])
+    views = projected_view_grid(N_LOBES)
+    write_exr(folder / LOBE_FILE, lobe_image({side: lobe_weights(views, side) for side in ("front", "back")}))
+    tables = ClothTableFiles({side: folder / name for side, name in BRDF_FILES.items()}, folder / LOBE_FILE,
+                             N_I, N_O, N_LOBES, LobeShape().to_dict())
+    return tables, atlases
+
+
+def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False):
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    configure_measurement_render(scene, resolution=(8, 8), samples=1 if mode == SUN_MODE else 16)
+    scene.cycles.shading_system = mode == SUN_MODE  # the general mode is plain nodes: no OSL
+    scene.world = None
+    scene.cycles.max_bounces = 0
+    bpy.ops.mesh.primitive_plane_add(size=20.0)
+    plane = bpy.context.active_object
+    if warp_along_y:  # u along +y: the warp turns with it
+        uv = plane.data.uv_layers.active
+        for loop in plane.data.loops:
+            co = plane.data.vertices[loop.vertex_index].co
+            uv.data[loop.index].uv = (co.y / 20.0 + 0.5, -co.x / 20.0 + 0.5)
+    material = apply_garment_material(plane, tables, mode=mode)
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+    sun.data.energy = SUN_IRRADIANCE
+    sun.data.angle = 0.0
+    scene.collection.objects.link(sun)
+    sun.rotation_mode = "QUATERNION"
+    sun.rotation_quaternion = _rotation_to(toward_sun)
+    bpy.context.view_layer.update()
+    if mode == SUN_MODE:
+        sync_sun(material, sun)
+    camera = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    camera.data.type = "ORTHO"
+    camera.data.ortho_scale = 1.0
+    camera.location = tuple(5.0 * np.asarray(toward_camera))
+    camera.rotation_mode = "QUATERNION"
+    camera.rotation_quaternion = _rotation_to(toward_camera)
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    return scene
+
+
+@pytest.mark.parametrize("toward_camera, toward_sun, side", [
+    (unit([0.3, 0.2, 0.9]), unit([-0.4, 0.3, 0.7]), "front"),       # reflection
+    (unit([0.3, 0.2, 0.9]), unit([0.2, -0.5, -0.6]), "front"),      # transmission, seen from the front
+    (unit([-0.5, 0.4, -0.7]), unit([0.1, 0.3, -0.9]), "back"),      # the back side's own reflection
+])
+@pytest.mark.parametrize("warp_along_y", [False, True], ids=["warp-x", "warp-y"])
+def test_sun_mode_reads_each_side_in_its_frame(tmp_path, synthetic_cloth, toward_camera, toward_sun, side,
+                                               warp_along_y):
+    tables, atlases = synthetic_cloth
+    scene = garment_scene(tables, SUN_MODE, toward_camera, toward_sun, warp_along_y)
+    pixels = render_to_array(scene, tmp_path / "patch.exr").reshape(-1, 4)
+    # World → cloth frame (x = warp), then → the side's frame.
+    to_cloth = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) if warp_along_y else np.eye(3)
+    wi = side_to_world(to_cloth @ toward_sun, side)
+    wo = side_to_world(to_cloth @ toward_camera, side)
+    expected = interpolate_rho(atlases[side], N_I, wi, wo) * SUN_IRRADIANCE
+    np.testing.assert_allclose(pixels[:, :3].mean(axis=0), expected, rtol=3e-4, atol=1e-6)
+    np.testing.assert_allclose(pixels[:, 3], COVERAGE[side], atol=1e-4)
+
+
+@pytest.mark.parametrize("toward_camera, toward_sun, side", [
+    (unit([0.2, 0.3, 0.9]), unit([0.3, -0.2, 0.9]), "front"),     # reflection
+    (unit([0.5, -0.3, 0.6]), unit([-0.3, 0.4, -0.8]), "front"),   # back-lit: translucent, fibre transmission
+    (unit([-0.4, 0.2, -0.8]), unit([0.1, -0.5, -0.7]), "back"),   # the back side, in its own frame
+])
+@pytest.mark.parametrize("warp_along_y", [False, True], ids=["warp-x", "warp-y"])
+def test_general_mode_renders_the_lobe_mixture_and_the_open_weave(tmp_path, synthetic_cloth, toward_camera,
+                                                                  toward_sun, side, warp_along_y):
+    tables, _ = synthetic_cloth
+    scene = garment_scene(tables, GENERAL_MODE, toward_camera, toward_sun, warp_along_y)
+    pixels = render_to_array(scene, tmp_path / "patch.exr").reshape(-1, 4)
+    to_cloth = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) if warp_along_y else np.eye(3)
+    view = side_to_world(to_cloth @ toward_camera, side)
+    light = side_to_world(to_cloth @ toward_sun, side)
+    weights = lobe_weights(view, side)
+    expected = SUN_IRRADIANCE * lobe_responses(view, light, lobes=GARMENT_LOBES) @ weights[: len(GARMENT_LOBES)]
+    assert expected[0] > 1e-3
+    np.testing.assert_allclose(pixels[:, :3].mean(axis=0), expected, rtol=0.02, atol=2e-4)
+    np.testing.assert_allclose(pixels[:, 3].mean(), COVERAGE[side], atol=0.02)  # sampled: 16 spp
+
+
+def test_garment_material_refuses_meshes_without_uvs_and_incomplete_bakes(tmp_path, synthetic_cloth):
+    tables, _ = synthetic_cloth
+    bpy.ops.wm.read_homefile(use_empty=True)
+    mesh = bpy.data.meshes.new("no uv")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [], [(0, 1, 2)])
+    obj = bpy.data.objects.new("no uv", mesh)
+    with pytest.raises(ValueError, match="UV"):
+        apply_garment_material(obj, tables)
+    with pytest.raises(FileNotFoundError):
+        cloth_tables_from_bake(tmp_path)
+    with pytest.raises(ParameterError, match="cloth_dir"):
+        ValidationRun(None, tmp_path, materials=("garment",), cloth_dir=tmp_path)
+    with pytest.raises(ValueError, match="mode"):
+        build_garment_material(tables, mode="MOON")
+
+
+@pytest.fixture(scope="module")
+def red_cotton_cloth(tmp_path_factory):
+    cache = tmp_path_factory.mktemp("cache")
+    settings = GoniometerSettings(incidence_resolution=3, exit_resolution=3, pixels_per_patch=10, samples=2)
+    folder, measured = bake_cloth(YARN_BAKE, settings, cache_dir=cache)
+    assert measured
+    return folder, settings, cache
+
+
+def test_cloth_bake_is_cached_and_self_describing(red_cotton_cloth):
+    from precompute.tables import read_table
+
+    folder, settings, cache = red_cotton_cloth
+    again, measured = bake_cloth(YARN_BAKE, settings, cache_dir=cache)
+    assert again == folder and not measured
+    tables = cloth_tables_from_bake(folder)
+    for side, path in tables.brdf_paths.items():
+        table = read_table(path, "brdf")
+        assert table.metadata["side"] == side and table.metadata["goniometer"]["exit_resolution"] == 3
+    lobes = read_table(tables.lobe_path, "cloth_lobes")
+    assert lobes.metadata["tiles"] == list(LOBE_TILES)
+    assert lobes.pixels.shape == (2 * tables.lobe_resolution, len(LOBE_TILES) * tables.lobe_resolution, 3)
+
+
+def test_cloth_bsdf_has_the_plain_weaves_mirror_symmetry(red_cotton_cloth):
+    """A plain weave of round yarns is its own mirror image across x (and y): ρ at mirrored
+    incidence and exit cells must agree, within the measurement's noise.  That noise is heavy-
+    tailed (light grazing through the gaps reaches a few pixels), so the check is on the whole
+    table: the RMS of the mirror differences against the RMS of ρ, and the median cell."""
+    from precompute.table_layout import rho_from_brdf_atlas
+    from precompute.tables import read_table
+
+    folder, settings, _ = red_cotton_cloth
+    tables = cloth_tables_from_bake(folder)
+    incidence = AngularGrid("sphere", 3).cell_centers()
+    exits = AngularGrid("hemisphere", 3).cell_centers()
+    for side in ("front", "back"):
+        rho = rho_from_brdf_atlas(read_table(tables.brdf_paths[side]).pixels, 3)[..., 0]
+        for mirror in (np.array([-1.0, 1.0, 1.0]), np.array([1.0, -1.0, 1.0])):
+            i_mirror = AngularGrid("sphere", 3).cell_of(incidence * mirror)
+            o_mirror = AngularGrid("hemisphere", 3).cell_of(exits * mirror)
+            mirrored = rho[i_mirror][:, o_mirror]
+            assert np.sqrt(np.mean((mirrored - rho) ** 2)) < 0.1 * np.sqrt(np.mean(rho**2))
+            assert np.median(np.abs(mirrored - rho) / rho) < 0.05
+
+
+def test_cloth_bsdf_conserves_energy(red_cotton_cloth):
+    folder, _, _ = red_cotton_cloth
+    summary = json.loads((folder / "summary.json").read_text())
+    total = np.array(summary["energy"]["per_incidence_total_rgb"])
+    open_weave = np.array(summary["energy"]["per_incidence_open"])
+    assert np.all(total <= 1.0) and summary["energy"]["max_total"] <= 1.0
+    # Something is reflected or transmitted, and the open weave passes part of the light.
+    assert np.all(total[:, 0] > open_weave) and np.all((open_weave > 0.0) & (open_weave < 1.0))
+
+
+def test_cloth_bsdf_agrees_with_the_in_plane_rig_at_normal_incidence_and_view(tmp_path, red_cotton_cloth):
+    """Two framings of the same measurement: the gonioreflectometer's regions at (normal, normal)
+    (a cell centre of both odd grids) and the validation rig's in-plane sweep at θi = θv = 0."""
+    folder, _, _ = red_cotton_cloth
+    results = run_validation(None, tmp_path, materials=("yarn", "garment"), tables_dir=YARN_BAKE, cloth_dir=folder,
+                             settings=RigSettings(incidences_deg=(0.0,), views_deg=(0.0,), resolution=48, samples=4),
+                             swatches=False)
+    yarn = np.array(results["materials"]["yarn"]["views"][0]["brdf_rgb"])
+    garment = np.array(results["materials"]["garment"]["views"][0]["brdf_rgb"])
+    np.testing.assert_allclose(garment[0], yarn[0], rtol=0.05)
+    assert results["garment_vs_yarn"]["views_compared"] == 1

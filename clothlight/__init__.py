@@ -10,7 +10,8 @@ from __future__ import annotations
 import importlib
 
 # Modules holding Blender classes, in registration order.
-_BLENDER_MODULES = ("preferences", "properties", "preset_menus", "operators", "validation.operator", "ui", "sun_link")
+_BLENDER_MODULES = ("preferences", "properties", "preset_menus", "operators", "validation.operator",
+                   "garment.operator", "ui", "sun_link")
 
 
 def _modules():

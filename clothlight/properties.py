@@ -330,6 +330,14 @@ class ClothLightSceneSettings(bpy.types.PropertyGroup):
         name="Sun", type=bpy.types.Object, poll=_is_sun,
         description="Sun lamp of a sun-mode material; its direction and strength follow the lamp. "
                     "Empty: the scene's first sun")
+    cloth_tables_dir: StringProperty(
+        name="Cloth Bake", subtype="DIR_PATH",
+        description="Folder of a cloth bake (python -m clothlight.garment bake): the cloth BSDF measured on "
+                    "the woven sample, for garment meshes")
+    garment_open_weave: BoolProperty(
+        name="Open Weave", default=True,
+        description="Let light through the gaps between yarns (a transparent closure weighted by the measured "
+                    "coverage). Off: faster, for dense cloth or cloth seen from afar")
 
 
 CLASSES = (ClothLightWeaveSettings, ClothLightMediumSettings, ClothLightSceneSettings)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import bpy
 
 from . import operators
+from .garment.operator import BAKE_COMMAND
 from .materials import shader_node
 from .preset_menus import CLOTHLIGHT_PT_medium_presets, CLOTHLIGHT_PT_weave_presets
 
@@ -183,6 +184,23 @@ class CLOTHLIGHT_PT_material(_SidebarPanel, bpy.types.Panel):
             _draw_material_info(layout, obj.active_material)
 
 
+class CLOTHLIGHT_PT_garment(_SidebarPanel, bpy.types.Panel):
+    bl_label = "Garment"
+    bl_parent_id = "CLOTHLIGHT_PT_main"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        settings = context.scene.clothlight
+        layout = self.layout
+        layout.label(text="Cloth BSDF on any mesh (paper §7)")
+        layout.prop(settings, "cloth_tables_dir")
+        layout.prop(settings, "garment_open_weave")
+        layout.operator("clothlight.apply_garment_material", icon="MOD_CLOTH")
+        column = layout.column(align=True)
+        column.label(text="Bake a cloth BSDF from a terminal:", icon="CONSOLE")
+        column.label(text=BAKE_COMMAND)
+
+
 class CLOTHLIGHT_PT_validation(_SidebarPanel, bpy.types.Panel):
     bl_label = "Validation"
     bl_parent_id = "CLOTHLIGHT_PT_main"
@@ -230,6 +248,7 @@ CLASSES = (
     CLOTHLIGHT_PT_bake_settings,
     CLOTHLIGHT_PT_bake_grids,
     CLOTHLIGHT_PT_material,
+    CLOTHLIGHT_PT_garment,
     CLOTHLIGHT_PT_validation,
     CLOTHLIGHT_PT_material_properties,
 )

@@ -74,7 +74,8 @@ def shader_inputs(material):
 def test_installed_extension_registers_its_classes_and_user_folders(addon, scene):
     for name in ("CLOTHLIGHT_OT_build_sample", "CLOTHLIGHT_OT_bake_tables", "CLOTHLIGHT_OT_apply_material",
                  "CLOTHLIGHT_OT_validate", "CLOTHLIGHT_OT_setup_render", "CLOTHLIGHT_PT_main",
-                 "CLOTHLIGHT_PT_material_properties", "CLOTHLIGHT_OT_weave_preset_add"):
+                 "CLOTHLIGHT_PT_material_properties", "CLOTHLIGHT_OT_weave_preset_add",
+                 "CLOTHLIGHT_OT_apply_garment_material", "CLOTHLIGHT_PT_garment"):
         assert hasattr(bpy.types, name), name
     prefs = bpy.context.preferences.addons[EXTENSION_MODULE].preferences
     assert prefs.threads == 0 and prefs.cache_dir == ""
@@ -177,6 +178,33 @@ def test_apply_material_uses_the_prebaked_tables_follows_the_sun_and_leaves_no_o
     direction = tuple(shader_inputs(sun_material)["SunDirection"].default_value)
     assert direction == pytest.approx((0.8414710, 0.0, 0.5403023), abs=1e-5)
     assert not unused_blocks()
+
+
+def test_apply_garment_material_puts_a_cloth_bake_on_meshes_with_uvs_only(addon, scene, tmp_path_factory):
+    from clothlight.garment.bake import bake_cloth
+    from clothlight.garment.measure import GoniometerSettings
+
+    yarn = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "red_cotton"
+    cloth, _ = bake_cloth(yarn, GoniometerSettings(incidence_resolution=3, exit_resolution=2, pixels_per_patch=6,
+                                                   samples=1), cache_dir=tmp_path_factory.mktemp("cloth"))
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    bpy.ops.mesh.primitive_grid_add(size=1.0)
+    garment = bpy.context.active_object
+    mesh = bpy.data.meshes.new("no uv")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [], [(0, 1, 2)])
+    bare = bpy.data.objects.new("no uv", mesh)
+    scene.collection.objects.link(bare)
+    scene.clothlight.cloth_tables_dir = str(tmp_path_factory.mktemp("not a bake"))
+    with pytest.raises(RuntimeError, match="Cloth bake"):
+        bpy.ops.clothlight.apply_garment_material()
+    scene.clothlight.cloth_tables_dir = str(cloth)
+    bare.select_set(True)
+    assert bpy.ops.clothlight.apply_garment_material() == {"FINISHED"}
+    material = garment.active_material
+    assert material is not None and material["clothlight_garment"] == "GENERAL"
+    assert not any(node.type == "SCRIPT" for node in material.node_tree.nodes)  # plain nodes: no OSL needed
+    assert not bare.data.materials  # no UV map, no warp direction: skipped with a warning
 
 
 def test_apply_material_refuses_objects_that_are_not_samples(addon, scene):

@@ -8,10 +8,8 @@ normal incidence and view, and is cached.
 
 import json
 import pathlib
-import math
 
 import numpy as np
-import OpenEXR
 import pytest
 
 from clothlight.garment.goniometry import side_to_world

@@ -8,7 +8,6 @@ import pytest
 
 from clothlight.garment.goniometry import (
     ParameterError,
-    RegionLayout,
     exit_directions,
     incidence_directions,
     max_tilt,

@@ -67,10 +67,14 @@ def cloth_tables_from_bake(folder) -> ClothTableFiles:
 
 
 def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garment", *, mode: str = GENERAL_MODE,
-                           uv_map: str = ""):
+                           uv_map: str = "", open_weave: bool = True):
     """The garment material reading ``tables`` in ``mode`` (module docstring); ``uv_map``: the UV
     map whose tangent is the warp (empty: the active one).  Sun mode: set the sun with
-    :func:`clothlight.materials.sync_sun`."""
+    :func:`clothlight.materials.sync_sun`.
+
+    ``open_weave=False`` (general mode) leaves out the transparent closure of the open weave: the
+    light through the gaps is lost, but camera and shadow rays stop at the cloth, which renders
+    faster (benchmarks/bench_garment_material.py); for dense cloth or cloth seen from afar."""
     if mode not in (SUN_MODE, GENERAL_MODE):
         raise ValueError(f"mode must be {SUN_MODE!r} or {GENERAL_MODE!r}, not {mode!r}")
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
@@ -95,14 +99,14 @@ def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garm
         shader.inputs["LobeTiles"].default_value = len(LOBE_TILES)
         surface = shader.outputs["BSDF"]
     else:
-        surface = _closure_mixture(tree, tables, tangent.outputs["Tangent"])
+        surface = _closure_mixture(tree, tables, tangent.outputs["Tangent"], open_weave)
     tree.links.new(surface, output.inputs["Surface"])
     material[MATERIAL_KIND] = mode
     material.cycles.use_bump_map_correction = False
     return material
 
 
-def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket):
+def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: bool):
     """The general mode's nodes; returns the summed closure's socket.
 
     Frame: z = the shading normal (Cycles turns it toward the viewer, so the back side gets its
@@ -159,7 +163,7 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket):
     image = bpy.data.images.load(str(tables.lobe_path), check_existing=True)
     image.colorspace_settings.name = "Non-Color"
     weights = {}
-    for k, tile in enumerate(LOBE_TILES):
+    for k, tile in enumerate(LOBE_TILES if open_weave else LOBE_TILES[:-1]):
         shifted = math_node("ADD", coordinates, ((k + inset + span / 2.0) / tiles, 0.0, 0.0), (600, 300 - 200 * k))
         texture = nodes.new("ShaderNodeTexImage")
         texture.image = image
@@ -170,9 +174,11 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket):
         weights[tile] = texture.outputs["Color"]
 
     closures = []
-    for node_type, tile in (("ShaderNodeBsdfDiffuse", "diffuse"), ("ShaderNodeBsdfTranslucent", "translucent"),
-                            ("ShaderNodeBsdfHair", "fibre_transmission"), ("ShaderNodeBsdfAnisotropic", "gloss"),
-                            ("ShaderNodeBsdfTransparent", "open_weave")):
+    kinds = [("ShaderNodeBsdfDiffuse", "diffuse"), ("ShaderNodeBsdfTranslucent", "translucent"),
+             ("ShaderNodeBsdfHair", "fibre_transmission"), ("ShaderNodeBsdfAnisotropic", "gloss")]
+    if open_weave:
+        kinds.append(("ShaderNodeBsdfTransparent", "open_weave"))
+    for node_type, tile in kinds:
         closure = nodes.new(node_type)
         closure.location = (1000, 300 - 200 * len(closures))
         links.new(weights[tile], closure.inputs["Color"])
@@ -197,16 +203,17 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket):
     return total
 
 
-def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_MODE, name: str | None = None):
-    """Put a garment material on every slot of the mesh object ``obj``; refuses a mesh without a
-    UV map (the warp direction comes from it)."""
+def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_MODE, name: str | None = None,
+                           open_weave: bool = True):
+    """Put a garment material (:func:`build_garment_material`) on every slot of the mesh object
+    ``obj``; refuses a mesh without a UV map (the warp direction comes from it)."""
     if obj is None or obj.type != "MESH":
         raise ValueError("the garment material goes on a mesh object")
     if not obj.data.uv_layers:
         raise ValueError(f"{obj.name!r} has no UV map: the garment material takes the warp from the UV tangent "
                          "(unwrap it with u along the warp)")
     material = build_garment_material(tables, name or f"ClothLight Garment ({obj.name})", mode=mode,
-                                      uv_map=obj.data.uv_layers.active.name)
+                                      uv_map=obj.data.uv_layers.active.name, open_weave=open_weave)
     if not obj.data.materials:
         obj.data.materials.append(material)
     for index in range(len(obj.data.materials)):

@@ -1,0 +1,69 @@
+"""The garment material in the interface: put a cloth bake on the selected meshes.
+
+The cloth bake itself runs from the command line (``python -m clothlight.garment bake``, minutes
+of renders); the panel shows the command.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from ..materials import GENERAL_MODE
+from .material import apply_garment_material, cloth_tables_from_bake
+
+BAKE_COMMAND = "python -m clothlight.garment bake --tables YARN_BAKE --out DIR"
+
+
+def _meshes(context):
+    return [obj for obj in context.selected_objects if obj.type == "MESH"]
+
+
+class CLOTHLIGHT_OT_apply_garment_material(bpy.types.Operator):
+    """Give the selected meshes the garment material of a cloth bake (general lighting; the warp
+    follows the UV map's u, the front the normals)"""
+
+    bl_idname = "clothlight.apply_garment_material"
+    bl_label = "Apply Garment Material"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if not _meshes(context):
+            cls.poll_message_set("Select the garment's mesh objects")
+            return False
+        return True
+
+    def execute(self, context):
+        settings = context.scene.clothlight
+        folder = bpy.path.abspath(settings.cloth_tables_dir)
+        try:
+            tables = cloth_tables_from_bake(folder)
+        except (FileNotFoundError, ValueError, KeyError) as error:
+            self.report({"ERROR"}, f"Cloth bake: {error}")
+            return {"CANCELLED"}
+        done, skipped = [], []
+        for obj in _meshes(context):
+            try:
+                apply_garment_material(obj, tables, mode=GENERAL_MODE, open_weave=settings.garment_open_weave)
+                done.append(obj.name)
+            except ValueError as error:
+                skipped.append(str(error))
+        for message in skipped:
+            self.report({"WARNING"}, message)
+        if not done:
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Garment material on {', '.join(done)}")
+        return {"FINISHED"}
+
+
+CLASSES = (CLOTHLIGHT_OT_apply_garment_material,)
+
+
+def register() -> None:
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister() -> None:
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

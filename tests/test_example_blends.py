@@ -28,6 +28,8 @@ def _table_paths():
                 for socket in node.inputs:
                     if socket.name.endswith("Table"):
                         yield socket.default_value
+            elif node.type == "TEX_IMAGE" and node.image is not None:  # the garment's node-based mixture
+                yield node.image.filepath
 
 
 def render_pixels(scene, path: pathlib.Path) -> np.ndarray:

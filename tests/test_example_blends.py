@@ -58,7 +58,11 @@ def test_example_opens_and_renders_its_cloth(blend, tmp_path):
     scenes = [scene for scene in bpy.data.scenes if scene.camera is not None]
     assert scenes
     for scene in scenes:
-        assert scene.render.engine == "CYCLES" and scene.cycles.shading_system and scene.cycles.device == "CPU"
+        assert scene.render.engine == "CYCLES" and scene.cycles.device == "CPU"
+        # OSL where a material runs a script (the garment's general mode is plain nodes).
+        assert scene.cycles.shading_system or not any(
+            node.type == "SCRIPT" for obj in scene.objects for slot in obj.material_slots if slot.material
+            for node in slot.material.node_tree.nodes)
         pixels = render_pixels(scene, tmp_path / f"{scene.name}.exr")
         assert np.isfinite(pixels).all()
         cloth = pixels[pixels[:, 3] > 0.5, :3]

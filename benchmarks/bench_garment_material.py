@@ -9,7 +9,6 @@ shader's cost: the same texture lookups whatever the grid)."""
 import pathlib
 import sys
 import tempfile
-import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
@@ -21,6 +20,7 @@ from clothlight.garment.material import build_garment_material, cloth_tables_fro
 from clothlight.garment.measure import GoniometerSettings  # noqa: E402
 from clothlight.materials import GENERAL_MODE  # noqa: E402
 from clothlight.measurement_render import configure_measurement_render  # noqa: E402
+from render_cost import light_and_camera, print_render_cost  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-garment-"))
@@ -34,42 +34,10 @@ scene = bpy.context.scene
 configure_measurement_render(scene, resolution=(320, 240), samples=64)
 scene.cycles.shading_system = False
 scene.render.film_transparent = False
-world = bpy.data.worlds.new("grey")
-world.color = (0.3, 0.3, 0.3)
-scene.world = world
 cloth, form = draped_cloth(scene)
-sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-sun.data.energy = 3.0
-sun.rotation_euler = (0.6, 0.2, 0.0)
-scene.collection.objects.link(sun)
-camera = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
-camera.location = (0.0, -2.4, 1.1)
-camera.rotation_euler = (1.2, 0.0, 0.0)
-scene.collection.objects.link(camera)
-scene.camera = camera
-
-principled = bpy.data.materials.new("Principled sheen")
-node = principled.node_tree.nodes["Principled BSDF"]
-node.inputs["Base Color"].default_value = (0.5, 0.02, 0.03, 1.0)
-node.inputs["Sheen Weight"].default_value = 1.0
-node.inputs["Roughness"].default_value = 0.8
-materials = {"Principled BSDF + sheen": principled,
-             "garment": build_garment_material(tables, "garment", mode=GENERAL_MODE, uv_map="UVMap"),
-             "garment, no open weave": build_garment_material(tables, "garment opaque", mode=GENERAL_MODE,
-                                                              uv_map="UVMap", open_weave=False)}
-
-timings = {}
-for label, material in materials.items():
-    cloth.data.materials.clear()
-    cloth.data.materials.append(material)
-    scene.render.filepath = str(out / f"{label}.exr")
-    bpy.ops.render.render(write_still=True)  # warm-up: shader compile, BVH
-    runs = []
-    for _ in range(3):
-        start = time.perf_counter()
-        bpy.ops.render.render(write_still=True)
-        runs.append(time.perf_counter() - start)
-    timings[label] = sorted(runs)[1]
-reference = timings["Principled BSDF + sheen"]
-for label, seconds in timings.items():
-    print(f"{label:28s} {seconds:6.2f} s   {seconds / reference:4.2f}x   (median of 3)")
+light_and_camera(scene, (0.0, -2.4, 1.1), (1.2, 0.0, 0.0))
+print_render_cost(scene, cloth, {
+    "garment": build_garment_material(tables, "garment", mode=GENERAL_MODE, uv_map="UVMap"),
+    "garment, no open weave": build_garment_material(tables, "garment opaque", mode=GENERAL_MODE, uv_map="UVMap",
+                                                     open_weave=False),
+}, out)

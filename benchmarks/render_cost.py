@@ -1,0 +1,56 @@
+"""Shared set-up of the material render-cost benchmarks (bench_yarn_material, bench_garment_material):
+the lit scene and the reference material they are timed against."""
+
+import pathlib
+import time
+
+import bpy
+
+REFERENCE = "Principled BSDF + sheen"
+
+
+def light_and_camera(scene, camera_location, camera_rotation):
+    """A grey world, a 3 W/m² sun and a camera; returns the sun object."""
+    world = bpy.data.worlds.new("grey")
+    world.color = (0.3, 0.3, 0.3)
+    scene.world = world
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+    sun.data.energy = 3.0
+    sun.rotation_euler = (0.6, 0.2, 0.0)
+    scene.collection.objects.link(sun)
+    camera = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    camera.location = camera_location
+    camera.rotation_euler = camera_rotation
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    return sun
+
+
+def principled_with_sheen():
+    """The reference: a red Principled BSDF with full sheen, roughness 0.8."""
+    material = bpy.data.materials.new(REFERENCE)
+    node = material.node_tree.nodes["Principled BSDF"]
+    node.inputs["Base Color"].default_value = (0.5, 0.02, 0.03, 1.0)
+    node.inputs["Sheen Weight"].default_value = 1.0
+    node.inputs["Roughness"].default_value = 0.8
+    return material
+
+
+def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: int = 3) -> dict:
+    """Render ``obj`` with the reference and each of ``materials`` (label → material): a warm-up
+    (shader compile, BVH), then the median of ``repeats`` timed renders; print seconds and ratios."""
+    timings = {}
+    for label, material in {REFERENCE: principled_with_sheen(), **materials}.items():
+        obj.data.materials.clear()
+        obj.data.materials.append(material)
+        scene.render.filepath = str(out / f"{label}.exr")
+        bpy.ops.render.render(write_still=True)
+        runs = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            bpy.ops.render.render(write_still=True)
+            runs.append(time.perf_counter() - start)
+        timings[label] = sorted(runs)[len(runs) // 2]
+    for label, seconds in timings.items():
+        print(f"{label:28s} {seconds:6.2f} s   {seconds / timings[REFERENCE]:4.2f}x   (median of {repeats})")
+    return timings

@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import pathlib
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -130,6 +128,9 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
     :class:`clothlight.yarn_tables.YarnTableFiles`); renders go to ``render_dir``.
 
     ``progress(done, total, what)`` is called after every render (2 N_o² of them)."""
+    import pathlib
+    import time
+
     weave = _sample_weave(settings)
     n_i, n_o = settings.incidence_resolution, settings.exit_resolution
     half_thickness, spacing, repeat = _half_thickness(weave)

@@ -338,6 +338,10 @@ class ClothLightSceneSettings(bpy.types.PropertyGroup):
         name="Open Weave", default=True,
         description="Let light through the gaps between yarns (a transparent closure weighted by the measured "
                     "coverage). Off: faster, for dense cloth or cloth seen from afar")
+    garment_weave_repeats: FloatProperty(
+        name="Weave Repeats per UV", default=0.0, min=0.0, soft_max=5000.0,
+        description="Show the yarns for close-ups with the cloth bake's weave detail texture: weave repeats per "
+                    "UV unit (the garment's length along u over the weave's repeat, both in mm). 0: off")
 
 
 CLASSES = (ClothLightWeaveSettings, ClothLightMediumSettings, ClothLightSceneSettings)

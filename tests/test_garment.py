@@ -10,6 +10,7 @@ import json
 import pathlib
 
 import numpy as np
+import OpenEXR
 import pytest
 
 from clothlight.garment.goniometry import side_to_world
@@ -83,7 +84,7 @@ def synthetic_cloth(tmp_path_factory):
     return tables, atlases
 
 
-def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False):
+def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False, weave_repeats_per_uv=None):
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     configure_measurement_render(scene, resolution=(8, 8), samples=1 if mode == SUN_MODE else 16)
@@ -97,7 +98,7 @@ def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False):
         for loop in plane.data.loops:
             co = plane.data.vertices[loop.vertex_index].co
             uv.data[loop.index].uv = (co.y / 20.0 + 0.5, -co.x / 20.0 + 0.5)
-    material = apply_garment_material(plane, tables, mode=mode)
+    material = apply_garment_material(plane, tables, mode=mode, weave_repeats_per_uv=weave_repeats_per_uv)
     sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
     sun.data.energy = SUN_IRRADIANCE
     sun.data.angle = 0.0
@@ -159,6 +160,32 @@ def test_general_mode_renders_the_lobe_mixture_and_the_open_weave(tmp_path, synt
     np.testing.assert_allclose(pixels[:, 3].mean(), COVERAGE[side], atol=0.02)  # sampled: 16 spp
 
 
+def test_weave_detail_shows_the_yarns_and_keeps_the_mean(tmp_path, synthetic_cloth):
+    """A detail texture of stripes (coverage 1 and 0.6, flat normals; its mean the bake's 0.8 at
+    normal view, as a real bake's is) tiled four times across a view straight down: pixels differ
+    stripe by stripe, the image's mean radiance and alpha are those of the material without detail."""
+    import dataclasses
+
+    tables, _ = synthetic_cloth
+    coverage = np.where(np.arange(32) < 16, 1.0, 0.6)[None, :].repeat(32, axis=0)
+    texture = np.concatenate([np.full((32, 32, 3), (0.5, 0.5, 1.0)), coverage[..., None]], axis=-1)
+    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, {"RGBA": texture.astype(np.float32)}) as exr:
+        exr.write(str(tmp_path / "detail.exr"))
+    detailed = dataclasses.replace(tables, detail_path=tmp_path / "detail.exr", detail_mean_coverage=0.8)
+    toward_camera, toward_sun = np.array([0.0, 0.0, 1.0]), unit([0.3, -0.2, 0.9])
+    means = []
+    for cloth, repeats in ((tables, None), (detailed, 80.0)):
+        scene = garment_scene(cloth, GENERAL_MODE, toward_camera, toward_sun, weave_repeats_per_uv=repeats)
+        scene.render.resolution_x = scene.render.resolution_y = 64
+        pixels = render_to_array(scene, tmp_path / "patch.exr").reshape(64, 64, 4)
+        means.append(pixels.reshape(-1, 4).mean(axis=0))
+        spread = pixels[..., 0].mean(axis=0)  # per image column: stripes run along the image's columns
+        assert (np.ptp(spread) > 0.5 * spread.mean()) == (repeats is not None)
+    np.testing.assert_allclose(means[1], means[0], rtol=0.03)
+    with pytest.raises(ValueError, match="weave detail"):
+        build_garment_material(tables, mode=GENERAL_MODE, weave_repeats_per_uv=10.0)
+
+
 def test_garment_material_refuses_meshes_without_uvs_and_incomplete_bakes(tmp_path, synthetic_cloth):
     tables, _ = synthetic_cloth
     bpy.ops.wm.read_homefile(use_empty=True)
@@ -197,6 +224,25 @@ def test_cloth_bake_is_cached_and_self_describing(red_cotton_cloth):
     lobes = read_table(tables.lobe_path, "cloth_lobes")
     assert lobes.metadata["tiles"] == list(LOBE_TILES)
     assert lobes.pixels.shape == (2 * tables.lobe_resolution, len(LOBE_TILES) * tables.lobe_resolution, 3)
+
+
+def test_weave_detail_tiles_and_covers_what_the_gonioreflectometer_measured(red_cotton_cloth):
+    """The detail texture (one repeat seen straight down) wraps around without a seam, and its mean
+    coverage is the cloth's coverage at normal view measured by the gonioreflectometer's regions:
+    two framings of the same weave."""
+    folder, _, _ = red_cotton_cloth
+    summary = json.loads((folder / "summary.json").read_text())
+    with OpenEXR.File(str(folder / summary["weave_detail"]["file"])) as exr:
+        texture = np.array(exr.channels()["RGBA"].pixels, dtype=float)
+    coverage = texture[..., 3]
+    assert summary["weave_detail"]["mean_coverage"] == pytest.approx(coverage.mean())
+    assert coverage.mean() == pytest.approx(summary["coverage_normal"]["front"], abs=0.02)
+    for axis in (0, 1):
+        neighbours = np.abs(np.diff(coverage, axis=axis)).mean()
+        seam = np.abs(np.take(coverage, 0, axis) - np.take(coverage, -1, axis)).mean()
+        assert seam <= 2.0 * neighbours + 1e-3
+    normals = 2.0 * texture[..., :3] - 1.0
+    assert np.allclose(np.linalg.norm(normals, axis=-1), 1.0, atol=1e-3) and normals[..., 2].min() > -1e-3
 
 
 def test_cloth_bsdf_has_the_plain_weaves_mirror_symmetry(red_cotton_cloth):

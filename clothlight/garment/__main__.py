@@ -73,7 +73,7 @@ def main(argv=None) -> int:
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for path in sorted(folder.iterdir()):
-        if path.suffix == ".exr":
+        if path.suffix == ".exr":  # tables and the weave detail texture
             shutil.copy2(path, out / path.name)
     shutil.copy2(folder / "summary.json", out / "summary.json")  # last: a complete folder
     summary = read_summary(out)

@@ -4,7 +4,8 @@ Two cache entries, as for a yarn (``precompute.bake``: spectral → tables): the
 (``measurement.npz``: ρ per side and coverage), keyed by the yarn tables' own cache key, the
 gonioreflectometer's settings (weave included) and the code that measures (the yarn shader
 included: the measurement renders it); and the tables written from it, keyed by that key and
-the code that fits and writes them.  Changing the fit re-renders nothing.
+the code that fits and writes them (and renders the weave detail texture, :mod:`.detail`).
+Changing the fit re-renders nothing.
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ import numpy as np
 from ..addon import import_precompute
 from ..yarn_tables import yarn_tables_from_bake
 from .goniometry import SIDES
-from .measure import ClothMeasurement, GoniometerSettings, measure_cloth
+from .detail import DETAIL_FILE, render_weave_detail
+from .measure import ClothMeasurement, GoniometerSettings, _sample_weave, measure_cloth
 from .tables import SUMMARY_FILE, write_cloth_tables
 
 cache = import_precompute("cache")
@@ -32,8 +34,8 @@ MEASUREMENT_SOURCES = (
     "clothlight/garment/goniometry.py", "clothlight/garment/measure.py", "clothlight/materials.py",
     "clothlight/measurement_render.py", "clothlight/weave/geometry.py", "osl/cloth_yarn.osl", "osl/clothlight.h",
 )
-TABLE_SOURCES = ("clothlight/garment/tables.py", "precompute/closure_fit.py", "precompute/table_layout.py",
-                 "precompute/cycles_closures.py")
+TABLE_SOURCES = ("clothlight/garment/tables.py", "clothlight/garment/detail.py", "precompute/closure_fit.py",
+                 "precompute/table_layout.py", "precompute/cycles_closures.py")
 
 
 def measurement_inputs(yarn_bake_dir, settings: GoniometerSettings) -> dict:
@@ -81,8 +83,11 @@ def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(
     folder = cache.lookup(cache_dir, TABLES_NAMESPACE, key)
     if folder is None:
         def write(target: pathlib.Path) -> None:
-            write_cloth_tables(target, load_measurement(measured_folder / MEASUREMENT_FILE), settings, tables,
-                               cache_key=key, code_digest=tables_in["code_digest"])
+            summary = write_cloth_tables(target, load_measurement(measured_folder / MEASUREMENT_FILE), settings,
+                                         tables, cache_key=key, code_digest=tables_in["code_digest"])
+            summary["weave_detail"] = {"file": DETAIL_FILE,
+                                       **render_weave_detail(_sample_weave(settings), target / DETAIL_FILE)}
+            (target / SUMMARY_FILE).write_text(json.dumps(summary, indent=1))
 
         folder, _ = cache.store(cache_dir, TABLES_NAMESPACE, key, tables_in, write)
     return folder, rendered

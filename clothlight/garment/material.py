@@ -41,6 +41,9 @@ class ClothTableFiles:
     exit_resolution: int
     lobe_resolution: int
     lobe_shape: dict
+    #: The weave detail texture (:mod:`.detail`) and its mean coverage; None in bakes without one.
+    detail_path: pathlib.Path | None = None
+    detail_mean_coverage: float | None = None
 
 
 def cloth_tables_from_bake(folder) -> ClothTableFiles:
@@ -61,22 +64,36 @@ def cloth_tables_from_bake(folder) -> ClothTableFiles:
     missing = [str(path) for path in (*brdf_paths.values(), folder / LOBE_FILE) if not path.is_file()]
     if missing:
         raise FileNotFoundError(f"cloth bake {folder} lacks {missing}")
+    detail = summary.get("weave_detail")
+    detail_path = folder / detail["file"] if detail else None
+    if detail_path is not None and not detail_path.is_file():
+        raise FileNotFoundError(f"cloth bake {folder} lacks its weave detail texture {detail_path}")
     return ClothTableFiles(brdf_paths, folder / LOBE_FILE, int(summary["incidence_resolution"]),
                            int(summary["exit_resolution"]), int(summary["lobe_grid_resolution"]),
-                           {key: float(value) for key, value in summary["lobe_shape"].items()})
+                           {key: float(value) for key, value in summary["lobe_shape"].items()},
+                           detail_path, float(detail["mean_coverage"]) if detail else None)
 
 
 def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garment", *, mode: str = GENERAL_MODE,
-                           uv_map: str = "", open_weave: bool = True):
+                           uv_map: str = "", open_weave: bool = True, weave_repeats_per_uv: float | None = None):
     """The garment material reading ``tables`` in ``mode`` (module docstring); ``uv_map``: the UV
     map whose tangent is the warp (empty: the active one).  Sun mode: set the sun with
     :func:`clothlight.materials.sync_sun`.
 
     ``open_weave=False`` (general mode) leaves out the transparent closure of the open weave: the
     light through the gaps is lost, but camera and shadow rays stop at the cloth, which renders
-    faster (benchmarks/bench_garment_material.py); for dense cloth or cloth seen from afar."""
+    faster (benchmarks/bench_garment_material.py); for dense cloth or cloth seen from afar.
+
+    ``weave_repeats_per_uv`` (general mode, a bake with a weave detail texture): weave repeats
+    per UV unit — the garment's size along u in mm over the weave's repeat in mm; the yarns then
+    show (normals and gaps) for close-ups, with the same mean as without."""
     if mode not in (SUN_MODE, GENERAL_MODE):
         raise ValueError(f"mode must be {SUN_MODE!r} or {GENERAL_MODE!r}, not {mode!r}")
+    if weave_repeats_per_uv is not None:
+        if mode != GENERAL_MODE or tables.detail_path is None:
+            raise ValueError("weave detail needs the general mode and a cloth bake with a weave detail texture")
+        if not (isinstance(weave_repeats_per_uv, (int, float)) and weave_repeats_per_uv > 0):
+            raise ValueError(f"weave_repeats_per_uv must be > 0, not {weave_repeats_per_uv!r}")
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
     tree = material.node_tree
     tree.nodes.clear()
@@ -99,20 +116,57 @@ def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garm
         shader.inputs["LobeTiles"].default_value = len(LOBE_TILES)
         surface = shader.outputs["BSDF"]
     else:
-        surface = _closure_mixture(tree, tables, tangent.outputs["Tangent"], open_weave)
+        detail = _weave_detail(tree, tables, uv_map, weave_repeats_per_uv) if weave_repeats_per_uv else None
+        surface = _closure_mixture(tree, tables, tangent.outputs["Tangent"], open_weave, detail)
     tree.links.new(surface, output.inputs["Surface"])
     material[MATERIAL_KIND] = mode
     material.cycles.use_bump_map_correction = False
     return material
 
 
-def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: bool):
+def _weave_detail(tree, tables: ClothTableFiles, uv_map: str, repeats: float):
+    """(normal socket, coverage scale socket) of the weave detail texture tiled ``repeats`` times
+    per UV unit: the bent normal, and the texel's coverage over the texture's mean."""
+    nodes, links = tree.nodes, tree.links
+    uv = nodes.new("ShaderNodeUVMap")
+    uv.uv_map = uv_map
+    uv.location = (-800, -600)
+    tiled = nodes.new("ShaderNodeVectorMath")
+    tiled.operation = "SCALE"
+    tiled.inputs["Scale"].default_value = float(repeats)
+    tiled.location = (-600, -600)
+    links.new(uv.outputs["UV"], tiled.inputs[0])
+    texture = nodes.new("ShaderNodeTexImage")
+    texture.image = bpy.data.images.load(str(tables.detail_path), check_existing=True)
+    texture.image.colorspace_settings.name = "Non-Color"
+    texture.image.alpha_mode = "CHANNEL_PACKED"
+    texture.interpolation = "Linear"
+    texture.extension = "REPEAT"
+    texture.location = (-400, -600)
+    links.new(tiled.outputs[0], texture.inputs["Vector"])
+    normal_map = nodes.new("ShaderNodeNormalMap")
+    normal_map.space = "TANGENT"
+    normal_map.uv_map = uv_map
+    normal_map.location = (-100, -600)
+    links.new(texture.outputs["Color"], normal_map.inputs["Color"])
+    scale = nodes.new("ShaderNodeMath")
+    scale.operation = "DIVIDE"
+    scale.inputs[1].default_value = tables.detail_mean_coverage
+    scale.location = (-100, -800)
+    links.new(texture.outputs["Alpha"], scale.inputs[0])
+    return normal_map.outputs["Normal"], scale.outputs[0]
+
+
+def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: bool, detail=None):
     """The general mode's nodes; returns the summed closure's socket.
 
     Frame: z = the shading normal (Cycles turns it toward the viewer, so the back side gets its
     own frame, a half-turn about the warp), x = the UV tangent made normal to it, y = z × x.
     Each tile of ``lobes.exr`` is looked up at the view's (ω_x, ω_y), held between the tile's
-    outermost pixel centres (tables.projected_view_grid), in the front or back row block."""
+    outermost pixel centres (tables.projected_view_grid), in the front or back row block.
+
+    ``detail`` (:func:`_weave_detail`): the closures about the bent normal, their weights times
+    s = coverage / mean coverage, the open weave's 1 − s (1 − open): the same mean per repeat."""
     nodes, links = tree.nodes, tree.links
 
     def math_node(operation, a, b=None, location=(0, 0), vector=True):
@@ -181,7 +235,22 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
     for node_type, tile in kinds:
         closure = nodes.new(node_type)
         closure.location = (1000, 300 - 200 * len(closures))
-        links.new(weights[tile], closure.inputs["Color"])
+        weight = weights[tile]
+        if detail is not None:
+            normal, scale = detail
+            if "Normal" in closure.inputs:
+                links.new(normal, closure.inputs["Normal"])
+            if tile == "open_weave":  # 1 − s (1 − open)
+                covered = math_node("SUBTRACT", (1.0, 1.0, 1.0), weight, (850, closure.location[1] - 100))
+                weight = math_node("SCALE", covered.outputs[0], None, (900, closure.location[1] - 100))
+                links.new(scale, weight.inputs["Scale"])
+                weight = math_node("SUBTRACT", (1.0, 1.0, 1.0), weight.outputs[0], (950, closure.location[1] - 100))
+                weight = math_node("MAXIMUM", weight.outputs[0], (0.0, 0.0, 0.0), (975, closure.location[1] - 100))
+            else:
+                weight = math_node("SCALE", weight, None, (900, closure.location[1] - 100))
+                links.new(scale, weight.inputs["Scale"])
+            weight = weight.outputs[0]
+        links.new(weight, closure.inputs["Color"])
         closures.append(closure)
     hair = closures[2]
     hair.component = "Transmission"
@@ -204,7 +273,7 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
 
 
 def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_MODE, name: str | None = None,
-                           open_weave: bool = True):
+                           open_weave: bool = True, weave_repeats_per_uv: float | None = None):
     """Put a garment material (:func:`build_garment_material`) on every slot of the mesh object
     ``obj``; refuses a mesh without a UV map (the warp direction comes from it)."""
     if obj is None or obj.type != "MESH":
@@ -213,7 +282,8 @@ def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_
         raise ValueError(f"{obj.name!r} has no UV map: the garment material takes the warp from the UV tangent "
                          "(unwrap it with u along the warp)")
     material = build_garment_material(tables, name or f"ClothLight Garment ({obj.name})", mode=mode,
-                                      uv_map=obj.data.uv_layers.active.name, open_weave=open_weave)
+                                      uv_map=obj.data.uv_layers.active.name, open_weave=open_weave,
+                                      weave_repeats_per_uv=weave_repeats_per_uv)
     if not obj.data.materials:
         obj.data.materials.append(material)
     for index in range(len(obj.data.materials)):

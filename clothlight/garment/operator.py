@@ -44,7 +44,8 @@ class CLOTHLIGHT_OT_apply_garment_material(bpy.types.Operator):
         done, skipped = [], []
         for obj in _meshes(context):
             try:
-                apply_garment_material(obj, tables, mode=GENERAL_MODE, open_weave=settings.garment_open_weave)
+                apply_garment_material(obj, tables, mode=GENERAL_MODE, open_weave=settings.garment_open_weave,
+                                       weave_repeats_per_uv=settings.garment_weave_repeats or None)
                 done.append(obj.name)
             except ValueError as error:
                 skipped.append(str(error))

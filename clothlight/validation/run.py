@@ -23,8 +23,8 @@ from dataclasses import asdict, dataclass
 import bpy
 import numpy as np
 
-from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
 from ..garment.material import build_garment_material, cloth_tables_from_bake
+from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
 from ..mesh_attributes import YARN_TANGENT
 from ..yarn_tables import yarn_tables_from_bake
 from .framing import ParameterError

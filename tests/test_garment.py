@@ -288,3 +288,19 @@ def test_cloth_bsdf_agrees_with_the_in_plane_rig_at_normal_incidence_and_view(tm
     garment = np.array(results["materials"]["garment"]["views"][0]["brdf_rgb"])
     np.testing.assert_allclose(garment[0], yarn[0], rtol=0.05)
     assert results["garment_vs_yarn"]["views_compared"] == 1
+
+
+def test_bake_command_copies_a_cached_bake_and_names_bad_input(tmp_path, red_cotton_cloth, capsys):
+    from clothlight.garment.__main__ import main
+
+    folder, settings, cache = red_cotton_cloth
+    common = ["--exit-resolution", "3", "--incidence-resolution", "3", "--pixels-per-patch",
+              str(settings.pixels_per_patch), "--samples", str(settings.samples), "--cache-dir", str(cache)]
+    assert main(["bake", "--tables", str(YARN_BAKE), "--out", str(tmp_path / "cloth"), *common]) == 0
+    assert "from the cache" in capsys.readouterr().out
+    assert sorted(p.name for p in (tmp_path / "cloth").iterdir()) == sorted(
+        p.name for p in folder.iterdir() if p.name != "entry.json")
+    assert cloth_tables_from_bake(tmp_path / "cloth").detail_path is not None
+    assert main(["bake", "--tables", str(tmp_path / "nothing"), "--out", str(tmp_path / "x")]) == 2
+    assert main(["bake", "--tables", str(YARN_BAKE), "--out", str(tmp_path / "x"), "--incidence-resolution", "8"]) == 2
+    assert "incidence_resolution" in capsys.readouterr().err

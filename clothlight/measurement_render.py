@@ -13,10 +13,17 @@ import numpy as np
 from .render_setup import use_cycles_osl_on_cpu
 
 
-def configure_measurement_render(scene, *, resolution: tuple[int, int], samples: int, seed: int = 0) -> None:
-    """Cycles OSL on the CPU, no denoising, no adaptive sampling, fixed seed, linear 'Standard' output."""
+def configure_measurement_render(scene, *, resolution: tuple[int, int], samples: int, seed: int = 0,
+                                 pixel_average: bool = False) -> None:
+    """Cycles OSL on the CPU, no denoising, no adaptive sampling, fixed seed, linear 'Standard' output.
+
+    ``pixel_average``: a one-pixel box filter, so that each pixel holds the mean radiance over its
+    own square, as a calibration that weights pixels by the area they cover assumes."""
     use_cycles_osl_on_cpu(scene)
     cycles = scene.cycles
+    if pixel_average:
+        cycles.pixel_filter_type = "BOX"
+        cycles.filter_width = 1.0
     cycles.samples = samples
     cycles.use_adaptive_sampling = False
     cycles.use_denoising = False
@@ -52,3 +59,30 @@ def render_to_array(scene, path: str | pathlib.Path) -> np.ndarray:
         bpy.data.images.remove(image)
     # Blender stores images bottom row first.
     return pixels.reshape(height, width, 4)[::-1]
+
+
+def add_orthographic_camera(scene, name: str, clip_end: float):
+    """A new orthographic camera object ``name`` in ``scene``, made its camera (clip 0.01 … ``clip_end``)."""
+    import bpy
+
+    camera = bpy.data.objects.new(name, bpy.data.cameras.new(name))
+    camera.data.type = "ORTHO"
+    camera.data.clip_start = 0.01
+    camera.data.clip_end = clip_end
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    return camera
+
+
+def remove_data_blocks(blocks) -> None:
+    """Delete the data blocks a measurement created (scenes, objects, meshes, lights, cameras,
+    materials), last created first; blocks already gone (e.g. removed by the user) are skipped."""
+    import bpy
+
+    collections = {"SCENE": bpy.data.scenes, "OBJECT": bpy.data.objects, "MESH": bpy.data.meshes,
+                   "LIGHT": bpy.data.lights, "CAMERA": bpy.data.cameras, "MATERIAL": bpy.data.materials}
+    for block in reversed(list(blocks)):
+        try:
+            collections[block.id_type].remove(block)
+        except ReferenceError:
+            pass

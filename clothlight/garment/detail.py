@@ -23,7 +23,12 @@ import numpy as np
 import OpenEXR
 from mathutils import Matrix
 
-from ..measurement_render import configure_measurement_render, render_to_array
+from ..measurement_render import (
+    add_orthographic_camera,
+    configure_measurement_render,
+    remove_data_blocks,
+    render_to_array,
+)
 from ..sample_object import build_sample_object, weave_record
 from ..validation.rig import sample_bounds
 
@@ -42,40 +47,28 @@ def render_weave_detail(weave, path, *, resolution: int = DEFAULT_RESOLUTION, sa
     weave = dataclasses.replace(weave, warp_count=SAMPLE_REPEATS * max(rows, columns),
                                 weft_count=SAMPLE_REPEATS * max(rows, columns))
     scene = bpy.data.scenes.new("ClothLight Weave Detail")
-    created = []
+    created = [scene]
     try:
         sample = build_sample_object(weave, name="ClothLight Weave Detail Sample", collection=scene.collection)
-        created += [sample, sample.data]
+        created += [sample.data, sample]
         bounds = sample_bounds(sample)
         repeat = max(bounds.period)
         material = _normal_emission()
         created.append(material)
         sample.data.materials.append(material)
-        configure_measurement_render(scene, resolution=(resolution, resolution), samples=samples)
+        configure_measurement_render(scene, resolution=(resolution, resolution), samples=samples, pixel_average=True)
         scene.cycles.shading_system = False
-        scene.cycles.pixel_filter_type = "BOX"
-        scene.cycles.filter_width = 1.0
         scene.cycles.max_bounces = 0
         scene.world = None
-        camera_data = bpy.data.cameras.new("ClothLight Weave Detail Camera")
-        camera = bpy.data.objects.new(camera_data.name, camera_data)
-        created += [camera, camera_data]
-        scene.collection.objects.link(camera)
-        scene.camera = camera
-        camera_data.type = "ORTHO"
-        camera_data.ortho_scale = repeat
-        camera_data.clip_start = 0.01
-        camera_data.clip_end = 100.0
+        camera = add_orthographic_camera(scene, "ClothLight Weave Detail Camera", clip_end=100.0)
+        created += [camera.data, camera]
+        camera.data.ortho_scale = repeat
         center = np.asarray(bounds.center)
         camera.matrix_world = Matrix.Translation((center[0], center[1], center[2] + 10.0))
         with tempfile.TemporaryDirectory(prefix="clothlight-detail-") as folder:
             pixels = render_to_array(scene, pathlib.Path(folder) / "detail.exr").astype(np.float64)
     finally:
-        removers = {"OBJECT": bpy.data.objects, "MESH": bpy.data.meshes, "CAMERA": bpy.data.cameras,
-                    "MATERIAL": bpy.data.materials}
-        for block in created:
-            removers[block.id_type].remove(block)
-        bpy.data.scenes.remove(scene)
+        remove_data_blocks(created)
     coverage = np.clip(pixels[..., 3], 0.0, 1.0)
     seen = coverage > 1e-6
     normal = np.zeros(pixels.shape[:2] + (3,))

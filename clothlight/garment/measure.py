@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import pathlib
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -20,7 +22,12 @@ import numpy as np
 from mathutils import Matrix
 
 from ..materials import SUN_MODE, build_yarn_material, shader_node
-from ..measurement_render import configure_measurement_render, render_to_array
+from ..measurement_render import (
+    add_orthographic_camera,
+    configure_measurement_render,
+    remove_data_blocks,
+    render_to_array,
+)
 from ..sample_object import build_sample_object, weave_record
 from ..validation.rig import VALIDATION_WEAVE, sample_bounds
 from ..weave import WeaveParameters
@@ -128,9 +135,6 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
     :class:`clothlight.yarn_tables.YarnTableFiles`); renders go to ``render_dir``.
 
     ``progress(done, total, what)`` is called after every render (2 N_o² of them)."""
-    import pathlib
-    import time
-
     weave = _sample_weave(settings)
     n_i, n_o = settings.incidence_resolution, settings.exit_resolution
     half_thickness, spacing, repeat = _half_thickness(weave)
@@ -145,15 +149,14 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
     weave = dataclasses.replace(weave, warp_count=yarns, weft_count=yarns)
 
     scene = bpy.data.scenes.new(SCENE_NAME)
-    created = []
+    created = [scene]
     try:
         sample = build_sample_object(weave, name=f"{SCENE_NAME} Sample", collection=scene.collection)
-        created += [sample, sample.data]
+        created += [sample.data, sample]
         bounds = sample_bounds(sample)
         layout = dataclasses.replace(layout, center=bounds.center)
-        configure_measurement_render(scene, resolution=(16, 16), samples=settings.samples, seed=settings.seed)
-        scene.cycles.pixel_filter_type = "BOX"
-        scene.cycles.filter_width = 1.0
+        configure_measurement_render(scene, resolution=(16, 16), samples=settings.samples, seed=settings.seed,
+                                     pixel_average=True)
         scene.cycles.max_bounces = 0
         scene.world = None
         scene.render.use_persistent_data = True
@@ -170,16 +173,9 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
         # Faces outside the regions are never measured; any sun will do for them.
         region = np.where((region >= 0) & (region < n_i * n_i), region, 0)
 
-        camera_data = bpy.data.cameras.new(f"{SCENE_NAME} Camera")
-        camera = bpy.data.objects.new(f"{SCENE_NAME} Camera", camera_data)
-        created += [camera, camera_data]
-        scene.collection.objects.link(camera)
-        scene.camera = camera
-        camera_data.type = "ORTHO"
-        camera_data.sensor_fit = "AUTO"
         distance = 10.0 + 2.0 * half_size
-        camera_data.clip_start = 0.01
-        camera_data.clip_end = 2.0 * distance
+        camera = add_orthographic_camera(scene, f"{SCENE_NAME} Camera", clip_end=2.0 * distance)
+        created += [camera.data, camera]
 
         rho, coverage = {}, {}
         total, done = 2 * n_o * n_o, 0
@@ -193,7 +189,7 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
             for exit_cell, toward_camera in enumerate(exit_directions(n_o, side)):
                 view = view_of(toward_camera, layout, settings.pixels_per_patch)
                 camera.matrix_world = Matrix(view.camera_matrix(distance).tolist())
-                camera_data.ortho_scale = view.ortho_scale
+                camera.data.ortho_scale = view.ortho_scale
                 scene.render.resolution_x, scene.render.resolution_y = view.width, view.height
                 pixels = render_to_array(scene, pathlib.Path(render_dir) / f"{side}_exit{exit_cell:03d}.exr")
                 index, weight = patch_weights(view, layout)
@@ -206,14 +202,7 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
         return ClothMeasurement(rho, coverage, patch_mm, (2 * bounds.half_size[0], 2 * bounds.half_size[1]),
                                 half_thickness, time.perf_counter() - start)
     finally:
-        removers = {"OBJECT": bpy.data.objects, "MESH": bpy.data.meshes, "CAMERA": bpy.data.cameras,
-                    "MATERIAL": bpy.data.materials}
-        for block in created:
-            try:
-                removers[block.id_type].remove(block)
-            except ReferenceError:
-                pass
-        bpy.data.scenes.remove(scene)
+        remove_data_blocks(created)
 
 
 def _drive_sun_from_attribute(material) -> None:

@@ -27,7 +27,7 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 from ..materials import shader_node, sync_sun
-from ..measurement_render import configure_measurement_render, render_to_array
+from ..measurement_render import configure_measurement_render, remove_data_blocks, render_to_array
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from ..sample_object import build_sample_object
 from ..weave import WeaveParameters
@@ -235,13 +235,7 @@ class Rig:
 
     def remove(self) -> None:
         """Delete the rig's scene and everything it created (not the materials it was given)."""
-        collections = {"SCENE": bpy.data.scenes, "OBJECT": bpy.data.objects, "MESH": bpy.data.meshes,
-                       "LIGHT": bpy.data.lights, "CAMERA": bpy.data.cameras}
-        for block in reversed(self._owned):
-            try:
-                collections[block.id_type].remove(block)
-            except ReferenceError:  # already removed, e.g. by the user while the sweep ran
-                pass
+        remove_data_blocks(self._owned)
         self._owned.clear()
 
 

@@ -34,7 +34,7 @@ from clothlight.measurement_render import configure_measurement_render, render_t
 from clothlight.validation.framing import ParameterError  # noqa: E402
 from clothlight.validation.rig import RigSettings  # noqa: E402
 from clothlight.validation.run import ValidationRun, run_validation  # noqa: E402
-from test_yarn_shader import _rotation_to, unit, write_exr  # noqa: E402
+from test_yarn_shader import add_sun_and_camera, unit, write_exr  # noqa: E402
 
 pytestmark = pytest.mark.blender
 
@@ -99,23 +99,9 @@ def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False, w
             co = plane.data.vertices[loop.vertex_index].co
             uv.data[loop.index].uv = (co.y / 20.0 + 0.5, -co.x / 20.0 + 0.5)
     material = apply_garment_material(plane, tables, mode=mode, weave_repeats_per_uv=weave_repeats_per_uv)
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.data.energy = SUN_IRRADIANCE
-    sun.data.angle = 0.0
-    scene.collection.objects.link(sun)
-    sun.rotation_mode = "QUATERNION"
-    sun.rotation_quaternion = _rotation_to(toward_sun)
-    bpy.context.view_layer.update()
+    sun = add_sun_and_camera(scene, toward_sun, toward_camera, SUN_IRRADIANCE)
     if mode == SUN_MODE:
         sync_sun(material, sun)
-    camera = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
-    camera.data.type = "ORTHO"
-    camera.data.ortho_scale = 1.0
-    camera.location = tuple(5.0 * np.asarray(toward_camera))
-    camera.rotation_mode = "QUATERNION"
-    camera.rotation_quaternion = _rotation_to(toward_camera)
-    scene.collection.objects.link(camera)
-    scene.camera = camera
     return scene
 
 

@@ -74,26 +74,31 @@ def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction):
     shader_node(material).inputs["SpecularWeight"].default_value = 0.0
     mesh.materials.append(material)
 
+    zen, azi = math.radians(view_zenith_deg), math.radians(view_azimuth_deg)
+    wo = np.array([math.sin(zen) * math.cos(azi), math.sin(zen) * math.sin(azi), math.cos(zen)])
+    sync_sun(material, add_sun_and_camera(scene, sun_direction, wo, SUN_IRRADIANCE))
+    return scene, wo
+
+
+def add_sun_and_camera(scene, toward_sun, toward_camera, irradiance):
+    """A sun of ``irradiance`` (W/m²) shining from ``toward_sun`` and an orthographic camera 1 unit
+    wide looking back along ``toward_camera`` at the origin; returns the sun."""
     sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.data.energy = SUN_IRRADIANCE
+    sun.data.energy = irradiance
     sun.data.angle = 0.0
     scene.collection.objects.link(sun)
     sun.rotation_mode = "QUATERNION"
-    sun.rotation_quaternion = _rotation_to(sun_direction)
-    bpy.context.view_layer.update()
-    sync_sun(material, sun)
-
+    sun.rotation_quaternion = _rotation_to(toward_sun)
     camera = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
     camera.data.type = "ORTHO"
     camera.data.ortho_scale = 1.0
-    zen, azi = math.radians(view_zenith_deg), math.radians(view_azimuth_deg)
-    wo = np.array([math.sin(zen) * math.cos(azi), math.sin(zen) * math.sin(azi), math.cos(zen)])
-    camera.location = tuple(5.0 * wo)
+    camera.location = tuple(5.0 * np.asarray(toward_camera))
     camera.rotation_mode = "QUATERNION"
-    camera.rotation_quaternion = _rotation_to(wo)
+    camera.rotation_quaternion = _rotation_to(toward_camera)
     scene.collection.objects.link(camera)
     scene.camera = camera
-    return scene, wo
+    bpy.context.view_layer.update()
+    return sun
 
 
 def _rotation_to(direction):

@@ -197,12 +197,21 @@ def red_cotton_cloth(tmp_path_factory):
     return folder, settings, cache
 
 
-def test_cloth_bake_is_cached_and_self_describing(red_cotton_cloth):
+def test_cloth_bake_is_cached_and_self_describing(tmp_path, red_cotton_cloth):
     from precompute.tables import read_table
 
     folder, settings, cache = red_cotton_cloth
     again, measured = bake_cloth(YARN_BAKE, settings, cache_dir=cache)
     assert again == folder and not measured
+    # A yarn bake whose lobes were refitted (another cache key, the same ρ) measures nothing again.
+    import shutil
+
+    refitted = tmp_path / "refitted"
+    shutil.copytree(YARN_BAKE, refitted)
+    summary = json.loads((refitted / "summary.json").read_text())
+    summary["cache_key"] = "0" * 64
+    (refitted / "summary.json").write_text(json.dumps(summary))
+    assert bake_cloth(refitted, settings, cache_dir=cache)[1] is False
     tables = cloth_tables_from_bake(folder)
     for side, path in tables.brdf_paths.items():
         table = read_table(path, "brdf")

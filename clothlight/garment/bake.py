@@ -1,7 +1,7 @@
 """Bake a cloth BSDF (measure → tables), or find it in the cache.
 
 Two cache entries, as for a yarn (``precompute.bake``: spectral → tables): the measurement
-(``measurement.npz``: ρ per side and coverage), keyed by the yarn tables' own cache key, the
+(``measurement.npz``: ρ per side and coverage), keyed by the yarn's ρ and host index, the
 gonioreflectometer's settings (weave included) and the code that measures (the yarn shader
 included: the measurement renders it); and the tables written from it, keyed by that key and
 the code that fits and writes them (and renders the weave detail texture, :mod:`.detail`).
@@ -25,6 +25,7 @@ from .measure import ClothMeasurement, GoniometerSettings, _sample_weave, measur
 from .tables import SUMMARY_FILE, write_cloth_tables
 
 cache = import_precompute("cache")
+precompute_tables = import_precompute("tables")
 
 MEASUREMENT_NAMESPACE = "cloth_measurement"
 TABLES_NAMESPACE = "cloth_tables"
@@ -38,11 +39,13 @@ TABLE_SOURCES = ("clothlight/garment/tables.py", "clothlight/garment/detail.py",
                  "precompute/table_layout.py", "precompute/cycles_closures.py")
 
 
-def measurement_inputs(yarn_bake_dir, settings: GoniometerSettings) -> dict:
-    """Everything a cloth measurement depends on (its cache key is their hash)."""
-    summary = json.loads((pathlib.Path(yarn_bake_dir) / "summary.json").read_text())
-    return {"yarn_tables": summary["cache_key"], "goniometer": settings.to_dict(),
-            "code_digest": cache.source_digest(_ROOT, MEASUREMENT_SOURCES)}
+def measurement_inputs(yarn_tables, settings: GoniometerSettings) -> dict:
+    """Everything a cloth measurement depends on (its cache key is their hash): of the yarn bake
+    only what the sun-mode yarn material reads — ρ (the pixels' hash, not the bake's cache key,
+    which also changes with the closure fit) and the host index of the specular term."""
+    rho = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").pixels
+    return {"yarn_rho_sha256": precompute_tables.content_hash(rho), "host_index": yarn_tables.host_index,
+            "goniometer": settings.to_dict(), "code_digest": cache.source_digest(_ROOT, MEASUREMENT_SOURCES)}
 
 
 def save_measurement(path, measurement: ClothMeasurement) -> None:
@@ -67,7 +70,7 @@ def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(
     whether this call rendered the measurement (False: it was in the cache)."""
     tables = yarn_tables_from_bake(yarn_bake_dir)
     cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else cache.default_cache_dir()
-    measured_in = measurement_inputs(yarn_bake_dir, settings)
+    measured_in = measurement_inputs(tables, settings)
     measured_key = cache.cache_key(measured_in)
     measured_folder = cache.lookup(cache_dir, MEASUREMENT_NAMESPACE, measured_key)
     rendered = measured_folder is None

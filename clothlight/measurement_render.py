@@ -61,6 +61,31 @@ def render_to_array(scene, path: str | pathlib.Path) -> np.ndarray:
     return pixels.reshape(height, width, 4)[::-1]
 
 
+def render_passes_to_arrays(scene, path: str | pathlib.Path) -> dict:
+    """Render ``scene`` with the passes its view layer enables to the multilayer EXR file ``path``;
+    returns each pass's pixels by its name in the file ("Combined", "Diffuse Color", …), (H, W, C),
+    top row first."""
+    import bpy
+    import OpenEXR
+
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    settings = scene.render.image_settings
+    single_layer = settings.media_type
+    settings.media_type = "MULTI_LAYER_IMAGE"
+    settings.file_format = "OPEN_EXR_MULTILAYER"
+    try:
+        scene.render.filepath = str(path)
+        bpy.ops.render.render(write_still=True, scene=scene.name)
+    finally:
+        settings.media_type = single_layer
+        settings.file_format = "OPEN_EXR"
+    with OpenEXR.File(str(path)) as exr:
+        # One part per pass, its channel group named "<view layer>.<pass>".
+        return {name.split(".", 1)[-1]: np.array(channel.pixels, dtype=np.float32)
+                for part in exr.parts for name, channel in part.channels.items()}
+
+
 def add_orthographic_camera(scene, name: str, clip_end: float):
     """A new orthographic camera object ``name`` in ``scene``, made its camera (clip 0.01 … ``clip_end``)."""
     import bpy

@@ -102,6 +102,34 @@ def _ggx_lambda(alpha2, cosine):
     return (np.sqrt(1.0 + alpha2 * (1.0 - cos2) / cos2) - 1.0) / 2.0
 
 
+def _beckmann_lambda(alpha2, cosine):
+    # Cycles' rational approximation (Walter et al. 2007, eq. 27) of the Smith term's Λ.
+    cos2 = np.clip(cosine * cosine, 1e-30, 1.0)
+    a = np.sqrt(cos2 / np.maximum(alpha2 * (1.0 - cos2), 1e-30))
+    return np.where(a < 1.6, (1.0 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a), 0.0)
+
+
+def beckmann_reflection_eval(normal, view, light, alpha):
+    """Cycles ``microfacet("beckmann", N, alpha, eta, 0)`` and the Glossy BSDF node's Beckmann
+    distribution (roughness² = alpha): Beckmann reflection without Fresnel, 1/sr.
+
+    ``D(h) / (4 N·V) / (1 + Λ(V) + Λ(L))`` with D = exp(−tan²θ_h/α²) / (π α² cos⁴θ_h) (α the
+    rms slope) and Cycles' approximation of Λ, zero for lights below N or views below N.
+    """
+    alpha = float(np.clip(alpha, 0.0, 1.0))
+    alpha2 = alpha * alpha
+    cos_view = _dot(normal, view)
+    cos_light = _dot(normal, light)
+    half = np.asarray(view, float) + np.asarray(light, float)
+    half = half / np.maximum(np.linalg.norm(half, axis=-1, keepdims=True), 1e-30)
+    cos2 = np.clip(_dot(normal, half), 1e-6, 1.0) ** 2
+    distribution = np.exp(-(1.0 - cos2) / (cos2 * max(alpha2, 1e-30))) / (np.pi * max(alpha2, 1e-30) * cos2 * cos2)
+    value = distribution / np.maximum(cos_view, 1e-30) * 0.25 / (
+        1.0 + _beckmann_lambda(alpha2, cos_view) + _beckmann_lambda(alpha2, cos_light))
+    valid = (cos_view > 0.0) & (cos_light >= 0.0) & (alpha2 > MICROFACET_SINGULAR_ALPHA2)
+    return np.where(valid, value, 0.0)
+
+
 def ggx_reflection_eval(normal, view, light, alpha):
     """Cycles ``microfacet("ggx", N, alpha, eta, 0)``: GGX reflection without Fresnel, 1/sr.
 

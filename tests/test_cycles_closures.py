@@ -32,8 +32,10 @@ shader closure_probe(int Kind = 0, float R1 = 0.2, float R2 = 0.5, float Alpha =
         BSDF = hair_reflection(N, R1, R2, T, 0.0);
     else if (Kind == 1)
         BSDF = hair_transmission(N, R1, R2, T, 0.0);
-    else
+    else if (Kind == 2)
         BSDF = microfacet("ggx", normalize(I), Alpha, 1.5, 0);
+    else
+        BSDF = microfacet("beckmann", N, Alpha, 1.5, 0);
 }
 """
 
@@ -87,6 +89,9 @@ CASES = [
     ("hair_transmission", (50, 80), (120, 250), "from behind, round the fibre"),
     ("ggx_retro", (35, 20), (40, 25), "close to the view"),
     ("ggx_retro", (60, 200), (45, 190), "off the view"),
+    ("beckmann", (30, 0), (35, 180), "near the mirror direction"),
+    ("beckmann", (70, 20), (60, 150), "grazing, forward"),
+    ("beckmann", (40, 90), (20, 80), "back toward the light"),
 ]
 
 
@@ -95,12 +100,16 @@ CASES = [
 def test_twin_matches_cycles(tmp_path, kind, view_angles, light_angles, what):
     view, light = direction(*view_angles), direction(*light_angles)
     r1, r2, alpha = 0.2, 0.5, 0.3
-    kinds = {"hair_reflection": 0, "hair_transmission": 1, "ggx_retro": 2}
+    kinds = {"hair_reflection": 0, "hair_transmission": 1, "ggx_retro": 2, "beckmann": 3}
+    if kind == "beckmann":  # the garment's gloss: the paper's rms slope
+        alpha = 0.8
     rendered = render_closure(tmp_path, kinds[kind], view, light, r1, r2, alpha)
     if kind == "hair_reflection":
         expected = cc.hair_reflection_eval(NORMAL, TANGENT, view, light, r1, r2)
     elif kind == "hair_transmission":
         expected = cc.hair_transmission_eval(NORMAL, TANGENT, view, light, r1, r2)
+    elif kind == "beckmann":
+        expected = cc.beckmann_reflection_eval(NORMAL, view, light, alpha)
     else:
         expected = cc.ggx_reflection_eval(view, view, light, alpha)
     assert float(expected) > 1e-3, "each case must probe a lit part of the lobe"
@@ -113,11 +122,12 @@ def test_twins_vanish_where_cycles_does():
     assert cc.hair_reflection_eval(NORMAL, TANGENT, view, behind, 0.2, 0.5) == 0.0
     assert cc.hair_transmission_eval(NORMAL, TANGENT, view, direction(40, 180), 0.2, 0.5) == 0.0
     assert cc.ggx_reflection_eval(NORMAL, view, behind, 0.3) == 0.0
+    assert cc.beckmann_reflection_eval(NORMAL, view, behind, 0.8) == 0.0
     np.testing.assert_allclose(cc.diffuse_eval(NORMAL, direction(60, 0)), 0.5 / math.pi)
     np.testing.assert_allclose(cc.translucent_eval(NORMAL, direction(120, 0)), 0.5 / math.pi)
 
 
-@pytest.mark.parametrize("kind", ["hair_reflection", "hair_transmission", "ggx"])
+@pytest.mark.parametrize("kind", ["hair_reflection", "hair_transmission", "ggx", "beckmann"])
 def test_lobes_conserve_energy(kind):
     # Each lobe is normalised by its sampling pdf: the integral over the sphere is at most 1 (less
     # where the lobe is clipped), which makes a fitted weight the lobe's albedo.
@@ -129,6 +139,8 @@ def test_lobes_conserve_energy(kind):
         values = cc.hair_reflection_eval(NORMAL, TANGENT, view, samples, 0.3, 0.6)
     elif kind == "hair_transmission":
         values = cc.hair_transmission_eval(NORMAL, TANGENT, view, samples, 0.3, 0.6)
+    elif kind == "beckmann":
+        values = cc.beckmann_reflection_eval(NORMAL, view, samples, 0.8)
     else:
         values = cc.ggx_reflection_eval(view, view, samples, 0.4)
     integral = values.mean() * 4 * math.pi

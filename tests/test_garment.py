@@ -14,7 +14,15 @@ import OpenEXR
 import pytest
 
 from clothlight.garment.goniometry import side_to_world
-from clothlight.garment.tables import BRDF_FILES, GARMENT_LOBES, LOBE_FILE, LOBE_TILES, lobe_image, projected_view_grid
+from clothlight.garment.tables import (
+    BRDF_FILES,
+    GARMENT_LOBES,
+    LOBE_FILE,
+    LOBE_TILES,
+    SPECULAR_VISIBILITY_FILES,
+    lobe_image,
+    projected_view_grid,
+)
 from precompute.closure_fit import LobeShape, lobe_responses
 from precompute.grids import AngularGrid
 from precompute.table_layout import brdf_atlas, interpolate_rho
@@ -34,6 +42,7 @@ from clothlight.measurement_render import configure_measurement_render, render_t
 from clothlight.validation.framing import ParameterError  # noqa: E402
 from clothlight.validation.rig import RigSettings  # noqa: E402
 from clothlight.validation.run import ValidationRun, run_validation  # noqa: E402
+from test_validation_rig import cook_torrance_between  # noqa: E402
 from test_yarn_shader import add_sun_and_camera, unit, write_exr  # noqa: E402
 
 pytestmark = pytest.mark.blender
@@ -41,6 +50,7 @@ pytestmark = pytest.mark.blender
 N_I, N_O, N_LOBES = 5, 6, 8
 SUN_IRRADIANCE = 2.0
 COVERAGE = {"front": 0.8, "back": 0.6}
+SPECULAR = {"weight": 0.7, "slope": 0.5, "ior": 1.45}
 YARN_BAKE = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "red_cotton"
 
 
@@ -51,6 +61,12 @@ def analytic_rho(wi, wo, side):
     g = scale * (0.10 + 0.05 * wi[..., 1] ** 2 + 0.04 * wo[..., 2])
     b = np.full_like(r, 0.02 if side == "front" else 0.07)
     return np.stack([r, g, b], axis=-1)
+
+
+def analytic_specular_visibility(wi, wo, side):
+    wi, wo = np.broadcast_arrays(wi, wo)
+    v = (0.6 + 0.1 * wo[..., 0] - 0.1 * wi[..., 1]) if side == "front" else 0.3 + 0.1 * wi[..., 2]
+    return np.repeat(v[..., None], 3, axis=-1)
 
 
 def lobe_weights(view, side):
@@ -73,15 +89,18 @@ def synthetic_cloth(tmp_path_factory):
     folder = tmp_path_factory.mktemp("cloth")
     wi = AngularGrid("sphere", N_I).cell_centers()
     wo = AngularGrid("hemisphere", N_O).cell_centers()
-    atlases = {}
+    atlases, visibility = {}, {}
     for side in ("front", "back"):
         atlases[side] = brdf_atlas(analytic_rho(wi[:, None, :], wo[None, :, :], side))
         write_exr(folder / BRDF_FILES[side], atlases[side])
+        visibility[side] = brdf_atlas(analytic_specular_visibility(wi[:, None, :], wo[None, :, :], side))
+        write_exr(folder / SPECULAR_VISIBILITY_FILES[side], visibility[side])
     views = projected_view_grid(N_LOBES)
     write_exr(folder / LOBE_FILE, lobe_image({side: lobe_weights(views, side) for side in ("front", "back")}))
-    tables = ClothTableFiles({side: folder / name for side, name in BRDF_FILES.items()}, folder / LOBE_FILE,
-                             N_I, N_O, N_LOBES, LobeShape().to_dict())
-    return tables, atlases
+    tables = ClothTableFiles({side: folder / name for side, name in BRDF_FILES.items()},
+                             {side: folder / name for side, name in SPECULAR_VISIBILITY_FILES.items()},
+                             folder / LOBE_FILE, N_I, N_O, N_LOBES, LobeShape().to_dict(), SPECULAR)
+    return tables, atlases, visibility
 
 
 def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False, weave_repeats_per_uv=None):
@@ -113,14 +132,18 @@ def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False, w
 @pytest.mark.parametrize("warp_along_y", [False, True], ids=["warp-x", "warp-y"])
 def test_sun_mode_reads_each_side_in_its_frame(tmp_path, synthetic_cloth, toward_camera, toward_sun, side,
                                                warp_along_y):
-    tables, atlases = synthetic_cloth
+    """ρ = the side's table + the specular term about the side's normal times its visibility table."""
+    tables, atlases, visibility = synthetic_cloth
     scene = garment_scene(tables, SUN_MODE, toward_camera, toward_sun, warp_along_y)
     pixels = render_to_array(scene, tmp_path / "patch.exr").reshape(-1, 4)
     # World → cloth frame (x = warp), then → the side's frame.
     to_cloth = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) if warp_along_y else np.eye(3)
     wi = side_to_world(to_cloth @ toward_sun, side)
     wo = side_to_world(to_cloth @ toward_camera, side)
-    expected = interpolate_rho(atlases[side], N_I, wi, wo) * SUN_IRRADIANCE
+    specular = SPECULAR["weight"] * cook_torrance_between(wi, wo, SPECULAR["slope"], SPECULAR["ior"]) * max(wi[2], 0.0)
+    assert (specular > 0.0) == (wi[2] > 0.0)  # the reflection cases check it
+    expected = (interpolate_rho(atlases[side], N_I, wi, wo)
+                + specular * interpolate_rho(visibility[side], N_I, wi, wo)) * SUN_IRRADIANCE
     np.testing.assert_allclose(pixels[:, :3].mean(axis=0), expected, rtol=3e-4, atol=1e-6)
     np.testing.assert_allclose(pixels[:, 3], COVERAGE[side], atol=1e-4)
 
@@ -133,7 +156,7 @@ def test_sun_mode_reads_each_side_in_its_frame(tmp_path, synthetic_cloth, toward
 @pytest.mark.parametrize("warp_along_y", [False, True], ids=["warp-x", "warp-y"])
 def test_general_mode_renders_the_lobe_mixture_and_the_open_weave(tmp_path, synthetic_cloth, toward_camera,
                                                                   toward_sun, side, warp_along_y):
-    tables, _ = synthetic_cloth
+    tables, *_ = synthetic_cloth
     scene = garment_scene(tables, GENERAL_MODE, toward_camera, toward_sun, warp_along_y)
     pixels = render_to_array(scene, tmp_path / "patch.exr").reshape(-1, 4)
     to_cloth = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) if warp_along_y else np.eye(3)
@@ -152,7 +175,7 @@ def test_weave_detail_shows_the_yarns_and_keeps_the_mean(tmp_path, synthetic_clo
     stripe by stripe, the image's mean radiance and alpha are those of the material without detail."""
     import dataclasses
 
-    tables, _ = synthetic_cloth
+    tables, *_ = synthetic_cloth
     coverage = np.where(np.arange(32) < 16, 1.0, 0.6)[None, :].repeat(32, axis=0)
     texture = np.concatenate([np.full((32, 32, 3), (0.5, 0.5, 1.0)), coverage[..., None]], axis=-1)
     with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, {"RGBA": texture.astype(np.float32)}) as exr:
@@ -173,7 +196,7 @@ def test_weave_detail_shows_the_yarns_and_keeps_the_mean(tmp_path, synthetic_clo
 
 
 def test_garment_material_refuses_meshes_without_uvs_and_incomplete_bakes(tmp_path, synthetic_cloth):
-    tables, _ = synthetic_cloth
+    tables, *_ = synthetic_cloth
     bpy.ops.wm.read_homefile(use_empty=True)
     mesh = bpy.data.meshes.new("no uv")
     mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [], [(0, 1, 2)])
@@ -299,3 +322,30 @@ def test_bake_command_copies_a_cached_bake_and_names_bad_input(tmp_path, red_cot
     assert main(["bake", "--tables", str(tmp_path / "nothing"), "--out", str(tmp_path / "x")]) == 2
     assert main(["bake", "--tables", str(YARN_BAKE), "--out", str(tmp_path / "x"), "--incidence-resolution", "8"]) == 2
     assert "incidence_resolution" in capsys.readouterr().err
+
+
+def test_specular_part_is_the_cook_torrance_term_times_its_visibility(red_cotton_cloth):
+    """The gonioreflectometer separates the yarns' specular term: at every cell centre it is the
+    Cook–Torrance term about the cloth normal (the same at every point of the cloth) times the
+    fraction of the patch where it shines, which is part of what yarn covers; on the back side,
+    whose normal is the other way, there is none."""
+    from clothlight.garment.bake import load_measurement
+    from clothlight.garment.tables import SPECULAR_KEYS
+
+    folder, settings, cache = red_cotton_cloth
+    (path,) = pathlib.Path(cache).glob("cloth_measurement/*/measurement.npz")
+    measured = load_measurement(path)
+    summary = json.loads((folder / "summary.json").read_text())
+    assert set(summary["specular"]) == set(SPECULAR_KEYS)
+    weight, slope, ior = (summary["specular"][key] for key in ("weight", "slope", "ior"))
+    incidence = AngularGrid("sphere", settings.incidence_resolution).cell_centers()
+    exits = AngularGrid("hemisphere", settings.exit_resolution).cell_centers()
+    term = np.array([[weight * cook_torrance_between(wi, wo, slope, ior) * max(wi[2], 0.0) for wo in exits]
+                     for wi in incidence])
+    visibility = measured.specular_visibility["front"]
+    assert visibility.max() > 0.1 and np.all(visibility <= measured.coverage["front"][None, :] + 1e-6)
+    np.testing.assert_allclose(measured.specular["front"], term * visibility, rtol=2e-3, atol=1e-7)
+    assert not measured.specular["back"].any() and not measured.specular_visibility["back"].any()
+    # The tables hold ρ without the term and its visibility; the summary the term's parameters.
+    tables = cloth_tables_from_bake(folder)
+    assert tables.specular == pytest.approx(summary["specular"])

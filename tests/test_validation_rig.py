@@ -84,16 +84,26 @@ def test_a_lambertian_plane_measures_albedo_over_pi_at_every_view_and_incidence(
 
 
 def cook_torrance(theta_i, theta_v, m=0.8, n=1.557):
-    """Cook–Torrance (1/sr) for light at −θi, view at θv in the x-z plane, from its definition:
-    F D G / (4 (n·l)(n·v)), Beckmann D = exp(−tan²α/m²) / (π m² cos⁴α), Smith's height-correlated
-    G = 1 / (1 + Λ(v) + Λ(l)) of that surface with Λ = (erf(a) − 1)/2 + exp(−a²)/(2a√π),
-    a = cot θ / m, F Cook and Torrance's dielectric Fresnel with g² = n² − 1 + c², c = v·h."""
-    light = np.array([-math.sin(theta_i), 0.0, math.cos(theta_i)])
-    view = np.array([math.sin(theta_v), 0.0, math.cos(theta_v)])
+    """Cook–Torrance (1/sr) for light at −θi, view at θv in the x-z plane: :func:`cook_torrance_between`."""
+    return cook_torrance_between([-math.sin(theta_i), 0.0, math.cos(theta_i)],
+                                 [math.sin(theta_v), 0.0, math.cos(theta_v)], m, n)
+
+
+def cook_torrance_between(light, view, m=0.8, n=1.557):
+    """Cook–Torrance (1/sr) about +z between unit directions toward the light and the viewer, from
+    its definition: F D G / (4 (n·l)(n·v)), Beckmann D = exp(−tan²α/m²) / (π m² cos⁴α), Smith's
+    height-correlated G = 1 / (1 + Λ(v) + Λ(l)) of that surface with Λ = (erf(a) − 1)/2 +
+    exp(−a²)/(2a√π), a = cot θ / m, F Cook and Torrance's dielectric Fresnel with g² = n² − 1 + c²,
+    c = v·h; 0 unless both are above the plane."""
+    light, view = np.asarray(light, float), np.asarray(view, float)
+    nl, nv = light[2], view[2]
+    if nl <= 0.0 or nv <= 0.0:
+        return 0.0
     half = (light + view) / np.linalg.norm(light + view)
-    nh, nl, nv, vh = half[2], light[2], view[2], view @ half
+    nh, vh = half[2], view @ half
     alpha = math.acos(min(nh, 1.0))
     d = math.exp(-((math.tan(alpha) / m) ** 2)) / (math.pi * m**2 * nh**4)
+
     def smith_lambda(cos_theta):
         a = cos_theta / (m * math.sqrt(1.0 - cos_theta**2)) if cos_theta < 1.0 else math.inf
         return 0.0 if math.isinf(a) else (math.erf(a) - 1) / 2 + math.exp(-a * a) / (2 * a * math.sqrt(math.pi))

@@ -48,20 +48,28 @@ def measurement_inputs(yarn_tables, settings: GoniometerSettings) -> dict:
             "goniometer": settings.to_dict(), "code_digest": cache.source_digest(_ROOT, MEASUREMENT_SOURCES)}
 
 
+#: The per-side arrays of a :class:`ClothMeasurement`, as the cache stores them.
+PER_SIDE_ARRAYS = ("rho", "specular", "specular_visibility", "coverage")
+
+
 def save_measurement(path, measurement: ClothMeasurement) -> None:
-    arrays = {f"rho_{side}": measurement.rho[side] for side in SIDES}
-    arrays.update({f"coverage_{side}": measurement.coverage[side] for side in SIDES})
+    arrays = {}
+    for name in PER_SIDE_ARRAYS:
+        arrays.update({f"{name}_{side}": getattr(measurement, name)[side] for side in SIDES})
     np.savez_compressed(path, **arrays, patch_mm=measurement.patch_mm,
+                        specular_parameters=json.dumps(measurement.specular_parameters),
                         sample_size_mm=np.asarray(measurement.sample_size_mm),
                         half_thickness_mm=measurement.half_thickness_mm, render_seconds=measurement.render_seconds)
 
 
 def load_measurement(path) -> ClothMeasurement:
     with np.load(path) as data:
-        return ClothMeasurement({side: data[f"rho_{side}"] for side in SIDES},
-                                {side: data[f"coverage_{side}"] for side in SIDES},
-                                float(data["patch_mm"]), tuple(float(v) for v in data["sample_size_mm"]),
-                                float(data["half_thickness_mm"]), float(data["render_seconds"]))
+        per_side = {name: {side: data[f"{name}_{side}"] for side in SIDES} for name in PER_SIDE_ARRAYS}
+        return ClothMeasurement(**per_side, specular_parameters=json.loads(str(data["specular_parameters"])),
+                                patch_mm=float(data["patch_mm"]),
+                                sample_size_mm=tuple(float(v) for v in data["sample_size_mm"]),
+                                half_thickness_mm=float(data["half_thickness_mm"]),
+                                render_seconds=float(data["render_seconds"]))
 
 
 def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(), *, cache_dir=None,

@@ -4,7 +4,7 @@ Two modes, as for the yarn material:
 
 * :data:`~clothlight.materials.GENERAL_MODE` (any lighting, what artists render with): the
   closure mixture of ``lobes.exr`` as plain Cycles nodes — diffuse, translucent, hair
-  transmission and GGX gloss closures weighted by image lookups at the view direction, plus a
+  transmission and Beckmann gloss closures weighted by image lookups at the view direction, plus a
   transparent closure for the open weave.  No OSL: it renders with Cycles' SVM on the CPU or any GPU.
 * :data:`~clothlight.materials.SUN_MODE` (validation): ``osl/cloth_garment.osl`` evaluates the
   measured ρ for the scene's sun exactly (needs Cycles OSL on the CPU).
@@ -24,7 +24,15 @@ import bpy
 from ..materials import GENERAL_MODE, SUN_MODE
 from ..osl_shaders import add_script_node
 from .goniometry import SIDES
-from .tables import BRDF_FILES, LOBE_FILE, LOBE_TILES, SUMMARY_FILE, SUMMARY_SCHEMA
+from .tables import (
+    BRDF_FILES,
+    LOBE_FILE,
+    LOBE_TILES,
+    SPECULAR_KEYS,
+    SPECULAR_VISIBILITY_FILES,
+    SUMMARY_FILE,
+    SUMMARY_SCHEMA,
+)
 
 SHADER = "cloth_garment"
 MATERIAL_KIND = "clothlight_garment"
@@ -32,15 +40,17 @@ MATERIAL_KIND = "clothlight_garment"
 
 @dataclass(frozen=True)
 class ClothTableFiles:
-    """The checked files of a cloth bake (absolute paths), grid sizes and lobe shape
-    (``summary.json``)."""
+    """The checked files of a cloth bake (absolute paths), grid sizes, lobe shape and the yarns'
+    specular parameters (``summary.json``: :data:`.tables.SPECULAR_KEYS`)."""
 
     brdf_paths: dict
+    specular_visibility_paths: dict
     lobe_path: pathlib.Path
     incidence_resolution: int
     exit_resolution: int
     lobe_resolution: int
     lobe_shape: dict
+    specular: dict
     #: The weave detail texture (:mod:`.detail`) and its mean coverage; None in bakes without one.
     detail_path: pathlib.Path | None = None
     detail_mean_coverage: float | None = None
@@ -61,16 +71,19 @@ def cloth_tables_from_bake(folder) -> ClothTableFiles:
         raise ValueError(f"{summary_path}: lobe tiles {summary.get('lobe_tiles')}, this ClothLight reads "
                          f"{list(LOBE_TILES)}: bake the cloth again")
     brdf_paths = {side: folder / name for side, name in BRDF_FILES.items()}
-    missing = [str(path) for path in (*brdf_paths.values(), folder / LOBE_FILE) if not path.is_file()]
+    visibility_paths = {side: folder / name for side, name in SPECULAR_VISIBILITY_FILES.items()}
+    missing = [str(path) for path in (*brdf_paths.values(), *visibility_paths.values(), folder / LOBE_FILE)
+               if not path.is_file()]
     if missing:
         raise FileNotFoundError(f"cloth bake {folder} lacks {missing}")
     detail = summary.get("weave_detail")
     detail_path = folder / detail["file"] if detail else None
     if detail_path is not None and not detail_path.is_file():
         raise FileNotFoundError(f"cloth bake {folder} lacks its weave detail texture {detail_path}")
-    return ClothTableFiles(brdf_paths, folder / LOBE_FILE, int(summary["incidence_resolution"]),
+    return ClothTableFiles(brdf_paths, visibility_paths, folder / LOBE_FILE, int(summary["incidence_resolution"]),
                            int(summary["exit_resolution"]), int(summary["lobe_grid_resolution"]),
                            {key: float(value) for key, value in summary["lobe_shape"].items()},
+                           {key: float(summary["specular"][key]) for key in SPECULAR_KEYS},
                            detail_path, float(detail["mean_coverage"]) if detail else None)
 
 
@@ -109,6 +122,10 @@ def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garm
         tree.links.new(tangent.outputs["Tangent"], shader.inputs["Warp"])
         for side in SIDES:
             shader.inputs[f"{side.capitalize()}Table"].default_value = str(tables.brdf_paths[side])
+            shader.inputs[f"{side.capitalize()}SpecularVisibility"].default_value = str(
+                tables.specular_visibility_paths[side])
+        for socket, key in (("SpecularWeight", "weight"), ("Slope", "slope"), ("IOR", "ior")):
+            shader.inputs[socket].default_value = tables.specular[key]
         shader.inputs["LobeTable"].default_value = str(tables.lobe_path)
         shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
         shader.inputs["ExitResolution"].default_value = tables.exit_resolution
@@ -259,7 +276,7 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
     hair.inputs["RoughnessV"].default_value = tables.lobe_shape["transmission_azimuthal"]
     links.new(warp, hair.inputs["Tangent"])
     gloss = closures[3]
-    gloss.distribution = "GGX"
+    gloss.distribution = "BECKMANN"
     gloss.inputs["Roughness"].default_value = tables.lobe_shape["gloss_alpha"] ** 0.5  # Cycles: α = roughness²
     gloss.inputs["Anisotropy"].default_value = 0.0
     total = closures[0].outputs[0]

@@ -26,7 +26,7 @@ from ..measurement_render import (
     add_orthographic_camera,
     configure_measurement_render,
     remove_data_blocks,
-    render_to_array,
+    render_passes_to_arrays,
 )
 from ..sample_object import build_sample_object, weave_record
 from ..validation.rig import VALIDATION_WEAVE, sample_bounds
@@ -103,10 +103,17 @@ def _sample_weave(settings: GoniometerSettings) -> WeaveParameters:
 
 @dataclass
 class ClothMeasurement:
-    """ρ per side (N_i², N_o², 3) in that side's frame, 1/sr; the coverage per side and exit cell
-    (N_o²,), the fraction of the cloth hidden by yarn along that view; and the layout used."""
+    """ρ per side (N_i², N_o², 3) in that side's frame, 1/sr, and the part of it that is the
+    yarns' specular term (§5.2, about the cloth normal; (N_i², N_o²), grey); the specular
+    visibility per side (N_i², N_o²), the fraction of the patch's projection where that term
+    shines (yarn facing the sun, lit, seen); the coverage per side and exit cell (N_o²,), the
+    fraction of the cloth hidden by yarn along that view; the yarn material's specular parameters
+    (``weight``, ``slope`` m, ``ior``); and the layout used."""
 
     rho: dict
+    specular: dict
+    specular_visibility: dict
+    specular_parameters: dict
     coverage: dict
     patch_mm: float
     sample_size_mm: tuple[float, float]
@@ -157,12 +164,23 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
         layout = dataclasses.replace(layout, center=bounds.center)
         configure_measurement_render(scene, resolution=(16, 16), samples=settings.samples, seed=settings.seed,
                                      pixel_average=True)
+        # The specular marks are diffuse closures that must stay dark: no world, no lamp, and
+        # the yarns' emission neither sampled as light nor seen by diffuse rays.
         scene.cycles.max_bounces = 0
         scene.world = None
         scene.render.use_persistent_data = True
+        scene.view_layers[0].use_pass_diffuse_color = True
         with bpy.context.temp_override(scene=scene):
             material = build_yarn_material(tables, name=f"{SCENE_NAME} Yarn", mode=SUN_MODE)
         created.append(material)
+        material.cycles.emission_sampling = "NONE"
+        shader = shader_node(material)
+        shader.inputs["MarkSpecular"].default_value = 1
+        # Even with no bounce Cycles follows a diffuse closure's sampled ray to find emitting
+        # surfaces; hidden from diffuse rays, the yarns' emission cannot light the marks.
+        sample.visible_diffuse = False
+        specular_parameters = {"weight": shader.inputs["SpecularWeight"].default_value,
+                               "slope": shader.inputs["Slope"].default_value, "ior": shader.inputs["IOR"].default_value}
         _drive_sun_from_attribute(material)
         sample.data.materials.clear()
         sample.data.materials.append(material)
@@ -177,7 +195,7 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
         camera = add_orthographic_camera(scene, f"{SCENE_NAME} Camera", clip_end=2.0 * distance)
         created += [camera.data, camera]
 
-        rho, coverage = {}, {}
+        rho, specular, visibility, coverage = {}, {}, {}, {}
         total, done = 2 * n_o * n_o, 0
         start = time.perf_counter()
         for side in SIDES:
@@ -185,21 +203,28 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
             attribute.data.foreach_set("vector", suns[region].astype(np.float32).ravel())
             sample.data.update()
             rho[side] = np.zeros((n_i * n_i, n_o * n_o, 3))
+            specular[side] = np.zeros((n_i * n_i, n_o * n_o))
+            visibility[side] = np.zeros((n_i * n_i, n_o * n_o))
             coverage[side] = np.zeros(n_o * n_o)
             for exit_cell, toward_camera in enumerate(exit_directions(n_o, side)):
                 view = view_of(toward_camera, layout, settings.pixels_per_patch)
                 camera.matrix_world = Matrix(view.camera_matrix(distance).tolist())
                 camera.data.ortho_scale = view.ortho_scale
                 scene.render.resolution_x, scene.render.resolution_y = view.width, view.height
-                pixels = render_to_array(scene, pathlib.Path(render_dir) / f"{side}_exit{exit_cell:03d}.exr")
+                passes = render_passes_to_arrays(scene, pathlib.Path(render_dir) / f"{side}_exit{exit_cell:03d}.exr")
+                pixels = passes["Combined"]
                 index, weight = patch_weights(view, layout)
                 patch, cover = patch_rho(pixels, index, weight, view, layout, sun_irradiance=1.0)
+                marks = np.concatenate([passes["Diffuse Color"][..., :2], pixels[..., 3:]], axis=-1)
+                marked, _ = patch_rho(marks, index, weight, view, layout, sun_irradiance=1.0)
                 rho[side][:, exit_cell] = patch[: n_i * n_i]
+                visibility[side][:, exit_cell] = marked[: n_i * n_i, 0]
+                specular[side][:, exit_cell] = marked[: n_i * n_i, 1]
                 coverage[side][exit_cell] = float(np.mean(cover[: n_i * n_i]))
                 done += 1
                 if progress is not None:
                     progress(done, total, f"{side}: exit cell {exit_cell + 1} of {n_o * n_o}")
-        return ClothMeasurement(rho, coverage, patch_mm, (2 * bounds.half_size[0], 2 * bounds.half_size[1]),
+        return ClothMeasurement(rho, specular, visibility, specular_parameters, coverage, patch_mm, (2 * bounds.half_size[0], 2 * bounds.half_size[1]),
                                 half_thickness, time.perf_counter() - start)
     finally:
         remove_data_blocks(created)

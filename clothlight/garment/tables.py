@@ -5,8 +5,16 @@ self-describing OpenEXR conventions of docs/table-spec.md:
 
 ``<side>_brdf.exr``
     A BRDF atlas (incidence over the sphere × exit over the side's hemisphere) of the cloth's
-    ρ = f |cos θ_i|, 1/sr: incidence from the side's own hemisphere is reflection, from the other
-    one transmission through the cloth.  Read exactly like a yarn's (``cl_yarn_rho``).
+    ρ = f |cos θ_i|, 1/sr, without the yarns' specular term: incidence from the side's own
+    hemisphere is reflection, from the other one transmission through the cloth.  Read exactly
+    like a yarn's (``cl_yarn_rho``), which holds the yarn's ρ without it too.
+``<side>_specular_visibility.exr``
+    The same atlas of the specular visibility V (grey, no unit): the fraction of the cloth where
+    the yarns' specular term of §5.2 shines (yarn facing the sun, lit, seen).  That term is a
+    Cook–Torrance lobe about the cloth normal, the same at every point of the cloth, so the cloth
+    reflects ``weight`` f_CT(ω_i, ω_o) cos θ_i V(ω_i, ω_o) of it (:data:`SPECULAR_KEYS` in the
+    summary): the shader evaluates f_CT exactly and reads only the smooth V from a table, where
+    bilinear interpolation between the grid's cells would flatten the peak near grazing.
 
 and for both sides together:
 
@@ -38,12 +46,13 @@ table_layout = import_precompute("table_layout")
 closure_fit = import_precompute("closure_fit")
 AngularGrid = import_precompute("grids").AngularGrid
 
-SUMMARY_SCHEMA = "clothlight-cloth/1"
+SUMMARY_SCHEMA = "clothlight-cloth/2"
 #: The garment material's closure mixture (names of precompute.closure_fit lobes, in tile order).
 #: At cloth scale the fibre reflection cone and the retro-reflection lobe barely lower the fit
 #: error (red cotton, median relative error front 0.248 with the yarn's five, 0.249 with diffuse,
 #: translucent and fibre transmission, 0.263 with diffuse and translucent alone), and every
-#: closure costs render time; a gloss lobe about the normal carries the cloth's specular peak.
+#: closure costs render time; a gloss lobe about the normal, Beckmann as the yarns' Cook–Torrance
+#: term, carries the cloth's specular peak.
 GARMENT_LOBES = ("diffuse", "translucent", "fibre_transmission", "gloss")
 SUMMARY_FILE = "summary.json"
 #: Tiles of ``lobes.exr``, left to right: the fitted lobes, then the open weave.
@@ -51,9 +60,14 @@ LOBE_TILES = (*GARMENT_LOBES, "open_weave")
 #: Views per side of the lobe image's projected-hemisphere grid.
 LOBE_GRID_RESOLUTION = 16
 BRDF_FILES = {side: f"{side}_brdf.exr" for side in SIDES}
+SPECULAR_VISIBILITY_FILES = {side: f"{side}_specular_visibility.exr" for side in SIDES}
+#: The yarn material's specular parameters the summary records (``specular``): the term's weight,
+#: the Beckmann rms slope m and the host's refractive index.
+SPECULAR_KEYS = ("weight", "slope", "ior")
 LOBE_FILE = "lobes.exr"
 UNITS = {"rho": "1/sr (ρ = f |cos θ_i|: radiance per irradiance on a plane facing the sun)",
          "coverage": "fraction of the cloth's area hidden by yarn along the view",
+         "specular_visibility": "fraction of the cloth's area where the yarns' specular term shines",
          "lengths": "mm", "angles": "unit vectors in the side's frame"}
 
 
@@ -136,7 +150,7 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
     folder.mkdir(parents=True, exist_ok=True)
     yarn = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").metadata
     n_i, n_o = settings.incidence_resolution, settings.exit_resolution
-    shape = closure_fit.LobeShape()
+    shape = closure_fit.LobeShape(gloss_alpha=float(measurement.specular_parameters["slope"]))
     header = {key: yarn[key] for key in precompute_tables.REQUIRED_METADATA if key not in ("cache_key",)}
     header.update(
         cache_key=cache_key,
@@ -151,9 +165,16 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
     views = projected_view_grid(LOBE_GRID_RESOLUTION)
     fit_error, tiles = {}, {}
     for side in SIDES:
-        atlas = table_layout.brdf_atlas(measurement.rho[side])
-        precompute_tables.write_table(folder / BRDF_FILES[side], atlas,
+        specular = measurement.specular[side][..., None]
+        without_specular = np.maximum(measurement.rho[side] - specular, 0.0)
+        precompute_tables.write_table(folder / BRDF_FILES[side], table_layout.brdf_atlas(without_specular),
                                       {**header, "side": side, "layout": layout, "table": "brdf"})
+        visibility = np.repeat(measurement.specular_visibility[side][..., None], 3, axis=-1)
+        precompute_tables.write_table(folder / SPECULAR_VISIBILITY_FILES[side], table_layout.brdf_atlas(visibility),
+                                      {**header, "side": side, "layout": layout, "table": "brdf",
+                                       "quantity": "specular visibility", "specular": measurement.specular_parameters})
+        # The closure mixture stands for all of ρ, specular included.
+        atlas = table_layout.brdf_atlas(measurement.rho[side])
         weights, error = closure_fit.fit_closure_weights(atlas, n_i, shape, lobes=GARMENT_LOBES, views=views)
         fit_error[side] = np.median(error, axis=0).tolist()
         open_weave = 1.0 - coverage_along(measurement.coverage[side], views)
@@ -170,7 +191,8 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
         **header,
         "schema": SUMMARY_SCHEMA,
         "table_schema": precompute_tables.SCHEMA,
-        "files": {"brdf": BRDF_FILES, "lobes": LOBE_FILE},
+        "files": {"brdf": BRDF_FILES, "specular_visibility": SPECULAR_VISIBILITY_FILES, "lobes": LOBE_FILE},
+        "specular": {key: float(measurement.specular_parameters[key]) for key in SPECULAR_KEYS},
         "incidence_resolution": n_i,
         "exit_resolution": n_o,
         "lobe_tiles": list(LOBE_TILES),

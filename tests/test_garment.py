@@ -343,7 +343,8 @@ def test_specular_part_is_the_cook_torrance_term_times_its_visibility(red_cotton
     term = np.array([[weight * cook_torrance_between(wi, wo, slope, ior) * max(wi[2], 0.0) for wo in exits]
                      for wi in incidence])
     visibility = measured.specular_visibility["front"]
-    assert visibility.max() > 0.1 and np.all(visibility <= measured.coverage["front"][None, :] + 1e-6)
+    # Coverage is the mean over the regions, V each region's own: up to the regions' spread.
+    assert visibility.max() > 0.1 and np.all(visibility <= measured.coverage["front"][None, :] + 0.01)
     np.testing.assert_allclose(measured.specular["front"], term * visibility, rtol=2e-3, atol=1e-7)
     assert not measured.specular["back"].any() and not measured.specular_visibility["back"].any()
     # The tables hold ρ without the term and its visibility; the summary the term's parameters.

@@ -156,6 +156,7 @@ def fit_closure_weights(
     subsamples: int = 3,
     lobes: tuple[str, ...] = LOBES,
     views: np.ndarray | None = None,
+    weighting: str = "relative",
 ) -> tuple[np.ndarray, np.ndarray]:
     """Non-negative lobe weights per exit cell and channel, and the fit's relative error.
 
@@ -173,6 +174,10 @@ def fit_closure_weights(
         The lobes to fit (names from :data:`LOBES`, in the order of the result).
     views
         Exit directions (n, 3) to fit at; None: the centres of the atlas' exit cells.
+    weighting
+        What the least squares weigh: ``"relative"`` the residual over ρ + mean ρ (every
+        incidence alike, dark ones included), ``"absolute"`` the residual itself (where ρ is
+        large, as in the light a mixture reflects under broad lighting, an integral of ρ).
 
     Returns
     -------
@@ -190,6 +195,8 @@ def fit_closure_weights(
     if views is None:
         views = AngularGrid("hemisphere", atlas.shape[0] // incidence_resolution).cell_centers()
     views = np.asarray(views, float).reshape(-1, 3)
+    if weighting not in ("relative", "absolute"):
+        raise ParameterError("weighting", weighting, "'relative' or 'absolute'")
     light = incidence_samples(AngularGrid("sphere", incidence_resolution), subsamples)
     channels = atlas.shape[2]
     weights = np.zeros((len(views), len(lobes), channels))
@@ -198,10 +205,11 @@ def fit_closure_weights(
         target = interpolate_rho(atlas, incidence_resolution, light, np.broadcast_to(view, light.shape))
         design = lobe_responses(view, light, shape, lobes)
         for channel in range(channels):
-            scale = 1.0 / (target[:, channel] + target[:, channel].mean() + 1e-30)
-            w, residual = nnls(design * scale[:, None], target[:, channel] * scale)
+            relative = 1.0 / (target[:, channel] + target[:, channel].mean() + 1e-30)
+            scale = relative if weighting == "relative" else np.ones_like(relative)
+            w, _ = nnls(design * scale[:, None], target[:, channel] * scale)
             weights[exit_cell, :, channel] = w
-            relative_error[exit_cell, channel] = residual / math.sqrt(len(light))
+            relative_error[exit_cell, channel] = math.sqrt(np.mean(((design @ w - target[:, channel]) * relative) ** 2))
     return weights, relative_error
 
 

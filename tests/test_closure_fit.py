@@ -87,6 +87,34 @@ def test_fit_reports_the_error_of_what_it_cannot_represent():
     assert np.median(error) > 0.1
 
 
+def test_absolute_weighting_trades_the_dark_incidences_for_the_bright_ones():
+    """A bright narrow peak on a dark diffuse floor, which the mixture cannot both follow: each
+    weighting leaves the smaller residual of its own kind (both are exact least squares), and
+    the absolute one comes closer at the peak."""
+    peak = np.array([0.0, 0.0, 1.0])
+
+    def peaked(view, lights):
+        floor = 0.02 * lobe_responses(view, lights, lobes=("diffuse",))[..., 0]
+        return np.repeat((floor + 2.0 * np.exp((lights @ peak - 1.0) / 0.05))[:, None], 3, axis=1)
+
+    atlas, views = atlas_of(peaked)
+    lights = incidence_samples(AngularGrid("sphere", N_I), 3)
+    residuals = {}
+    for weighting in ("relative", "absolute"):
+        weights, _ = fit_closure_weights(atlas, N_I, weighting=weighting)
+        view = views[0]
+        target = interpolate_rho(atlas, N_I, lights, np.broadcast_to(view, lights.shape))[:, 0]
+        fit = evaluate_closure_mixture(weights[0], view, lights)[:, 0]
+        relative = (fit - target) / (target + target.mean())
+        residuals[weighting] = (np.sum((fit - target) ** 2), np.sum(relative**2),
+                                abs(evaluate_closure_mixture(weights[0], view, peak)[0] - peaked(view, peak[None])[0, 0]))
+    assert residuals["absolute"][0] <= residuals["relative"][0] * (1 + 1e-9)
+    assert residuals["relative"][1] <= residuals["absolute"][1] * (1 + 1e-9)
+    assert residuals["absolute"][2] < residuals["relative"][2]
+    with pytest.raises(ParameterError, match="weighting"):
+        fit_closure_weights(atlas, N_I, weighting="squared")
+
+
 def test_fit_refuses_bad_tables_and_shapes():
     with pytest.raises(ParameterError, match="atlas"):
         fit_closure_weights(np.ones((10, 4, 3)), N_I)

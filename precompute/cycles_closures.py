@@ -1,4 +1,4 @@
-"""NumPy twins of the Cycles 5.0 closures the yarn shader's general-lighting mode mixes.
+"""NumPy twins of the Cycles 5.0 closures the general-lighting modes (yarn, garment) mix.
 
 Cycles' OSL accepts only its built-in closures, so the yarn BRDF is rendered
 under arbitrary lighting as a weighted sum of them (:mod:`precompute.closure_fit`).

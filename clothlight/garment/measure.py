@@ -224,8 +224,9 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
                 done += 1
                 if progress is not None:
                     progress(done, total, f"{side}: exit cell {exit_cell + 1} of {n_o * n_o}")
-        return ClothMeasurement(rho, specular, visibility, specular_parameters, coverage, patch_mm, (2 * bounds.half_size[0], 2 * bounds.half_size[1]),
-                                half_thickness, time.perf_counter() - start)
+        return ClothMeasurement(rho, specular, visibility, specular_parameters, coverage, patch_mm,
+                                (2 * bounds.half_size[0], 2 * bounds.half_size[1]), half_thickness,
+                                time.perf_counter() - start)
     finally:
         remove_data_blocks(created)
 

@@ -13,7 +13,7 @@
   measured on the woven sample (``python -m clothlight.garment bake``, paper §7) in general-
   lighting mode, under a sun, with a lamp behind the cloth so that the back-lit fabric glows
   (paper Figure 9b).  Its tables are in ``example_blends/tables/red_cotton_cloth/`` (measured with
-  ``EXAMPLE_GONIOMETER``).
+  the default gonioreflectometer).
 * ``twill_closeup_general.blend`` — a 2/2 twill of the same yarn close up, in general-lighting
   mode (the closure mixture, §5, lit by everything Cycles has) under a physical sky: sun and
   sky light from every direction, as an HDRI would give.
@@ -43,7 +43,6 @@ from mathutils import Vector  # noqa: E402
 from clothlight.garment.bake import bake_cloth  # noqa: E402
 from clothlight.garment.drape import draped_cloth  # noqa: E402
 from clothlight.garment.material import apply_garment_material, cloth_tables_from_bake  # noqa: E402
-from clothlight.garment.measure import GoniometerSettings  # noqa: E402
 from clothlight.jobs import BakeJob, preset_request  # noqa: E402
 from clothlight.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
 from clothlight.render_setup import use_cycles_osl_on_cpu  # noqa: E402
@@ -58,9 +57,6 @@ TABLE_FILES = ("brdf.exr", "lobes.exr", "summary.json")
 # Coarser tessellation than the default for the sample seen whole: the files stay small.
 PAPER_WEAVE = WeaveParameters(interlacing="plain", warp_count=12, weft_count=12, spacing_mm=0.5, yarn_radius_mm=0.1,
                               segments_per_crossing=6, segments_around=8)
-# Finer exit grid than the default (12² cells per side instead of 8², 20 min of renders instead of
-# 7): on the validation sweep the flat patch comes to 5.5 % of the yarn sample instead of 9.3 %.
-EXAMPLE_GONIOMETER = GoniometerSettings(exit_resolution=12, pixels_per_patch=12)
 TWILL_WEAVE = WeaveParameters(interlacing="twill_2_2", warp_count=16, weft_count=16, spacing_mm=0.5,
                               yarn_radius_mm=0.1)
 
@@ -80,9 +76,9 @@ def example_tables(out_dir: pathlib.Path) -> pathlib.Path:
 
 
 def example_cloth_tables(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pathlib.Path:
-    """The cloth BSDF of the paper's weave of that yarn (:data:`EXAMPLE_GONIOMETER`; cached),
+    """The cloth BSDF of the paper's weave of that yarn (the default gonioreflectometer; cached),
     copied next to the blends."""
-    measured, _ = bake_cloth(tables_dir, EXAMPLE_GONIOMETER, progress=lambda done, total, what: print(
+    measured, _ = bake_cloth(tables_dir, progress=lambda done, total, what: print(
         f"\rmeasuring the cloth BSDF: {done}/{total}", end="", file=sys.stderr))
     print(file=sys.stderr)
     folder = out_dir / "tables" / f"{PRESET}_cloth"

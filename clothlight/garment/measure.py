@@ -72,7 +72,7 @@ class GoniometerSettings:
         validation weave.
     """
 
-    # Red cotton: the flat patch within 4.3 % of the yarn sample on the validation sweep, 35 min
+    # Red cotton: the flat patch within 4.3 % of the yarn sample on the validation sweep, 40 min
     # on 2 cores; N_i = 9, N_o = 8, 16 pixels (a 7-min draft) 9.3 % (docs/garment.md).
     incidence_resolution: int = 11
     exit_resolution: int = 12

@@ -109,42 +109,43 @@ def _beckmann_lambda(alpha2, cosine):
     return np.where(a < 1.6, (1.0 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a), 0.0)
 
 
+def _microfacet_reflection_eval(normal, view, light, alpha, distribution, smith_lambda):
+    """``D(h) / (4 N·V) / (1 + Λ(V) + Λ(L))`` for ``distribution(α², cos θ_h)`` and
+    ``smith_lambda(α², cos θ)``: Cycles' microfacet reflection without Fresnel (Walter et al. 2007
+    with the height-correlated Smith term), zero for lights below N or views below N."""
+    alpha = float(np.clip(alpha, 0.0, 1.0))
+    alpha2 = alpha * alpha
+    cos_view = _dot(normal, view)
+    cos_light = _dot(normal, light)
+    half = np.asarray(view, float) + np.asarray(light, float)
+    half = half / np.maximum(np.linalg.norm(half, axis=-1, keepdims=True), 1e-30)
+    value = distribution(alpha2, _dot(normal, half)) / np.maximum(cos_view, 1e-30) * 0.25 / (
+        1.0 + smith_lambda(alpha2, cos_view) + smith_lambda(alpha2, cos_light))
+    valid = (cos_view > 0.0) & (cos_light >= 0.0) & (alpha2 > MICROFACET_SINGULAR_ALPHA2)
+    return np.where(valid, value, 0.0)
+
+
+def _beckmann_distribution(alpha2, cos_half):
+    cos2 = np.clip(cos_half, 1e-6, 1.0) ** 2
+    alpha2 = max(alpha2, 1e-30)
+    return np.exp(-(1.0 - cos2) / (cos2 * alpha2)) / (np.pi * alpha2 * cos2 * cos2)
+
+
+def _ggx_distribution(alpha2, cos_half):
+    return alpha2 / (np.pi * (1.0 + (alpha2 - 1.0) * cos_half * cos_half) ** 2)
+
+
 def beckmann_reflection_eval(normal, view, light, alpha):
     """Cycles ``microfacet("beckmann", N, alpha, eta, 0)`` and the Glossy BSDF node's Beckmann
     distribution (roughness² = alpha): Beckmann reflection without Fresnel, 1/sr.
 
-    ``D(h) / (4 N·V) / (1 + Λ(V) + Λ(L))`` with D = exp(−tan²θ_h/α²) / (π α² cos⁴θ_h) (α the
-    rms slope) and Cycles' approximation of Λ, zero for lights below N or views below N.
+    D = exp(−tan²θ_h/α²) / (π α² cos⁴θ_h) (α the rms slope) with Cycles' approximation of Λ
+    (:func:`_microfacet_reflection_eval`).
     """
-    alpha = float(np.clip(alpha, 0.0, 1.0))
-    alpha2 = alpha * alpha
-    cos_view = _dot(normal, view)
-    cos_light = _dot(normal, light)
-    half = np.asarray(view, float) + np.asarray(light, float)
-    half = half / np.maximum(np.linalg.norm(half, axis=-1, keepdims=True), 1e-30)
-    cos2 = np.clip(_dot(normal, half), 1e-6, 1.0) ** 2
-    distribution = np.exp(-(1.0 - cos2) / (cos2 * max(alpha2, 1e-30))) / (np.pi * max(alpha2, 1e-30) * cos2 * cos2)
-    value = distribution / np.maximum(cos_view, 1e-30) * 0.25 / (
-        1.0 + _beckmann_lambda(alpha2, cos_view) + _beckmann_lambda(alpha2, cos_light))
-    valid = (cos_view > 0.0) & (cos_light >= 0.0) & (alpha2 > MICROFACET_SINGULAR_ALPHA2)
-    return np.where(valid, value, 0.0)
+    return _microfacet_reflection_eval(normal, view, light, alpha, _beckmann_distribution, _beckmann_lambda)
 
 
 def ggx_reflection_eval(normal, view, light, alpha):
-    """Cycles ``microfacet("ggx", N, alpha, eta, 0)``: GGX reflection without Fresnel, 1/sr.
-
-    ``D(h) / (4 N·V) / (1 + Λ(V) + Λ(L))`` (Walter et al. 2007 with the
-    height-correlated Smith term), zero for lights below N or views below N.
-    """
-    alpha = float(np.clip(alpha, 0.0, 1.0))
-    alpha2 = alpha * alpha
-    cos_view = _dot(normal, view)
-    cos_light = _dot(normal, light)
-    half = np.asarray(view, float) + np.asarray(light, float)
-    half = half / np.maximum(np.linalg.norm(half, axis=-1, keepdims=True), 1e-30)
-    cos_half = _dot(normal, half)
-    distribution = alpha2 / (np.pi * (1.0 + (alpha2 - 1.0) * cos_half * cos_half) ** 2)
-    value = distribution / np.maximum(cos_view, 1e-30) * 0.25 / (
-        1.0 + _ggx_lambda(alpha2, cos_view) + _ggx_lambda(alpha2, cos_light))
-    valid = (cos_view > 0.0) & (cos_light >= 0.0) & (alpha2 > MICROFACET_SINGULAR_ALPHA2)
-    return np.where(valid, value, 0.0)
+    """Cycles ``microfacet("ggx", N, alpha, eta, 0)``: GGX reflection without Fresnel, 1/sr
+    (:func:`_microfacet_reflection_eval`)."""
+    return _microfacet_reflection_eval(normal, view, light, alpha, _ggx_distribution, _ggx_lambda)

@@ -58,7 +58,8 @@ def synthetic_tables(tmp_path_factory):
     return tables, atlas, weights
 
 
-def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction):
+def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, *, cloth_normal=(0.0, 0.0, 1.0),
+                specular_weight=0.0):
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     configure_measurement_render(scene, resolution=(8, 8), samples=1 if mode == SUN_MODE else 16)
@@ -67,11 +68,11 @@ def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction):
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     plane = bpy.context.active_object
     mesh = plane.data
-    for name, value in ((YARN_TANGENT, (1.0, 0.0, 0.0)), (CLOTH_NORMAL, (0.0, 0.0, 1.0))):
+    for name, value in ((YARN_TANGENT, (1.0, 0.0, 0.0)), (CLOTH_NORMAL, cloth_normal)):
         attribute = mesh.attributes.new(name, "FLOAT_VECTOR", "POINT")
         attribute.data.foreach_set("vector", np.tile(value, len(mesh.vertices)).astype(np.float32))
     material = build_yarn_material(tables, mode=mode)
-    shader_node(material).inputs["SpecularWeight"].default_value = 0.0
+    shader_node(material).inputs["SpecularWeight"].default_value = specular_weight
     mesh.materials.append(material)
 
     zen, azi = math.radians(view_zenith_deg), math.radians(view_azimuth_deg)
@@ -151,3 +152,35 @@ def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_
     expected = SUN_IRRADIANCE * lobe_responses(wo, sun_direction) @ weights[0]
     assert expected.min() > 1e-3
     np.testing.assert_allclose(pixels.mean(axis=0), expected, rtol=0.01, atol=1e-4)
+
+
+def rendered_specular(tmp_path, tables, mode, view, sun_direction, cloth_normal):
+    """Mean radiance of the patch with the specular term minus without it."""
+    zenith = math.degrees(math.acos(view[2]))
+    azimuth = math.degrees(math.atan2(view[1], view[0]))
+    means = []
+    for weight in (1.0, 0.0):
+        scene, _ = patch_scene(tables, mode, zenith, azimuth, sun_direction, cloth_normal=cloth_normal,
+                               specular_weight=weight)
+        means.append(render_to_array(scene, tmp_path / f"{mode}{weight}.exr")[..., :3].reshape(-1, 3).mean(axis=0))
+    return means[0] - means[1]
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("cloth_normal, sun_direction, lit", [
+    (unit([0.3, 0.0, 0.95]), unit([-0.5, 0.1, 0.86]), True),  # the face toward the cloth normal and the sun
+    (unit([0.6, 0.0, -0.8]), unit([0.8, 0.0, -0.6]), False),  # a face turned below the cloth: sun behind it
+], ids=["face-lit", "face-below-cloth"])
+def test_general_mode_specular_is_the_sun_modes(tmp_path, synthetic_tables, cloth_normal, sun_direction, lit):
+    # The Cook-Torrance term is about the cloth normal, but a face lit from behind reflects none of
+    # it (the sun mode's rule): Cycles' closure must give the same on either side of the cloth plane.
+    tables, _, _ = synthetic_tables
+    view = unit([0.8, 0.1, 0.6])
+    sun = rendered_specular(tmp_path, tables, SUN_MODE, view, sun_direction, cloth_normal)
+    general = rendered_specular(tmp_path, tables, GENERAL_MODE, view, sun_direction, cloth_normal)
+    if lit:
+        assert sun.min() > 1e-2
+        np.testing.assert_allclose(general, sun, rtol=0.02)
+    else:
+        np.testing.assert_allclose(sun, 0.0, atol=1e-6)
+        np.testing.assert_allclose(general, 0.0, atol=1e-4)

@@ -23,10 +23,15 @@ tables = yarn_tables_from_bake(bake("red_cotton", ["transport.angular_resolution
 
 bpy.ops.wm.read_homefile(use_empty=True)
 scene = bpy.context.scene
-configure_measurement_render(scene, resolution=(160, 160), samples=16)
+SIZES = ((160, 16), (320, 64))  # pixels per side, samples per pixel
+configure_measurement_render(scene, resolution=(SIZES[0][0],) * 2, samples=SIZES[0][1])  # OSL, to compile
 sample = build_sample_object(WeaveParameters(warp_count=12, weft_count=12))
 sun = light_and_camera(scene, (0.0, -4.0, 3.0), (0.93, 0.0, 0.0))
 materials = {"yarn, general lighting": build_yarn_material(tables, "yarn general", mode=GENERAL_MODE),
              "yarn, sun mode": build_yarn_material(tables, "yarn sun", mode=SUN_MODE)}
 sync_sun(materials["yarn, sun mode"], sun)
-print_render_cost(scene, sample, materials, out)
+# Small renders weigh each render's fixed cost (scene sync, OSL compilation) more: both sizes.
+for pixels, samples in SIZES:
+    configure_measurement_render(scene, resolution=(pixels, pixels), samples=samples)
+    print(f"{pixels}² pixels, {samples} samples per pixel")
+    print_render_cost(scene, sample, materials, out)

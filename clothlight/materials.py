@@ -51,11 +51,24 @@ def _new_material(name: str, shader_name: str):
     tree.links.new(shader.outputs["BSDF"], output.inputs["Surface"])
     tree.links.new(_object_to_world(tree, CLOTH_NORMAL, "NORMAL", (-200, -200)), shader.inputs["ClothNormal"])
     material["clothlight_shader"] = shader_name
-    # Cycles' bump-map correction bends a closure's normal toward the geometric one (and darkens
-    # diffuse lobes about other normals); the cloth normal of the specular lobe is far from a
-    # yarn's geometric normal by design, so the correction would move the lobe the sun mode computes.
-    material.cycles.use_bump_map_correction = False
+    configure_cycles_material(material)
     return material, shader
+
+
+def configure_cycles_material(material) -> None:
+    """Cycles settings every ClothLight material needs.
+
+    Bump-map correction bends a closure's normal toward the geometric one (and darkens diffuse
+    lobes about other normals); the cloth normal of the specular lobe is far from a yarn's
+    geometric normal by design, so the correction would move the lobe the sun mode computes.
+
+    Emission sampling off: the sun modes' radiance is an emission closure, and Cycles, which
+    cannot tell from an OSL shader whether it emits, would otherwise make every triangle of the
+    cloth a light to sample — in either mode, for no light at all (the general mode emits none;
+    the sun mode's yarns have no closure that receives light).  With it the general mode of the
+    yarn material rendered 1.7× slower (benchmarks/bench_yarn_material.py)."""
+    material.cycles.use_bump_map_correction = False
+    material.cycles.emission_sampling = "NONE"
 
 
 def shader_node(material):

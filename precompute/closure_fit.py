@@ -86,7 +86,7 @@ class LobeShape:
     radiance lit from straight behind (the glow of §6.1, Figure 9b) came to 0.94
     of the sun mode's, from 0.07: the relative fit alone spends little on the few
     cells of direct transmission.  The validation sweep (lit from the front) did not
-    move: general vs sun 21 % red either way.
+    move with it.
     """
 
     reflection_longitudinal: float = 0.05

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import bpy
 
-from ..materials import GENERAL_MODE, SUN_MODE
+from ..materials import GENERAL_MODE, SUN_MODE, configure_cycles_material
 from ..osl_shaders import add_script_node
 from .goniometry import SIDES
 from .tables import (
@@ -137,7 +137,7 @@ def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garm
         surface = _closure_mixture(tree, tables, tangent.outputs["Tangent"], open_weave, detail)
     tree.links.new(surface, output.inputs["Surface"])
     material[MATERIAL_KIND] = mode
-    material.cycles.use_bump_map_correction = False
+    configure_cycles_material(material)
     return material
 
 

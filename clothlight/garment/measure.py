@@ -167,7 +167,8 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
         configure_measurement_render(scene, resolution=(16, 16), samples=settings.samples, seed=settings.seed,
                                      pixel_average=True)
         # The specular marks are diffuse closures that must stay dark: no world, no lamp, and
-        # the yarns' emission neither sampled as light nor seen by diffuse rays.
+        # the yarns' emission neither sampled as light (configure_cycles_material) nor seen by
+        # diffuse rays.
         scene.cycles.max_bounces = 0
         scene.world = None
         scene.render.use_persistent_data = True
@@ -175,7 +176,6 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
         with bpy.context.temp_override(scene=scene):
             material = build_yarn_material(tables, name=f"{SCENE_NAME} Yarn", mode=SUN_MODE)
         created.append(material)
-        material.cycles.emission_sampling = "NONE"
         shader = shader_node(material)
         shader.inputs["MarkSpecular"].default_value = 1
         # Even with no bounce Cycles follows a diffuse closure's sampled ray to find emitting

@@ -36,21 +36,22 @@ def principled_with_sheen():
     return material
 
 
-def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: int = 3) -> dict:
+def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: int = 5) -> dict:
     """Render ``obj`` with the reference and each of ``materials`` (label → material): a warm-up
-    (shader compile, BVH), then the median of ``repeats`` timed renders; print seconds and ratios."""
-    timings = {}
-    for label, material in {REFERENCE: principled_with_sheen(), **materials}.items():
-        obj.data.materials.clear()
-        obj.data.materials.append(material)
-        scene.render.filepath = str(out / f"{label}.exr")
-        bpy.ops.render.render(write_still=True)
-        runs = []
-        for _ in range(repeats):
+    each (shader compile, BVH), then ``repeats`` rounds of one timed render per material, taken in
+    turn so that a machine whose speed drifts slows them alike; print the medians and ratios."""
+    every = {REFERENCE: principled_with_sheen(), **materials}
+    runs = {label: [] for label in every}
+    for round_index in range(repeats + 1):
+        for label, material in every.items():
+            obj.data.materials.clear()
+            obj.data.materials.append(material)
+            scene.render.filepath = str(out / f"{label}.exr")
             start = time.perf_counter()
             bpy.ops.render.render(write_still=True)
-            runs.append(time.perf_counter() - start)
-        timings[label] = sorted(runs)[len(runs) // 2]
+            if round_index:
+                runs[label].append(time.perf_counter() - start)
+    timings = {label: sorted(seconds)[len(seconds) // 2] for label, seconds in runs.items()}
     for label, seconds in timings.items():
         print(f"{label:28s} {seconds:6.2f} s   {seconds / timings[REFERENCE]:4.2f}x   (median of {repeats})")
     return timings

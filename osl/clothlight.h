@@ -163,6 +163,15 @@ vector cl_to_frame(vector d, vector x, vector y, vector z)
     return vector(dot(d, x), dot(d, y), dot(d, z));
 }
 
+// Exit direction of the view I in the yarn frame, on the tables' hemisphere: smooth normals can
+// put a silhouette view just below the horizon.
+vector cl_exit_direction(vector I, vector x, vector y, vector z)
+{
+    vector wo = cl_to_frame(normalize(I), x, y, z);
+    wo[2] = max(wo[2], 0.0);
+    return normalize(wo);
+}
+
 // Texture lookup that reproduces the table's cell values at cell centres and interpolates
 // linearly between them: zero filter width (no mipmaps, no derivative blur), clamped wrap.
 color cl_table_texel(string file, float u, float v)

@@ -132,6 +132,19 @@ float cl_cloth_specular(vector Nc, vector N_out, vector L, vector V, float m, fl
     return cl_cook_torrance(Nc, L, V, m, eta) * max(dot(Nc, L), 0.0);
 }
 
+// The general modes' closure for that term on a yarn face of shading normal N: Cycles'
+// reflection-only dielectric Beckmann lobe about Nc (cl_cook_torrance: Smith shadowing, exact
+// Fresnel).  Cycles keeps such a closure's light where sign(N.l) = sign(N.Nc) sign(Nc.l) (its
+// bump-shadowing test): on faces turned below the cloth plane that is light from behind the face,
+// which cl_cloth_specular cuts, and never light the face receives, so those faces get none.
+closure color cl_cloth_specular_closure(vector Nc, normal N, float weight, float m, float eta)
+{
+    closure color lobe = 0;
+    if (dot(N, Nc) > 0.0)
+        lobe = weight * dielectric_bsdf(Nc, vector(0), color(1), color(0), m, m, eta, "beckmann");
+    return lobe;
+}
+
 // True when the sun (world direction L) is hidden from P by ANOTHER yarn.  Ng_out is the outward
 // geometric normal of the yarn at P.  Light arriving from behind crosses the yarn itself first;
 // that self-shadowing is already inside the baked tables, so a ray that starts into its own

@@ -132,6 +132,14 @@ float cl_cloth_specular(vector Nc, vector N_out, vector L, vector V, float m, fl
     return cl_cook_torrance(Nc, L, V, m, eta) * max(dot(Nc, L), 0.0);
 }
 
+// The cloth normal on the viewer's side (V toward the viewer): a sheet has the same sheen on
+// both faces, each about its own normal.
+vector cl_cloth_normal_toward(vector Nc, vector V)
+{
+    vector n = normalize(Nc);
+    return dot(n, V) < 0.0 ? -n : n;
+}
+
 // The general modes' closure for that term on a yarn face of shading normal N: Cycles'
 // reflection-only dielectric Beckmann lobe about Nc (cl_cook_torrance: Smith shadowing, exact
 // Fresnel).  Cycles keeps such a closure's light where sign(N.l) = sign(N.Nc) sign(Nc.l) (its

@@ -188,6 +188,18 @@ def test_general_mode_specular_is_the_sun_modes(tmp_path, synthetic_tables, clot
 
 @pytest.mark.blender
 @pytest.mark.parametrize("mode", [SUN_MODE, GENERAL_MODE])
+def test_the_specular_is_the_same_on_both_faces_of_the_cloth(tmp_path, synthetic_tables, mode):
+    # Seen and lit from the cloth's back, the term is about the back's normal: the same sheen.
+    tables = synthetic_tables[0]
+    view, sun_direction = unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])
+    front = rendered_specular(tmp_path, tables, mode, view, sun_direction, (0.0, 0.0, 1.0))
+    back = rendered_specular(tmp_path, tables, mode, view, sun_direction, (0.0, 0.0, -1.0))
+    assert front.min() > 1e-2
+    np.testing.assert_allclose(back, front, rtol=1e-3 if mode == SUN_MODE else 0.02)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("mode", [SUN_MODE, GENERAL_MODE])
 def test_the_yarn_material_is_no_light_to_sample(synthetic_tables, mode):
     # Cycles cannot tell whether an OSL shader emits; sampling every triangle of the cloth as a
     # light made the general mode 1.7x slower, for no light (clothlight.materials).

@@ -327,8 +327,8 @@ def test_bake_command_copies_a_cached_bake_and_names_bad_input(tmp_path, red_cot
 def test_specular_part_is_the_cook_torrance_term_times_its_visibility(red_cotton_cloth):
     """The gonioreflectometer separates the yarns' specular term: at every cell centre it is the
     Cook–Torrance term about the cloth normal (the same at every point of the cloth) times the
-    fraction of the patch where it shines, which is part of what yarn covers; on the back side,
-    whose normal is the other way, there is none."""
+    fraction of the patch where it shines, which is part of what yarn covers; on either side, in
+    that side's frame (its normal toward its viewers)."""
     from clothlight.garment.bake import load_measurement
     from clothlight.garment.tables import SPECULAR_KEYS
 
@@ -342,11 +342,11 @@ def test_specular_part_is_the_cook_torrance_term_times_its_visibility(red_cotton
     exits = AngularGrid("hemisphere", settings.exit_resolution).cell_centers()
     term = np.array([[weight * cook_torrance_between(wi, wo, slope, ior) * max(wi[2], 0.0) for wo in exits]
                      for wi in incidence])
-    visibility = measured.specular_visibility["front"]
-    # Coverage is the mean over the regions, V each region's own: up to the regions' spread.
-    assert visibility.max() > 0.1 and np.all(visibility <= measured.coverage["front"][None, :] + 0.01)
-    np.testing.assert_allclose(measured.specular["front"], term * visibility, rtol=2e-3, atol=1e-7)
-    assert not measured.specular["back"].any() and not measured.specular_visibility["back"].any()
+    for side in ("front", "back"):
+        visibility = measured.specular_visibility[side]
+        # Coverage is the mean over the regions, V each region's own: up to the regions' spread.
+        assert visibility.max() > 0.1 and np.all(visibility <= measured.coverage[side][None, :] + 0.01)
+        np.testing.assert_allclose(measured.specular[side], term * visibility, rtol=2e-3, atol=1e-7)
     # The tables hold ρ without the term and its visibility; the summary the term's parameters.
     tables = cloth_tables_from_bake(folder)
     assert tables.specular == pytest.approx(summary["specular"])

@@ -5,6 +5,8 @@ import pathlib
 import time
 
 import bpy
+import numpy as np
+import OpenEXR
 
 REFERENCE = "Principled BSDF + sheen"
 
@@ -55,3 +57,11 @@ def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: i
     for label, seconds in timings.items():
         print(f"{label:28s} {seconds:6.2f} s   {seconds / timings[REFERENCE]:4.2f}x   (median of {repeats})")
     return timings
+
+
+def read_rgb(path: pathlib.Path) -> np.ndarray:
+    """The RGB radiance (H, W, 3) of a rendered EXR image, top row first."""
+    with OpenEXR.File(str(path)) as image:
+        channels = image.channels()
+        rgb = channels["RGBA"].pixels if "RGBA" in channels else np.stack([channels[c].pixels for c in "RGB"], -1)
+    return np.asarray(rgb[..., :3], float)

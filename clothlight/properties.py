@@ -338,6 +338,11 @@ class ClothLightSceneSettings(bpy.types.PropertyGroup):
         name="Open Weave", default=True,
         description="Let light through the gaps between yarns (a transparent closure weighted by the measured "
                     "coverage). Off: faster, for dense cloth or cloth seen from afar")
+    garment_transmission: BoolProperty(
+        name="Transmission", default=True,
+        description="Let light through the yarns (translucent and fibre-transmission closures): back-lit fabric "
+                    "glows. Off: the cloth passes no light and renders at about a Principled BSDF's cost, for "
+                    "garments lit from the viewer's side")
     garment_weave_repeats: FloatProperty(
         name="Weave Repeats per UV", default=0.0, min=0.0, soft_max=5000.0,
         description="Show the yarns for close-ups with the cloth bake's weave detail texture: weave repeats per "

@@ -195,6 +195,7 @@ class CLOTHLIGHT_PT_garment(_SidebarPanel, bpy.types.Panel):
         layout.label(text="Cloth BSDF on any mesh (paper §7)")
         layout.prop(settings, "cloth_tables_dir")
         layout.prop(settings, "garment_open_weave")
+        layout.prop(settings, "garment_transmission")
         layout.prop(settings, "garment_weave_repeats")
         layout.operator("clothlight.apply_garment_material", icon="MOD_CLOTH")
         column = layout.column(align=True)

@@ -205,6 +205,13 @@ def test_apply_garment_material_puts_a_cloth_bake_on_meshes_with_uvs_only(addon,
     assert material is not None and material["clothlight_garment"] == "GENERAL"
     assert not any(node.type == "SCRIPT" for node in material.node_tree.nodes)  # plain nodes: no OSL needed
     assert not bare.data.materials  # no UV map, no warp direction: skipped with a warning
+    closures = {node.bl_idname for node in material.node_tree.nodes if node.bl_idname.startswith("ShaderNodeBsdf")}
+    assert {"ShaderNodeBsdfTranslucent", "ShaderNodeBsdfHair", "ShaderNodeBsdfTransparent"} <= closures
+    scene.clothlight.garment_open_weave = scene.clothlight.garment_transmission = False  # the panel's switches
+    assert bpy.ops.clothlight.apply_garment_material() == {"FINISHED"}
+    closures = {node.bl_idname for node in garment.active_material.node_tree.nodes
+                if node.bl_idname.startswith("ShaderNodeBsdf")}
+    assert closures == {"ShaderNodeBsdfDiffuse", "ShaderNodeBsdfAnisotropic"}
 
 
 def test_apply_material_refuses_objects_that_are_not_samples(addon, scene):

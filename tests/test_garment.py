@@ -103,7 +103,8 @@ def synthetic_cloth(tmp_path_factory):
     return tables, atlases, visibility
 
 
-def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False, weave_repeats_per_uv=None):
+def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False, weave_repeats_per_uv=None,
+                  transmission=True):
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     configure_measurement_render(scene, resolution=(8, 8), samples=1 if mode == SUN_MODE else 16)
@@ -117,7 +118,8 @@ def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False, w
         for loop in plane.data.loops:
             co = plane.data.vertices[loop.vertex_index].co
             uv.data[loop.index].uv = (co.y / 20.0 + 0.5, -co.x / 20.0 + 0.5)
-    material = apply_garment_material(plane, tables, mode=mode, weave_repeats_per_uv=weave_repeats_per_uv)
+    material = apply_garment_material(plane, tables, mode=mode, weave_repeats_per_uv=weave_repeats_per_uv,
+                                      transmission=transmission)
     sun = add_sun_and_camera(scene, toward_sun, toward_camera, SUN_IRRADIANCE)
     if mode == SUN_MODE:
         sync_sun(material, sun)
@@ -167,6 +169,24 @@ def test_general_mode_renders_the_lobe_mixture_and_the_open_weave(tmp_path, synt
     assert expected[0] > 1e-3
     np.testing.assert_allclose(pixels[:, :3].mean(axis=0), expected, rtol=0.02, atol=2e-4)
     np.testing.assert_allclose(pixels[:, 3].mean(), COVERAGE[side], atol=0.02)  # sampled: 16 spp
+
+
+def test_without_transmission_the_garment_reflects_the_same_and_passes_no_light(tmp_path, synthetic_cloth):
+    """transmission=False: lit from the viewer's side the same radiance as the full material, lit
+    from behind none (the open weave's see-through stays)."""
+    tables, *_ = synthetic_cloth
+    toward_camera = unit([0.3, 0.2, 0.9])
+    for toward_sun, passes_light in ((unit([-0.4, 0.3, 0.7]), False), (unit([0.2, -0.5, -0.6]), True)):
+        means = {}
+        for transmission in (True, False):
+            scene = garment_scene(tables, GENERAL_MODE, toward_camera, toward_sun, transmission=transmission)
+            means[transmission] = render_to_array(scene, tmp_path / "patch.exr").reshape(-1, 4).mean(axis=0)
+        assert means[True][0] > 1e-3
+        np.testing.assert_allclose(means[False][3], means[True][3], atol=0.02)  # alpha: the open weave
+        if passes_light:
+            np.testing.assert_array_equal(means[False][:3], 0.0)
+        else:
+            np.testing.assert_allclose(means[False][:3], means[True][:3], rtol=0.02, atol=2e-4)
 
 
 def test_weave_detail_shows_the_yarns_and_keeps_the_mean(tmp_path, synthetic_cloth):

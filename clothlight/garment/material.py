@@ -88,7 +88,8 @@ def cloth_tables_from_bake(folder) -> ClothTableFiles:
 
 
 def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garment", *, mode: str = GENERAL_MODE,
-                           uv_map: str = "", open_weave: bool = True, weave_repeats_per_uv: float | None = None):
+                           uv_map: str = "", open_weave: bool = True, transmission: bool = True,
+                           weave_repeats_per_uv: float | None = None):
     """The garment material reading ``tables`` in ``mode`` (module docstring); ``uv_map``: the UV
     map whose tangent is the warp (empty: the active one).  Sun mode: set the sun with
     :func:`clothlight.materials.sync_sun`.
@@ -96,6 +97,12 @@ def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garm
     ``open_weave=False`` (general mode) leaves out the transparent closure of the open weave: the
     light through the gaps is lost, but camera and shadow rays stop at the cloth, which renders
     faster (benchmarks/bench_garment_material.py); for dense cloth or cloth seen from afar.
+
+    ``transmission=False`` (general mode) leaves out the translucent and fibre-transmission
+    closures as well: the cloth reflects as before but passes no light, so paths stop at it and it
+    renders at about a Principled BSDF's cost.  What is lost is the light through the cloth: the
+    glow of back-lit fabric, and on a worn garment lit from the front the light that goes through,
+    reflects off the body and comes back through the cloth (docs/garment.md, "Render cost").
 
     ``weave_repeats_per_uv`` (general mode, a bake with a weave detail texture): weave repeats
     per UV unit — the garment's size along u in mm over the weave's repeat in mm; the yarns then
@@ -134,7 +141,7 @@ def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garm
         surface = shader.outputs["BSDF"]
     else:
         detail = _weave_detail(tree, tables, uv_map, weave_repeats_per_uv) if weave_repeats_per_uv else None
-        surface = _closure_mixture(tree, tables, tangent.outputs["Tangent"], open_weave, detail)
+        surface = _closure_mixture(tree, tables, tangent.outputs["Tangent"], open_weave, transmission, detail)
     tree.links.new(surface, output.inputs["Surface"])
     material[MATERIAL_KIND] = mode
     configure_cycles_material(material)
@@ -174,13 +181,18 @@ def _weave_detail(tree, tables: ClothTableFiles, uv_map: str, repeats: float):
     return normal_map.outputs["Normal"], scale.outputs[0]
 
 
-def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: bool, detail=None):
+def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: bool, transmission: bool,
+                     detail=None):
     """The general mode's nodes; returns the summed closure's socket.
 
     Frame: z = the shading normal (Cycles turns it toward the viewer, so the back side gets its
     own frame, a half-turn about the warp), x = the UV tangent made normal to it, y = z × x.
     Each tile of ``lobes.exr`` is looked up at the view's (ω_x, ω_y), held between the tile's
     outermost pixel centres (tables.projected_view_grid), in the front or back row block.
+
+    ``open_weave``, ``transmission``: whether the transparent closure and the two transmission
+    closures are in the sum (:func:`build_garment_material`); the image lookups of lobes left out
+    are left out too.
 
     ``detail`` (:func:`_weave_detail`): the closures about the bent normal, their weights times
     s = coverage / mean coverage, the open weave's 1 − s (1 − open): the same mean per repeat."""
@@ -233,8 +245,16 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
 
     image = bpy.data.images.load(str(tables.lobe_path), check_existing=True)
     image.colorspace_settings.name = "Non-Color"
+    kinds = [("ShaderNodeBsdfDiffuse", "diffuse"), ("ShaderNodeBsdfAnisotropic", "gloss")]
+    if transmission:
+        kinds += [("ShaderNodeBsdfTranslucent", "translucent"), ("ShaderNodeBsdfHair", "fibre_transmission")]
+    if open_weave:
+        kinds.append(("ShaderNodeBsdfTransparent", "open_weave"))
+    used = {tile for _, tile in kinds}
     weights = {}
-    for k, tile in enumerate(LOBE_TILES if open_weave else LOBE_TILES[:-1]):
+    for k, tile in enumerate(LOBE_TILES):
+        if tile not in used:
+            continue
         shifted = math_node("ADD", coordinates, ((k + inset + span / 2.0) / tiles, 0.0, 0.0), (600, 300 - 200 * k))
         texture = nodes.new("ShaderNodeTexImage")
         texture.image = image
@@ -244,11 +264,7 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
         links.new(shifted.outputs[0], texture.inputs["Vector"])
         weights[tile] = texture.outputs["Color"]
 
-    closures = []
-    kinds = [("ShaderNodeBsdfDiffuse", "diffuse"), ("ShaderNodeBsdfTranslucent", "translucent"),
-             ("ShaderNodeBsdfHair", "fibre_transmission"), ("ShaderNodeBsdfAnisotropic", "gloss")]
-    if open_weave:
-        kinds.append(("ShaderNodeBsdfTransparent", "open_weave"))
+    closures = {}
     for node_type, tile in kinds:
         closure = nodes.new(node_type)
         closure.location = (1000, 300 - 200 * len(closures))
@@ -268,17 +284,19 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
                 links.new(scale, weight.inputs["Scale"])
             weight = weight.outputs[0]
         links.new(weight, closure.inputs["Color"])
-        closures.append(closure)
-    hair = closures[2]
-    hair.component = "Transmission"
-    hair.inputs["Offset"].default_value = 0.0
-    hair.inputs["RoughnessU"].default_value = tables.lobe_shape["transmission_longitudinal"]
-    hair.inputs["RoughnessV"].default_value = tables.lobe_shape["transmission_azimuthal"]
-    links.new(warp, hair.inputs["Tangent"])
-    gloss = closures[3]
+        closures[tile] = closure
+    if transmission:
+        hair = closures["fibre_transmission"]
+        hair.component = "Transmission"
+        hair.inputs["Offset"].default_value = 0.0
+        hair.inputs["RoughnessU"].default_value = tables.lobe_shape["transmission_longitudinal"]
+        hair.inputs["RoughnessV"].default_value = tables.lobe_shape["transmission_azimuthal"]
+        links.new(warp, hair.inputs["Tangent"])
+    gloss = closures["gloss"]
     gloss.distribution = "BECKMANN"
     gloss.inputs["Roughness"].default_value = tables.lobe_shape["gloss_alpha"] ** 0.5  # Cycles: α = roughness²
     gloss.inputs["Anisotropy"].default_value = 0.0
+    closures = list(closures.values())
     total = closures[0].outputs[0]
     for closure in closures[1:]:
         add = nodes.new("ShaderNodeAddShader")
@@ -290,7 +308,8 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
 
 
 def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_MODE, name: str | None = None,
-                           open_weave: bool = True, weave_repeats_per_uv: float | None = None):
+                           open_weave: bool = True, transmission: bool = True,
+                           weave_repeats_per_uv: float | None = None):
     """Put a garment material (:func:`build_garment_material`) on every slot of the mesh object
     ``obj``; refuses a mesh without a UV map (the warp direction comes from it)."""
     if obj is None or obj.type != "MESH":
@@ -300,7 +319,7 @@ def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_
                          "(unwrap it with u along the warp)")
     material = build_garment_material(tables, name or f"ClothLight Garment ({obj.name})", mode=mode,
                                       uv_map=obj.data.uv_layers.active.name, open_weave=open_weave,
-                                      weave_repeats_per_uv=weave_repeats_per_uv)
+                                      transmission=transmission, weave_repeats_per_uv=weave_repeats_per_uv)
     if not obj.data.materials:
         obj.data.materials.append(material)
     for index in range(len(obj.data.materials)):

@@ -45,6 +45,7 @@ class CLOTHLIGHT_OT_apply_garment_material(bpy.types.Operator):
         for obj in _meshes(context):
             try:
                 apply_garment_material(obj, tables, mode=GENERAL_MODE, open_weave=settings.garment_open_weave,
+                                       transmission=settings.garment_transmission,
                                        weave_repeats_per_uv=settings.garment_weave_repeats or None)
                 done.append(obj.name)
             except ValueError as error:

@@ -25,7 +25,7 @@ from clothlight.garment.material import build_garment_material, cloth_tables_fro
 from clothlight.garment.tables import SUMMARY_FILE  # noqa: E402
 from clothlight.materials import GENERAL_MODE  # noqa: E402
 from clothlight.measurement_render import configure_measurement_render, render_to_array  # noqa: E402
-from render_cost import light_and_camera, principled_with_sheen, read_rgb, print_render_cost  # noqa: E402
+from render_cost import light_and_camera, principled_with_sheen, print_render_cost, read_rgb  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-garment-"))
@@ -75,4 +75,3 @@ print(f"cloth pixels: {mask.mean():.0%} of the image")
 for label in materials:
     ratio = read_rgb(out / f"{label}.exr")[mask].mean(axis=0) / full
     print(f"{label:36s} the cloth's mean radiance / the full garment's: {np.array2string(ratio, precision=3)}")
-

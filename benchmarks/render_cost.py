@@ -55,7 +55,7 @@ def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: i
                 runs[label].append(time.perf_counter() - start)
     timings = {label: sorted(seconds)[len(seconds) // 2] for label, seconds in runs.items()}
     for label, seconds in timings.items():
-        print(f"{label:28s} {seconds:6.2f} s   {seconds / timings[REFERENCE]:4.2f}x   (median of {repeats})")
+        print(f"{label:36s} {seconds:6.2f} s   {seconds / timings[REFERENCE]:4.2f}x   (median of {repeats})")
     return timings
 
 

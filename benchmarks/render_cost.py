@@ -62,6 +62,4 @@ def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: i
 def read_rgb(path: pathlib.Path) -> np.ndarray:
     """The RGB radiance (H, W, 3) of a rendered EXR image, top row first."""
     with OpenEXR.File(str(path)) as image:
-        channels = image.channels()
-        rgb = channels["RGBA"].pixels if "RGBA" in channels else np.stack([channels[c].pixels for c in "RGB"], -1)
-    return np.asarray(rgb[..., :3], float)
+        return np.asarray(image.channels()["RGBA"].pixels[..., :3], float)

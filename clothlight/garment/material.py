@@ -250,11 +250,9 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
         kinds += [("ShaderNodeBsdfTranslucent", "translucent"), ("ShaderNodeBsdfHair", "fibre_transmission")]
     if open_weave:
         kinds.append(("ShaderNodeBsdfTransparent", "open_weave"))
-    used = {tile for _, tile in kinds}
     weights = {}
-    for k, tile in enumerate(LOBE_TILES):
-        if tile not in used:
-            continue
+    for _, tile in kinds:
+        k = LOBE_TILES.index(tile)
         shifted = math_node("ADD", coordinates, ((k + inset + span / 2.0) / tiles, 0.0, 0.0), (600, 300 - 200 * k))
         texture = nodes.new("ShaderNodeTexImage")
         texture.image = image

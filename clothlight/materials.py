@@ -109,6 +109,8 @@ def build_yarn_material(
     shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
     shader.inputs["ExitResolution"].default_value = tables.exit_resolution
     shader.inputs["LobeTable"].default_value = str(tables.lobe_path)
+    shader.inputs["UnscatteredTable"].default_value = str(tables.unscattered_path)
+    shader.inputs["UnscatteredSamples"].default_value = tables.unscattered_samples
     for socket, key in LOBE_SHAPE_SOCKETS.items():
         shader.inputs[socket].default_value = tables.lobe_shape[key]
     shader.inputs["IOR"].default_value = tables.host_index

@@ -14,30 +14,36 @@ from .addon import import_precompute
 
 @dataclass(frozen=True)
 class YarnTableFiles:
-    """Paths and grid sizes of one baked yarn: the BRDF atlas and the closure-lobe atlas.
+    """Paths and grid sizes of one baked yarn: the BRDF atlas, the closure-lobe atlas and the
+    unscattered light's attenuation.
 
     Attributes
     ----------
-    brdf_path, lobe_path
-        Absolute paths of the OpenEXR atlases (docs/table-spec.md).
+    brdf_path, lobe_path, unscattered_path
+        Absolute paths of the OpenEXR tables (docs/table-spec.md).
     incidence_resolution, exit_resolution
         ``N_i`` (sphere grid) and ``N_o`` (hemisphere grid).
     lobe_shape
         Roughness of the general-lighting mode's shaped lobes, keyed as
         ``precompute.closure_fit.LobeShape`` (the bake's ``summary.json``).
     host_index
-        Refractive index of the yarn host, for the specular Fresnel term.
+        Refractive index of the yarn host, for the specular Fresnel term and the refraction of
+        the unscattered light.
+    unscattered_samples
+        Pixels of the attenuation table.
     """
 
     brdf_path: pathlib.Path
     lobe_path: pathlib.Path
+    unscattered_path: pathlib.Path
     incidence_resolution: int
     exit_resolution: int
     lobe_shape: dict
     host_index: float
+    unscattered_samples: int
 
     def __post_init__(self):
-        for name in ("brdf_path", "lobe_path"):
+        for name in ("brdf_path", "lobe_path", "unscattered_path"):
             path = pathlib.Path(getattr(self, name))
             if not path.is_absolute():
                 raise ValueError(f"{name} must be absolute for OSL texture(): {path}")
@@ -69,8 +75,10 @@ def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:
     return YarnTableFiles(
         brdf_path=folder / "brdf.exr",
         lobe_path=folder / "lobes.exr",
+        unscattered_path=folder / "unscattered.exr",
         incidence_resolution=int(summary["incidence_resolution"]),
         exit_resolution=int(summary["exit_resolution"]),
         lobe_shape={key: float(value) for key, value in summary["lobe_shape"].items()},
         host_index=float(summary["host_index"]),
+        unscattered_samples=int(summary["unscattered_samples"]),
     )

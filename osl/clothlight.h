@@ -235,6 +235,58 @@ color cl_yarn_rho(string file, int incidence_resolution, int exit_resolution, ve
     return mix(mix(c00, c10, ax), mix(c01, c11, ax), ay);
 }
 
+// ---- Unscattered light through the yarn (precompute/ballistic.py) ---------------------------
+// Light that crosses the yarn without scattering, in closed form: refracted in, attenuated along
+// equal chords, reflected inside with the same Fresnel F at every hit, refracted out.  Path k
+// (k internal reflections) carries (1 - F)^2 F^k A((k + 1) chord), A from the attenuation table
+// (one row of `samples` pixels over l/R in [0, CL_UNSCATTERED_MAX_LENGTH]).  Each path's delta
+// in wi is spread over a normalised von Mises-Fisher cone of angular spread `spread` (radians).
+// precompute.table_layout.interpolate_unscattered_rho is the NumPy twin.
+
+#define CL_UNSCATTERED_ORDERS 4
+#define CL_UNSCATTERED_MAX_LENGTH 8.0
+
+color cl_unscattered_attenuation(string file, int samples, float length_over_radius)
+{
+    float x = clamp(length_over_radius / CL_UNSCATTERED_MAX_LENGTH, 0.0, 1.0) * (samples - 1);
+    return cl_table_texel(file, (x + 0.5) / samples, 0.5);
+}
+
+color cl_unscattered_rho(string file, int samples, float eta, vector wi, vector wo, float spread)
+{
+    float kappa = 1.0 / (spread * spread);
+    float cone_norm = kappa / (M_2PI * (1.0 - exp(-2.0 * kappa)));
+    float F = cl_fresnel_dielectric(wo[2], eta);
+    // the light followed backwards, lengths in yarn radii, section centre at the origin
+    vector u = vector(-wo[0] / eta, -wo[1] / eta, 0.0);
+    u[2] = -sqrt(max(0.0, 1.0 - u[0] * u[0] - u[1] * u[1]));
+    float py = 0.0;
+    float pz = 1.0;
+    float travelled = 0.0;
+    float factor = (1.0 - F) * (1.0 - F);
+    color rho = 0;
+    for (int k = 0; k < CL_UNSCATTERED_ORDERS; k++) {
+        float a = max(u[1] * u[1] + u[2] * u[2], 1e-20);
+        float b = py * u[1] + pz * u[2];
+        float c = py * py + pz * pz - 1.0;
+        float step = (-b + sqrt(max(b * b - a * c, 0.0))) / a;
+        py += step * u[1];
+        pz += step * u[2];
+        travelled += step;
+        float inv = 1.0 / sqrt(py * py + pz * pz);
+        vector n = vector(0.0, py * inv, pz * inv);
+        float cos_hit = dot(u, n);
+        vector tangential = (u - cos_hit * n) * eta;
+        vector out = tangential + sqrt(max(0.0, 1.0 - dot(tangential, tangential))) * n;
+        float cone = cone_norm * exp(kappa * (dot(wi, out) - 1.0));
+        if (cone > 0.0)
+            rho += factor * cone * cl_unscattered_attenuation(file, samples, travelled);
+        factor *= F;
+        u -= 2.0 * cos_hit * n;
+    }
+    return rho;
+}
+
 // Number of closure-mixture lobes: the tiles of lobes.exr (precompute.closure_fit.LOBES).
 #define CL_LOBE_COUNT 5
 

@@ -26,7 +26,7 @@ Preset TOML tables owned here (defaults merged when absent)::
     n_around = 16              # spatial cells around the yarn (the paper: 16 × 8 = 128)
     n_along = 8                # spatial cells along the yarn, even
     angular_resolution = 12    # N of the N × N hemisphere grids of the BSSRDF (the paper: 144 cells)
-    incidence_resolution = 12  # N_i of the N_i × N_i sphere grid of incidence of the tables
+    incidence_resolution = "auto"  # N_i of the tables' sphere grid of incidence: odd, or "auto"
     target_rel_stderr = 0.01   # relative standard error of every cell's albedo to reach, or
     # paths_per_cell = 20000   # a fixed path budget per incidence cell instead
     seed = 0
@@ -41,6 +41,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import json
+import math
 import os
 import pathlib
 import secrets
@@ -52,8 +53,8 @@ from collections.abc import Callable, Mapping, Sequence
 import numba
 import numpy as np
 
-from . import __version__
-from .cache import canonical_json, cache_key, default_cache_dir, lookup, source_digest, store
+from . import __version__, ballistic
+from .cache import canonical_json, cache_key, default_cache_dir, lookup, store
 from .closure_fit import LOBES, LobeShape, fit_closure_weights
 from .color import (
     DEFAULT_ILLUMINANT,
@@ -69,35 +70,48 @@ from .color import (
 from .errors import ParameterError
 from .medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from .optics import medium_optics
-from .table_layout import brdf_atlas, interpolate_rho, lobe_atlas
+from .sources import stage_digest
+from .table_layout import (
+    brdf_atlas,
+    interpolate_attenuation,
+    interpolate_rho,
+    interpolate_unscattered_rho,
+    lobe_atlas,
+)
 from .tables import SCHEMA, write_table
-from .transport import TransportGrids, YarnGeometry, simulate_yarn, yarn_brdf
+from .transport import TransportGrids, YarnGeometry, simulate_yarn
+from .transport.brdf import INCIDENCE_RESOLUTIONS, yarn_brdf_to_tolerance
 
 TRANSPORT_DEFAULTS = {
     "n_around": 16,
     "n_along": 8,
     "angular_resolution": 12,
-    "incidence_resolution": 12,
+    "incidence_resolution": "auto",
     "paths_per_cell": None,
     "target_rel_stderr": 0.01,
     "seed": 0,
 }
 BAKE_DEFAULTS = {"illuminant": DEFAULT_ILLUMINANT, "observer": DEFAULT_OBSERVER}
 #: Version of the spectral stage's file (spectral.npz); bump when its content changes meaning.
-SPECTRAL_FORMAT = "clothlight-spectral/1"
-#: Code the result of each stage depends on (paths relative to precompute/), digested into its key.
-PACKAGE_DIR = pathlib.Path(__file__).resolve().parent
-SPECTRAL_SOURCES = (
-    "medium.py", "optics.py", "mie.py", "dye.py", "phase.py", "grids.py",
-    *sorted(str(p.relative_to(PACKAGE_DIR)) for p in (PACKAGE_DIR / "transport").glob("*.py")),
-)
-TABLE_SOURCES = ("color.py", "tables.py", "table_layout.py", "closure_fit.py", "bake.py")
+SPECTRAL_FORMAT = "clothlight-spectral/2"
+#: Incidence samples per side of the sphere square that the closure fit uses in all (cells ×
+#: samples per cell), whatever N_i is.
+CLOSURE_FIT_SAMPLES_PER_SIDE = 36
+#: Code the result of each stage depends on, digested into its key (:mod:`precompute.sources`): the
+#: modules the stage runs and every project module they import, transitively.  The spectral stage
+#: runs the optics, the transport and :func:`_simulate` of this file, without the colour and fit
+#: this file imports (tests/test_sources.py checks that what _simulate calls comes from the former).
+PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[1]
+SPECTRAL_SOURCES = {"entries": ("precompute.medium", "precompute.optics", "precompute.transport"),
+                    "files": ("precompute/bake.py",)}
+TABLE_SOURCES = {"entries": ("precompute.bake",)}
 #: The files of a bake folder, written in this order (summary.json last).
 TABLE_FILES = {
     "brdf": "brdf.exr",
     "brdf_stderr": "brdf_stderr.exr",
     "albedo": "albedo.exr",
     "closure_lobes": "lobes.exr",
+    "unscattered": "unscattered.exr",
 }
 SPECTRAL_FILE = "spectral.npz"
 SUMMARY_FILE = "summary.json"
@@ -106,6 +120,7 @@ UNITS = {
     "brdf_stderr": "1/sr: upper bound of the standard error of rho",
     "albedo": "1: hemispherical albedo, integral of rho cos(theta_o) over the exit hemisphere",
     "closure_lobes": "1: weight of the clamped-cosine lobe max(0, m_k . w_i)/pi, see docs/table-spec.md",
+    "unscattered": "1: transmittance of the unscattered light along a path of length l/R inside the yarn",
     "wavelengths": "nm (vacuum)",
     "lengths": "mm (suffix _mm), nm (suffix _nm)",
     "mu_s, mu_a": "1/mm",
@@ -261,7 +276,14 @@ def transport_settings(config: dict, *, seed=None, paths_per_cell=None, target_r
     settings["seed"] = _integer("transport.seed", settings["seed"], 0, 2**63 - 1)
     for name in ("n_around", "n_along", "angular_resolution"):
         settings[name] = _integer(f"transport.{name}", settings[name], 1)
-    settings["incidence_resolution"] = _integer("transport.incidence_resolution", settings["incidence_resolution"], 2)
+    if settings["incidence_resolution"] != "auto":
+        n_i = settings["incidence_resolution"]
+        if isinstance(n_i, bool) or not isinstance(n_i, int) or n_i < 3 or n_i % 2 == 0:
+            raise ParameterError(
+                "transport.incidence_resolution", n_i,
+                "\"auto\" or an odd integer ≥ 3 (with an even one the planes across and along the yarn "
+                "fall on the octahedral map's crease, docs/table-spec.md)",
+            )
     try:
         TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
     except ParameterError as exc:  # name the parameter as the preset spells it
@@ -313,7 +335,7 @@ def spectral_inputs(configuration: BakeConfiguration) -> dict:
     return {
         "format": SPECTRAL_FORMAT,
         "code_version": __version__,
-        "code_digest": source_digest(PACKAGE_DIR, SPECTRAL_SOURCES),
+        "code_digest": stage_digest(PROJECT_ROOT, **SPECTRAL_SOURCES),
         "medium": configuration.medium.to_dict(),
         "transport": configuration.transport,
     }
@@ -324,7 +346,7 @@ def table_inputs(spectral_key: str, configuration: BakeConfiguration) -> dict:
     return {
         "schema": SCHEMA,
         "code_version": __version__,
-        "code_digest": source_digest(PACKAGE_DIR, TABLE_SOURCES),
+        "code_digest": stage_digest(PROJECT_ROOT, **TABLE_SOURCES),
         "spectral_key": spectral_key,
         "colour": configuration.colour,
     }
@@ -351,13 +373,16 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
             seed=settings["seed"], threads=threads, progress=transport_progress,
         )
         brdf_start = time.perf_counter()
-        brdf = yarn_brdf(transport, settings["incidence_resolution"])
+        n_i = settings["incidence_resolution"]
+        brdf, checks = yarn_brdf_to_tolerance(transport, INCIDENCE_RESOLUTIONS if n_i == "auto" else (n_i,))
         record = {
             **inputs,
             "key": key,
             "host_index": optics.boundary_index,
             "incidence_resolution": brdf.incidence_grid.resolution,
             "exit_resolution": brdf.exit_grid.resolution,
+            "incidence_grid_checks": [check.to_dict() for check in checks],
+            "radius_mm": geometry.radius_mm,
             "paths": {
                 "per_incidence_cell": transport.paths_per_cell.tolist(),
                 "total": int(transport.paths_per_cell.sum()),
@@ -382,6 +407,7 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
             hemispherical_albedo=brdf.hemispherical_albedo(),
             specular=transport.specular,
             exit_fraction=transport.exit_fraction,
+            unscattered_fraction=transport.unscattered_fraction,
             absorbed_fraction=transport.absorbed_fraction,
             albedo_rel_stderr=transport.albedo_rel_stderr,
             paths_per_cell=transport.paths_per_cell,
@@ -425,8 +451,22 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
         stderr = spectral_stderr_to_rgb(arrays["rho_stderr"], wavelengths, colour["illuminant"], colour["observer"])
         albedo, _ = clip_to_gamut(to_rgb(arrays["hemispherical_albedo"]))
         atlas = brdf_atlas(rho)
+        attenuation_spectra = ballistic.attenuation(
+            arrays["mu_s"] + arrays["mu_a"], spectral["radius_mm"], ballistic.attenuation_lengths()
+        )
+        attenuation, _ = clip_to_gamut(to_rgb(attenuation_spectra))
+        unscattered_table = attenuation[None]
+        host_index = spectral["host_index"]
+        # The general mode's closures carry the unscattered light too, spread over an incidence cell.
+        cell_spread = math.sqrt(4.0 * math.pi) / n_i / 2.0
+
+        def unscattered(wi, wo):
+            return interpolate_unscattered_rho(unscattered_table, host_index, wi, wo, cell_spread)
+
         lobe_shape = LobeShape()
-        weights, fit_error = fit_closure_weights(atlas, n_i, lobe_shape)
+        weights, fit_error = fit_closure_weights(
+            atlas, n_i, lobe_shape, subsamples=max(1, round(CLOSURE_FIT_SAMPLES_PER_SIDE / n_i)), added_rho=unscattered
+        )
         rho_normal = _normal_rgb(atlas, n_i)
         rho_normal_unclipped = _normal_rgb(brdf_atlas(rho_unclipped), n_i)
         header = {
@@ -455,10 +495,18 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             "brdf_stderr": brdf_atlas(stderr),
             "albedo": albedo.reshape(n_i, n_i, 3),
             "closure_lobes": lobe_atlas(weights),
+            "unscattered": unscattered_table,
+        }
+        extra_layout = {
+            "closure_lobes": {"lobe_count": len(LOBES)},
+            "unscattered": {
+                "attenuation_samples": ballistic.ATTENUATION_SAMPLES,
+                "max_length_over_radius": ballistic.MAX_LENGTH_OVER_RADIUS,
+                "orders": ballistic.ORDERS,
+            },
         }
         for kind, image in images.items():
-            extra = {"lobe_count": len(LOBES)} if kind == "closure_lobes" else {}
-            metadata = {**header, "table": kind, "layout": {**layout, **extra}}
+            metadata = {**header, "table": kind, "layout": {**layout, **extra_layout.get(kind, {})}}
             if kind == "closure_lobes":
                 metadata["lobes"] = list(LOBES)
                 metadata["lobe_shape"] = lobe_shape.to_dict()
@@ -473,7 +521,13 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             "exit_resolution": n_o,
             "lobe_count": len(LOBES),
             "lobe_shape": lobe_shape.to_dict(),
+            "unscattered_samples": ballistic.ATTENUATION_SAMPLES,
             "rho_normal_rgb": rho_normal.tolist(),
+            "unscattered_normal_view_rgb": ballistic.unscattered_radiance_factor(
+                np.array([0.0, 0.0, 1.0]), host_index,
+                lambda length: interpolate_attenuation(unscattered_table, length),
+            ).tolist(),
+            "incidence_grid_checks": spectral["incidence_grid_checks"],
             "table1_ratios_normal": _json_ratios(rho_normal),
             "table1_ratios_normal_unclipped": _json_ratios(rho_normal_unclipped),
             "table1_ratios_paper_real_red_cotton": {"B/R": 0.08, "G/R": 0.011},

@@ -11,6 +11,9 @@ BRDF atlas
     and row ``j`` counted from the top.  Each tile is ``N_o × N_o`` pixels, one
     per exit cell of ``AngularGrid("hemisphere", N_o)``; exit cell ``(p, q)`` is
     pixel column ``p`` and row ``q`` of the tile.  Image size ``N_i·N_o`` square.
+Unscattered-light attenuation
+    one row of ``M`` pixels: pixel ``m`` holds the RGB transmittance of a path of length
+    ``ℓ/R = m · ℓ_max / (M − 1)`` inside the yarn (:mod:`precompute.ballistic`).
 Lobe atlas
     one row of ``K`` tiles of ``N_o × N_o`` pixels: tile ``k`` holds the weight
     of closure lobe ``k`` (:mod:`precompute.closure_fit`) for every exit cell.
@@ -23,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import ballistic
 from .errors import ParameterError
 from .grids import AngularGrid
 
@@ -127,12 +131,28 @@ def interpolate_rho(atlas: np.ndarray, incidence_resolution: int, wi: np.ndarray
     ax = (fx - i0)[..., None]
     ay = (fy - j0)[..., None]
     so, to = st_o[..., 0], st_o[..., 1]
-    out = np.empty(wi.shape[:-1] + (atlas.shape[2],))
-    for idx in np.ndindex(wi.shape[:-1]):
-        def tile(col, row):
-            return _bilinear_in_tile(atlas, col[idx], row[idx], n_o, so[idx], to[idx])
 
-        c00, c10, c01, c11 = tile(i0, j0), tile(i1, j0), tile(i0, j1), tile(i1, j1)
-        a, b = ax[idx], ay[idx]
-        out[idx] = (c00 * (1 - a) + c10 * a) * (1 - b) + (c01 * (1 - a) + c11 * a) * b
-    return out
+    def tile(col, row):
+        return _bilinear_in_tile(atlas, col, row, n_o, so, to)
+
+    c00, c10, c01, c11 = tile(i0, j0), tile(i1, j0), tile(i0, j1), tile(i1, j1)
+    return (c00 * (1 - ax) + c10 * ax) * (1 - ay) + (c01 * (1 - ax) + c11 * ax) * ay
+
+
+def interpolate_attenuation(table: np.ndarray, length_over_radius) -> np.ndarray:
+    """The unscattered light's transmittance (…, C) at path lengths ``length_over_radius`` (…) from
+    its table (1, M, C) (or (M, C)), as ``cl_unscattered_attenuation`` reads it: linear between
+    pixel centres, held at the ends."""
+    table = np.asarray(table, float).reshape(-1, np.shape(table)[-1])
+    samples = table.shape[0]
+    x = np.clip(np.asarray(length_over_radius, float) / ballistic.MAX_LENGTH_OVER_RADIUS, 0.0, 1.0) * (samples - 1)
+    lower = np.minimum(np.floor(x).astype(int), samples - 2)
+    fraction = (x - lower)[..., None]
+    return table[lower] * (1.0 - fraction) + table[lower + 1] * fraction
+
+
+def interpolate_unscattered_rho(table: np.ndarray, index: float, wi: np.ndarray, wo: np.ndarray,
+                                spread_rad: float) -> np.ndarray:
+    """ρ_u(ω_i, ω_o) (…, C), 1/sr, from the attenuation table exactly as the shader forms it
+    (``cl_unscattered_rho``): :func:`precompute.ballistic.unscattered_rho` on the tabulated colour."""
+    return ballistic.unscattered_rho(wi, wo, index, lambda length: interpolate_attenuation(table, length), spread_rad)

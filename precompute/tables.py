@@ -30,7 +30,7 @@ import numpy as np
 import OpenEXR
 
 #: Bump when the layout or the meaning of any header field changes (docs/table-spec.md).
-SCHEMA = "clothlight-table/3"
+SCHEMA = "clothlight-table/4"
 SCHEMA_KEY = "clothlight_schema"
 KIND_KEY = "clothlight_table"
 VERSION_KEY = "clothlight_code_version"
@@ -40,12 +40,23 @@ METADATA_KEY = "clothlight_metadata"
 
 #: Table kinds and the image shape (rows, columns) each has, from its ``layout`` metadata.
 KINDS = {
-    "brdf": lambda n_i, n_o, k: (n_i * n_o, n_i * n_o),
-    "brdf_stderr": lambda n_i, n_o, k: (n_i * n_o, n_i * n_o),
-    "albedo": lambda n_i, n_o, k: (n_i, n_i),
-    "closure_lobes": lambda n_i, n_o, k: (n_o, k * n_o),
+    "brdf": lambda layout: (layout["incidence_resolution"] * layout["exit_resolution"],) * 2,
+    "brdf_stderr": lambda layout: (layout["incidence_resolution"] * layout["exit_resolution"],) * 2,
+    "albedo": lambda layout: (layout["incidence_resolution"],) * 2,
+    "closure_lobes": lambda layout: (layout["exit_resolution"], layout["lobe_count"] * layout["exit_resolution"]),
     # Garment closure weights, front and back side stacked (docs/table-spec.md, "Cloth tables").
-    "cloth_lobes": lambda n_i, n_o, k: (2 * n_o, k * n_o),
+    "cloth_lobes": lambda layout: (2 * layout["exit_resolution"], layout["lobe_count"] * layout["exit_resolution"]),
+    # Attenuation of the unscattered light along a path of length l / R (precompute/ballistic.py).
+    "unscattered": lambda layout: (1, layout["attenuation_samples"]),
+}
+#: The integer ``layout`` entries each kind needs.
+LAYOUT_KEYS = {
+    "brdf": ("incidence_resolution", "exit_resolution"),
+    "brdf_stderr": ("incidence_resolution", "exit_resolution"),
+    "albedo": ("incidence_resolution", "exit_resolution"),
+    "closure_lobes": ("incidence_resolution", "exit_resolution", "lobe_count"),
+    "cloth_lobes": ("incidence_resolution", "exit_resolution", "lobe_count"),
+    "unscattered": ("attenuation_samples",),
 }
 #: Metadata every table must carry (besides ``table`` and ``layout``) to be reproducible.
 REQUIRED_METADATA = ("code_version", "cache_key", "medium", "transport", "paths", "colour", "units")
@@ -78,14 +89,13 @@ def expected_shape(metadata: dict) -> tuple[int, int, int]:
         raise ValueError(f"table kind {kind!r} is not one of {sorted(KINDS)}")
     layout = metadata.get("layout", {})
     try:
-        n_i = int(layout["incidence_resolution"])
-        n_o = int(layout["exit_resolution"])
-        lobes = int(layout.get("lobe_count", 0))
+        sizes = {key: int(layout[key]) for key in LAYOUT_KEYS[kind]}
     except (KeyError, TypeError, ValueError) as exc:
-        raise ValueError(f"layout metadata {layout!r} lacks incidence_resolution / exit_resolution ({exc})") from None
-    if kind in ("closure_lobes", "cloth_lobes") and lobes < 1:
-        raise ValueError(f"a {kind} table needs layout.lobe_count ≥ 1, not {lobes}")
-    return (*KINDS[kind](n_i, n_o, lobes), 3)
+        raise ValueError(f"layout metadata {layout!r} lacks {' / '.join(LAYOUT_KEYS[kind])} ({exc})") from None
+    too_small = {key: value for key, value in sizes.items() if value < 1}
+    if too_small:
+        raise ValueError(f"a {kind} table needs layout entries ≥ 1, not {too_small}")
+    return (*KINDS[kind](sizes), 3)
 
 
 def write_table(path: str | pathlib.Path, pixels: np.ndarray, metadata: dict) -> pathlib.Path:

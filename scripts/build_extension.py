@@ -45,7 +45,7 @@ REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(REPO_ROOT) not in sys.path:  # a script in scripts/: make the repository's packages importable
     sys.path.insert(0, str(REPO_ROOT))
 
-from clothlight.jobs import BAKE_DEPENDENCIES, BakeJob, preset_request  # noqa: E402
+from clothlight.jobs import BAKE_DEPENDENCIES, BakeCancelled, BakeFailed, BakeJob, preset_request  # noqa: E402
 
 #: pip's platform tags for each Blender platform: Blender 5.0 needs glibc 2.28 on Linux and
 #: runs on macOS 11.2+; scipy's and numba's macOS wheels need macOS 12, which is what a bake
@@ -64,7 +64,7 @@ STAGE_IGNORE = shutil.ignore_patterns(".git", ".venv", "dist", "out", "__pycache
                                       "*.oso", "*.pyc", "*.nbi", "*.nbc", "example_blends", "benchmarks", "tests",
                                       "prebaked", "wheels")
 #: Files of a bake folder the add-on reads (spectral.npz stays behind: it is large and only the bake uses it).
-PREBAKED_FILES = ("brdf.exr", "lobes.exr", "brdf_stderr.exr", "albedo.exr", "summary.json")
+PREBAKED_FILES = ("brdf.exr", "lobes.exr", "unscattered.exr", "brdf_stderr.exr", "albedo.exr", "summary.json")
 
 
 def _normalise(name: str) -> str:
@@ -172,7 +172,7 @@ def prebake(presets: list[str], stage: pathlib.Path, cache_dir: pathlib.Path | N
 
         try:
             outcome = job.wait(on_progress=progress)
-        except Exception as error:
+        except (BakeFailed, BakeCancelled, OSError) as error:
             print(job.log, file=sys.stderr)
             raise SystemExit(f"pre-baking {name} failed: {error}") from None
         folder = stage / "prebaked" / name
@@ -214,7 +214,8 @@ def _run_tool(tool: pathlib.Path, *args: str) -> None:
 
 def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = ("linux-x64",),
                     prebake_presets: list[str] = (), prebake_transport: dict | None = None,
-                    wheelhouse: pathlib.Path | None = None, cache_dir: pathlib.Path | None = None) -> list[pathlib.Path]:
+                    wheelhouse: pathlib.Path | None = None,
+                    cache_dir: pathlib.Path | None = None) -> list[pathlib.Path]:
     """Build and validate one zip per platform (one universal zip without wheels when ``platforms``
     is None); return their paths."""
     output_dir.mkdir(parents=True, exist_ok=True)

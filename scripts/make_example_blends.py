@@ -53,7 +53,7 @@ from clothlight.weave import WeaveParameters  # noqa: E402
 from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
 
 PRESET = "red_cotton"
-TABLE_FILES = ("brdf.exr", "lobes.exr", "summary.json")
+TABLE_FILES = ("brdf.exr", "lobes.exr", "unscattered.exr", "summary.json")
 # Coarser tessellation than the default for the sample seen whole: the files stay small.
 PAPER_WEAVE = WeaveParameters(interlacing="plain", warp_count=12, weft_count=12, spacing_mm=0.5, yarn_radius_mm=0.1,
                               segments_per_crossing=6, segments_around=8)
@@ -218,7 +218,8 @@ def draped_garment_general(out_dir: pathlib.Path, cloth_dir: pathlib.Path) -> pa
     # The paper's cotton reflects little (no light between yarns in its model, §7): exposed up.
     scene.view_settings.exposure = 2.0
     cloth, form = draped_cloth(scene)
-    apply_garment_material(cloth, cloth_tables_from_bake(cloth_dir), mode=GENERAL_MODE, name="ClothLight Red Cotton Garment")
+    apply_garment_material(cloth, cloth_tables_from_bake(cloth_dir), mode=GENERAL_MODE,
+                           name="ClothLight Red Cotton Garment")
     relative_tables(cloth.data.materials[0], out_dir)
     grey = bpy.data.materials.new("Form")
     grey.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.6, 0.6, 0.6, 1.0)

@@ -10,12 +10,13 @@ general mode must turn lobe weights into clamped-cosine responses.
 import math
 
 import numpy as np
-import OpenEXR
 import pytest
 
 from precompute.closure_fit import LOBES, LobeShape, lobe_responses
 from precompute.grids import AngularGrid
-from precompute.table_layout import brdf_atlas, interpolate_rho, lobe_atlas
+from precompute import ballistic
+from precompute.table_layout import brdf_atlas, interpolate_rho, interpolate_unscattered_rho, lobe_atlas
+from tests.helpers import add_sun_and_camera, direction, empty_render_scene, unit, write_exr
 
 bpy = pytest.importorskip("bpy")
 
@@ -24,8 +25,12 @@ from clothlight.measurement_render import configure_measurement_render, render_t
 from clothlight.mesh_attributes import CLOTH_NORMAL, YARN_TANGENT  # noqa: E402
 from clothlight.yarn_tables import YarnTableFiles  # noqa: E402
 
-N_I, N_O = 12, 8
+N_I, N_O = 13, 8
 SUN_IRRADIANCE = 2.0
+INDEX = 1.557
+#: Extinction per channel times the yarn radius: a red-tinted yarn's unscattered light.
+EXTINCTION_R = np.array([0.15, 0.9, 0.6])
+SPREAD = 0.05  # the shader's default cone, radians
 
 
 def analytic_rho(wi, wo):
@@ -35,11 +40,6 @@ def analytic_rho(wi, wo):
     g = 0.10 + 0.05 * wi[..., 1] ** 2 + 0.04 * wo[..., 2]
     b = 0.05 + 0.03 * (wi[..., 2] + 1.0) * (1.0 + wo[..., 1])
     return np.stack([r, g, b], axis=-1)
-
-
-def write_exr(path, image):
-    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, {"RGB": image.astype(np.float32)}) as exr:
-        exr.write(str(path))
 
 
 @pytest.fixture(scope="module")
@@ -54,17 +54,21 @@ def synthetic_tables(tmp_path_factory):
     weights = np.zeros((N_O * N_O, len(LOBES), 3))
     weights[:, :, :] = [[0.5, 0.25, 0.125], [0.4, 0.0, 0.1], [0.3, 0.2, 0.0], [0.6, 0.1, 0.3], [0.2, 0.5, 0.1]]
     write_exr(folder / "lobes.exr", lobe_atlas(weights))
-    tables = YarnTableFiles(folder / "rho.exr", folder / "lobes.exr", N_I, N_O, LobeShape().to_dict(), 1.557)
-    return tables, atlas, weights
+    attenuation = np.exp(-np.outer(ballistic.attenuation_lengths(), EXTINCTION_R))[None]
+    write_exr(folder / "unscattered.exr", attenuation)
+    tables = YarnTableFiles(folder / "rho.exr", folder / "lobes.exr", folder / "unscattered.exr", N_I, N_O,
+                            LobeShape().to_dict(), INDEX, ballistic.ATTENUATION_SAMPLES)
+    return tables, atlas, weights, attenuation
+
+
+def spec_sun_rho(atlas, attenuation, wi, wo):
+    """What the sun mode must emit per irradiance: the table's ρ plus the unscattered light."""
+    return interpolate_rho(atlas, N_I, wi, wo) + interpolate_unscattered_rho(attenuation, INDEX, wi, wo, SPREAD)
 
 
 def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, *, cloth_normal=(0.0, 0.0, 1.0),
                 specular_weight=0.0):
-    bpy.ops.wm.read_homefile(use_empty=True)
-    scene = bpy.context.scene
-    configure_measurement_render(scene, resolution=(8, 8), samples=1 if mode == SUN_MODE else 16)
-    scene.world = None
-    scene.cycles.max_bounces = 0
+    scene = empty_render_scene(resolution=8, samples=1 if mode == SUN_MODE else 16, bounces=0)
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     plane = bpy.context.active_object
     mesh = plane.data
@@ -75,43 +79,9 @@ def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, 
     shader_node(material).inputs["SpecularWeight"].default_value = specular_weight
     mesh.materials.append(material)
 
-    zen, azi = math.radians(view_zenith_deg), math.radians(view_azimuth_deg)
-    wo = np.array([math.sin(zen) * math.cos(azi), math.sin(zen) * math.sin(azi), math.cos(zen)])
+    wo = direction(view_zenith_deg, view_azimuth_deg)
     sync_sun(material, add_sun_and_camera(scene, sun_direction, wo, SUN_IRRADIANCE))
     return scene, wo
-
-
-def add_sun_and_camera(scene, toward_sun, toward_camera, irradiance):
-    """A sun of ``irradiance`` (W/m²) shining from ``toward_sun`` and an orthographic camera 1 unit
-    wide looking back along ``toward_camera`` at the origin; returns the sun."""
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.data.energy = irradiance
-    sun.data.angle = 0.0
-    scene.collection.objects.link(sun)
-    sun.rotation_mode = "QUATERNION"
-    sun.rotation_quaternion = _rotation_to(toward_sun)
-    camera = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
-    camera.data.type = "ORTHO"
-    camera.data.ortho_scale = 1.0
-    camera.location = tuple(5.0 * np.asarray(toward_camera))
-    camera.rotation_mode = "QUATERNION"
-    camera.rotation_quaternion = _rotation_to(toward_camera)
-    scene.collection.objects.link(camera)
-    scene.camera = camera
-    bpy.context.view_layer.update()
-    return sun
-
-
-def _rotation_to(direction):
-    """Quaternion turning local +Z onto ``direction`` (a camera looks, and a sun shines, along −Z)."""
-    from mathutils import Vector
-
-    return Vector((0.0, 0.0, 1.0)).rotation_difference(Vector(direction).normalized())
-
-
-def unit(v):
-    v = np.asarray(v, float)
-    return v / np.linalg.norm(v)
 
 
 CASES = [
@@ -127,15 +97,33 @@ CASES = [
 def test_sun_mode_reproduces_the_table_spec_and_the_analytic_rho(
     tmp_path, synthetic_tables, view_zenith, view_azimuth, sun_direction
 ):
-    tables, atlas, _ = synthetic_tables
+    tables, atlas, _, attenuation = synthetic_tables
     scene, wo = patch_scene(tables, SUN_MODE, view_zenith, view_azimuth, sun_direction)
     pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
     measured_rho = pixels.mean(axis=0) / SUN_IRRADIANCE
     np.testing.assert_allclose(pixels.std(axis=0), 0.0, atol=1e-5)
-    spec_rho = interpolate_rho(atlas, N_I, sun_direction, wo)
+    spec_rho = spec_sun_rho(atlas, attenuation, sun_direction, wo)
     np.testing.assert_allclose(measured_rho, spec_rho, rtol=2e-4, atol=1e-6)
     # Off the cell centres, linear interpolation of a smooth ρ stays close to it.
     np.testing.assert_allclose(measured_rho, analytic_rho(sun_direction, wo), rtol=0.03)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("order, offset_rad", [(0, 0.0), (0, 0.04), (1, 0.02), (2, 0.0)],
+                         ids=["through", "through-off-centre", "one-reflection", "two-reflections"])
+def test_sun_mode_adds_the_unscattered_light_as_its_numpy_twin(tmp_path, synthetic_tables, order, offset_rad):
+    # The sun where an unscattered path comes from (or within its cone): the shader's closed form
+    # and cone must be the NumPy twin's, and they must dominate the scattered table there.
+    tables, atlas, _, attenuation = synthetic_tables
+    view_zenith, view_azimuth = 30.0, 60.0
+    wo = direction(view_zenith, view_azimuth)
+    paths, _, _ = ballistic.unscattered_paths(wo, INDEX)
+    sun = unit(paths[order] + offset_rad * unit(np.cross(paths[order], [0.0, 0.0, 1.0])))
+    scene, _ = patch_scene(tables, SUN_MODE, view_zenith, view_azimuth, sun)
+    measured_rho = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3).mean(axis=0) / SUN_IRRADIANCE
+    unscattered = interpolate_unscattered_rho(attenuation, INDEX, sun, wo, SPREAD)
+    assert unscattered.max() > 0.01 * interpolate_rho(atlas, N_I, sun, wo).max()
+    np.testing.assert_allclose(measured_rho, spec_sun_rho(atlas, attenuation, sun, wo), rtol=1e-3, atol=1e-6)
 
 
 @pytest.mark.blender
@@ -146,7 +134,7 @@ def test_sun_mode_reproduces_the_table_spec_and_the_analytic_rho(
      (20.0, 40.0, unit([0.2, 0.3, -0.9]))],  # behind: translucent, fibre transmission
     ids=["front", "cone", "behind"])
 def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_zenith, view_azimuth, sun_direction):
-    tables, _, weights = synthetic_tables
+    tables, _, weights, _ = synthetic_tables
     scene, wo = patch_scene(tables, GENERAL_MODE, view_zenith, view_azimuth, sun_direction)
     pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
     expected = SUN_IRRADIANCE * lobe_responses(wo, sun_direction) @ weights[0]
@@ -174,7 +162,7 @@ def rendered_specular(tmp_path, tables, mode, view, sun_direction, cloth_normal)
 def test_general_mode_specular_is_the_sun_modes(tmp_path, synthetic_tables, cloth_normal, sun_direction, lit):
     # The Cook-Torrance term is about the cloth normal, but a face lit from behind reflects none of
     # it (the sun mode's rule): Cycles' closure must give the same on either side of the cloth plane.
-    tables, _, _ = synthetic_tables
+    tables = synthetic_tables[0]
     view = unit([0.8, 0.1, 0.6])
     sun = rendered_specular(tmp_path, tables, SUN_MODE, view, sun_direction, cloth_normal)
     general = rendered_specular(tmp_path, tables, GENERAL_MODE, view, sun_direction, cloth_normal)

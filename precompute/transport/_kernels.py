@@ -143,7 +143,8 @@ def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, inward):
 
 @numba.njit(cache=True, error_model="numpy")
 def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_res, cos_max, n_around,
-                n_along, cell_length, out_res, table, table_sq, specular, exit_sum, exit_sq, absorbed, lost, events):
+                n_along, cell_length, out_res, table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed,
+                lost, events):
     """Run incidence cell ``cell``'s tasks ``first_task + t`` of ``sizes[t]`` paths (a 0 ends the list),
     choosing hero wavelengths with probabilities ``hero_p`` (L,)."""
     n_wl = exit_sum.shape[1]
@@ -157,6 +158,7 @@ def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_r
     cell_specular = np.zeros(n_wl)
     cell_exit = np.zeros(n_wl)
     cell_exit_sq = np.zeros(n_wl)
+    cell_unscattered = np.zeros(n_wl)
     cell_absorbed = np.zeros(n_wl)
     cell_lost = np.zeros(n_wl)
     cell_events = 0
@@ -186,7 +188,11 @@ def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_r
             cell_events += collisions
             for k in range(n_wl):
                 cell_specular[k] += reflectance
-            if status == EXITED:
+            if status == EXITED and collisions == 0:
+                # a deterministic caustic, given in closed form (precompute/ballistic.py): kept out of the BSSRDF
+                for k in range(n_wl):
+                    cell_unscattered[k] += weights[k]
+            elif status == EXITED:
                 around, along, out_cell = _exit_bins(pos, d, dpsi, n_around, n_along, cell_length, out_res)
                 for k in range(n_wl):
                     w = weights[k]
@@ -201,6 +207,7 @@ def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_r
         specular[cell, k] += cell_specular[k]
         exit_sum[cell, k] += cell_exit[k]
         exit_sq[cell, k] += cell_exit_sq[k]
+        unscattered[cell, k] += cell_unscattered[k]
         absorbed[cell, k] += cell_absorbed[k]
         lost[cell, k] += cell_lost[k]
     events[cell] += cell_events
@@ -209,7 +216,7 @@ def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_r
 @numba.njit(cache=True, parallel=True, error_model="numpy")
 def yarn_kernel(slots, cells, task_first, task_sizes, seed, radius, eta, medium, hero_p, in_res, cos_max,
                 n_around, n_along, cell_length, out_res,
-                table, table_sq, specular, exit_sum, exit_sq, absorbed, lost, events):
+                table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed, lost, events):
     """Trace the tasks of incidence cells ``cells``: cell ``cells[i]`` runs, in order, tasks
     ``task_first[i] + t`` with ``task_sizes[i, t]`` paths (a 0 ends its list), choosing hero
     wavelengths with the probabilities ``hero_p[cells[i]]`` (n_in, L).  Thread slot
@@ -222,7 +229,8 @@ def yarn_kernel(slots, cells, task_first, task_sizes, seed, radius, eta, medium,
     outputs are indexed by incidence cell and written only by that cell's iteration:
     ``table`` (n_in, n_around, n_along + 2, n_out, L) summed exit flux, ``table_sq``
     (n_in, n_around, n_out, L) summed per-path squares of the axis-summed exit flux,
-    ``specular``, ``exit_sum``, ``exit_sq`` (per-path squares), ``absorbed``, ``lost`` (n_in, L)
+    ``specular``, ``exit_sum``, ``exit_sq`` (per-path squares), ``unscattered`` (exits without a
+    collision, which are not binned), ``absorbed``, ``lost`` (n_in, L)
     and ``events`` (n_in,); the tallies are added to, so a cell's rounds accumulate.
     """
     for s in numba.prange(slots.shape[0]):
@@ -231,19 +239,20 @@ def yarn_kernel(slots, cells, task_first, task_sizes, seed, radius, eta, medium,
                 break
             _trace_cell(cells[i], task_first[i], task_sizes[i], seed, radius, eta, medium, hero_p[cells[i]],
                         in_res, cos_max, n_around, n_along, cell_length, out_res, table, table_sq, specular,
-                        exit_sum, exit_sq, absorbed, lost, events)
+                        exit_sum, exit_sq, unscattered, absorbed, lost, events)
 
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")
 def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_res,
-                sums, sums_sq, specular, absorbed, lost, events):
+                sums, sums_sq, unscattered, specular, absorbed, lost, events):
     """A parallel beam arriving from world direction ``toward_light`` on the whole yarn.
 
     Paths enter at impact parameters uniform across the yarn's width (z = 0; the infinite
     yarn is lit uniformly along its axis, so exits are summed over all heights).  Task ``c``
     runs ``paths[c]`` paths from stream (seed, c, 1) into ``sums[c]``, ``sums_sq[c]``
-    (n_around, n_out, L): exit flux and per-path squares by receiving cell (absolute
-    azimuth) and exit direction in the receiving point's frame; ``specular[c]``,
+    (n_around, n_out, L): exit flux after scattering and per-path squares by receiving cell
+    (absolute azimuth) and exit direction in the receiving point's frame; ``unscattered[c]``
+    (same shape): the exits without a collision, binned the same way; ``specular[c]``,
     ``absorbed[c]``, ``lost[c]`` (L,) and ``events[c]``, all per unit flux entering the
     beam's cross-section.
     """
@@ -292,6 +301,10 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
             task_events += collisions
             if status == EXITED:
                 around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)
+                if collisions == 0:
+                    for k in range(n_wl):
+                        unscattered[c, around, out_cell, k] += weights[k]
+                    continue
                 for k in range(n_wl):
                     sums[c, around, out_cell, k] += weights[k]
                     sums_sq[c, around, out_cell, k] += weights[k] * weights[k]

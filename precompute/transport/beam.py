@@ -40,9 +40,11 @@ class ParallelBeamRadiance:
 
     ``toward_light`` (3,): the beam's direction toward the light in the yarn's frame (axis
     = z; receiving cell j spans azimuths [j, j + 1) · 2π / n_around).  ``rho``,
-    ``rho_stderr`` (n_around, n_out, L), 1/sr: L_o / E⊥ by receiving cell and exit cell of
-    ``exit_grid``.  ``specular``, ``exit_fraction``, ``absorbed_fraction``,
-    ``lost_fraction`` (L,): shares of the flux intercepted by the yarn.
+    ``rho_stderr`` (n_around, n_out, L), 1/sr: L_o / E⊥ of the scattered light by receiving
+    cell and exit cell of ``exit_grid`` (what the tables hold); ``unscattered_rho`` the same
+    for the light that crossed without a collision (:mod:`precompute.ballistic`).
+    ``specular``, ``exit_fraction`` (scattered), ``unscattered_fraction``,
+    ``absorbed_fraction``, ``lost_fraction`` (L,): shares of the flux intercepted by the yarn.
     """
 
     wavelengths_nm: np.ndarray
@@ -51,8 +53,10 @@ class ParallelBeamRadiance:
     exit_grid: AngularGrid
     rho: np.ndarray
     rho_stderr: np.ndarray
+    unscattered_rho: np.ndarray
     specular: np.ndarray
     exit_fraction: np.ndarray
+    unscattered_fraction: np.ndarray
     absorbed_fraction: np.ndarray
     lost_fraction: np.ndarray
     paths: int
@@ -91,13 +95,15 @@ def simulate_parallel_beam(optics, geometry: YarnGeometry, toward_light, *, n_ar
     n_wl = len(medium.wavelengths_nm)
     sums = np.zeros((BEAM_TASKS, n_around, exit_grid.n_cells, n_wl))
     sums_sq = np.zeros_like(sums)
+    unscattered = np.zeros_like(sums)
     specular = np.zeros((BEAM_TASKS, n_wl))
     absorbed = np.zeros_like(specular)
     lost = np.zeros_like(specular)
     events = np.zeros(BEAM_TASKS, dtype=np.int64)
     with numba_threads(thread_count(threads)):
         _kernels.beam_kernel(counts, seed, geometry.radius_mm, geometry.index, medium.kernel(), toward_light,
-                             n_around, exit_grid.resolution, sums, sums_sq, specular, absorbed, lost, events)
+                             n_around, exit_grid.resolution, sums, sums_sq, unscattered, specular, absorbed, lost,
+                             events)
     mean = sums.sum(axis=0) / paths
     mean_sq = sums_sq.sum(axis=0) / paths
     stderr = np.sqrt(np.maximum(mean_sq - mean**2, 0.0) / (paths - 1))
@@ -111,8 +117,10 @@ def simulate_parallel_beam(optics, geometry: YarnGeometry, toward_light, *, n_ar
         exit_grid=exit_grid,
         rho=mean * scale[None, :, None],
         rho_stderr=stderr * scale[None, :, None],
+        unscattered_rho=unscattered.sum(axis=0) / paths * scale[None, :, None],
         specular=specular.sum(axis=0) / paths,
         exit_fraction=mean.sum(axis=(0, 1)),
+        unscattered_fraction=unscattered.sum(axis=(0, 1, 2)) / paths,
         absorbed_fraction=absorbed.sum(axis=0) / paths,
         lost_fraction=lost.sum(axis=0) / paths,
         paths=paths,

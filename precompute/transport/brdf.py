@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..grids import AngularGrid
 from ._checks import integer_at_least
-from .cylinder import YarnTransport, mean_cos_per_cell
+from .cylinder import ALBEDO_FLOOR, YarnTransport, mean_cos_per_cell
 
 #: Positions per source cell around the circumference in the sum of eq. (5).
 CIRCUMFERENTIAL_SUBSAMPLES = 16
@@ -146,3 +146,109 @@ def yarn_brdf(transport: YarnTransport, incidence_resolution: int = 12, *, inter
         rho=rho,
         rho_stderr=stderr,
     )
+
+
+#: Incidence resolutions an automatic choice tries, coarsest first.  Odd, so that the planes
+#: x = 0 (light across the yarn) and y = 0 (the axis–normal plane), where the octahedral map
+#: folds, run through cell centres and a bilinear lookup there blends cells on the plane.
+INCIDENCE_RESOLUTIONS = (21, 25, 29, 33)
+#: What an automatic choice holds, at every wavelength whose albedo counts: the table's
+#: bilinear lookup of ρ within this share of eq. (5) evaluated exactly (signed, summed over
+#: test directions and exit cells) ...
+LOOKUP_BIAS_TOLERANCE = 0.01
+#: ... and ∫ρ dω_i under uniform light within this share of what the transport's own tallies
+#: give by reciprocity (``exit_fraction``, summed over the exit cells).
+ENERGY_TOLERANCE = 0.02
+#: Directions (a Fibonacci sphere) at which the lookup is checked against eq. (5).
+LOOKUP_TEST_DIRECTIONS = 400
+
+
+@dataclass(frozen=True)
+class IncidenceGridCheck:
+    """How well a table of incidence resolution ``resolution`` holds ρ, per wavelength (L,).
+
+    ``lookup_bias``: Σ (bilinear lookup − eq. (5)) / Σ eq. (5) over the test directions and the
+    exit cells; ``energy_error``: Σ_o ∫ρ dω_i / Σ_o exit_fraction − 1 (uniform light, the
+    integral as the midpoint sum over the incidence cells); ``counted``: the wavelengths the
+    tolerances apply to (albedo at least ALBEDO_FLOOR of the largest).
+    """
+
+    resolution: int
+    lookup_bias: np.ndarray
+    energy_error: np.ndarray
+    counted: np.ndarray
+
+    @property
+    def within_tolerance(self) -> bool:
+        return bool(np.all(np.abs(self.lookup_bias[self.counted]) <= LOOKUP_BIAS_TOLERANCE)
+                    and np.all(np.abs(self.energy_error[self.counted]) <= ENERGY_TOLERANCE))
+
+    def to_dict(self) -> dict:
+        counted = self.counted
+        return {
+            "incidence_resolution": self.resolution,
+            "lookup_bias_worst": float(np.abs(self.lookup_bias[counted]).max()),
+            "energy_error_worst": float(np.abs(self.energy_error[counted]).max()),
+            "lookup_bias": self.lookup_bias.tolist(),
+            "energy_error": self.energy_error.tolist(),
+        }
+
+
+def fibonacci_sphere(count: int) -> np.ndarray:
+    """``count`` unit directions spread evenly over the sphere (Fibonacci lattice), (count, 3)."""
+    k = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * k / count
+    phi = np.pi * (3.0 - math.sqrt(5.0)) * k
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+
+
+def incidence_lookup(rho: np.ndarray, resolution: int, wi: np.ndarray) -> np.ndarray:
+    """ρ (n_dirs, n_out, L) for light from ``wi`` (n_dirs, 3) by the tables' bilinear incidence
+    lookup between the cell centres of ``rho`` (N_i², n_out, L) (:func:`precompute.table_layout.interpolate_rho`
+    without the exit interpolation)."""
+    n = resolution
+    st = AngularGrid("sphere", n).direction_to_square(wi)
+    fx = np.clip(st[:, 0] * n - 0.5, 0.0, n - 1.0)
+    fy = np.clip(st[:, 1] * n - 0.5, 0.0, n - 1.0)
+    i0 = np.floor(fx).astype(int)
+    j0 = np.floor(fy).astype(int)
+    i1 = np.minimum(i0 + 1, n - 1)
+    j1 = np.minimum(j0 + 1, n - 1)
+    ax = (fx - i0)[:, None, None]
+    ay = (fy - j0)[:, None, None]
+
+    def cell(i, j):
+        return rho[j * n + i]
+
+    return (cell(i0, j0) * (1 - ax) + cell(i1, j0) * ax) * (1 - ay) + (cell(i0, j1) * (1 - ax) + cell(i1, j1) * ax) * ay
+
+
+def check_incidence_grid(transport: YarnTransport, brdf: YarnBRDF, test_directions: np.ndarray,
+                         exact: np.ndarray) -> IncidenceGridCheck:
+    """The checks of :class:`IncidenceGridCheck` for ``brdf``; ``exact`` is eq. (5) at ``test_directions``."""
+    lookup = incidence_lookup(brdf.rho, brdf.incidence_grid.resolution, test_directions)
+    total = exact.sum(axis=(0, 1))
+    bias = np.divide((lookup - exact).sum(axis=(0, 1)), total, out=np.zeros_like(total), where=total > 0)
+    integral = brdf.rho.sum(axis=0).sum(axis=0) * brdf.incidence_grid.cell_solid_angle
+    reference = transport.exit_fraction.sum(axis=0)
+    energy = np.divide(integral, reference, out=np.ones_like(reference), where=reference > 0) - 1.0
+    albedo = transport.exit_fraction.mean(axis=0)
+    return IncidenceGridCheck(brdf.incidence_grid.resolution, bias, energy, albedo >= ALBEDO_FLOOR * albedo.max())
+
+
+def yarn_brdf_to_tolerance(transport: YarnTransport, resolutions=INCIDENCE_RESOLUTIONS, *,
+                           subsamples: int = CIRCUMFERENTIAL_SUBSAMPLES) -> tuple[YarnBRDF, list[IncidenceGridCheck]]:
+    """Eq. (5) on the coarsest incidence grid of ``resolutions`` that meets LOOKUP_BIAS_TOLERANCE and
+    ENERGY_TOLERANCE (the finest if none does), with the checks of every grid tried."""
+    if not resolutions:
+        raise ParameterError("resolutions", resolutions, "at least one incidence resolution")
+    test_directions = fibonacci_sphere(LOOKUP_TEST_DIRECTIONS)
+    exact, _ = yarn_brdf_at(transport, test_directions, subsamples=subsamples)
+    checks = []
+    for resolution in resolutions:
+        brdf = yarn_brdf(transport, resolution, subsamples=subsamples)
+        checks.append(check_incidence_grid(transport, brdf, test_directions, exact))
+        if checks[-1].within_tolerance:
+            break
+    return brdf, checks

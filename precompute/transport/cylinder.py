@@ -107,9 +107,11 @@ class YarnTransport:
     bssrdf_axial_second_moment : (n_in, n_around, n_out, L) float32, (1/(mm² sr))²
         Per-path mean of the squared contribution to ``bssrdf`` summed over the axial bins
         (each path exits at most once): gives the standard errors of that sum.
-    specular, exit_fraction, absorbed_fraction, lost_fraction : (n_in, L)
-        Shares of the incident flux: Fresnel reflection at entry, all exits, absorption,
-        paths ended after the interaction limit.  They sum to 1 within noise.
+    specular, exit_fraction, unscattered_fraction, absorbed_fraction, lost_fraction : (n_in, L)
+        Shares of the incident flux: Fresnel reflection at entry, exits after scattering (what
+        ``bssrdf`` holds), exits without any collision (the unscattered light, given exactly by
+        :mod:`precompute.ballistic` and not binned), absorption, paths ended after the
+        interaction limit.  They sum to 1 within noise.
     albedo_rel_stderr : (n_in, L)
         Relative standard error of ``exit_fraction`` (the hemispherical albedo of the cell).
     paths_per_cell : (n_in,) int; ``events``: collisions simulated; ``wall_seconds``.
@@ -122,6 +124,7 @@ class YarnTransport:
     bssrdf_axial_second_moment: np.ndarray
     specular: np.ndarray
     exit_fraction: np.ndarray
+    unscattered_fraction: np.ndarray
     absorbed_fraction: np.ndarray
     lost_fraction: np.ndarray
     albedo_rel_stderr: np.ndarray
@@ -353,6 +356,7 @@ class _YarnRun:
         self.specular = np.zeros((self.n_in, n_wl))
         self.exit_sum = np.zeros((self.n_in, n_wl))
         self.exit_sq = np.zeros((self.n_in, n_wl))
+        self.unscattered = np.zeros((self.n_in, n_wl))
         self.absorbed = np.zeros((self.n_in, n_wl))
         self.lost = np.zeros((self.n_in, n_wl))
         self.events = np.zeros(self.n_in, dtype=np.int64)
@@ -382,7 +386,8 @@ class _YarnRun:
                 self.grids.angular_resolution,
                 self.cos_max, self.grids.n_around, self.grids.n_along,
                 self.grids.cell_length_mm(self.geometry.radius_mm), self.grids.angular_resolution, self.table,
-                self.table_sq, self.specular, self.exit_sum, self.exit_sq, self.absorbed, self.lost, self.events,
+                self.table_sq, self.specular, self.exit_sum, self.exit_sq, self.unscattered, self.absorbed, self.lost,
+                self.events,
             )
             for c in chunk:
                 self.tasks[c] += len(new_tasks[c])
@@ -460,6 +465,7 @@ class _YarnRun:
             bssrdf_axial_second_moment=second,
             specular=self.specular / n[:, None],
             exit_fraction=self.exit_sum / n[:, None],
+            unscattered_fraction=self.unscattered / n[:, None],
             absorbed_fraction=self.absorbed / n[:, None],
             lost_fraction=self.lost / n[:, None],
             albedo_rel_stderr=self.relative_stderr(),

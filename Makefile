@@ -1,6 +1,9 @@
 # ClothLight developer entry points. Both README commands go through here:
 #   make demo   set up the environment and run the main job on the default (the paper's red cotton)
 #   make test   set up the environment and run the test suite
+# and for development:
+#   make test-fast  the pure-Python tier (no bpy, no renders, no bakes), in seconds
+#   make lint       ruff, as .ci/run runs it before the tests
 #
 # The virtual environment lives outside the clone, keyed by the hash of everything that
 # defines it, so repeated runs and fresh clones on the same machine reuse it; a new machine
@@ -12,7 +15,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.clothlight-installed
 OUT ?= out
 
-.PHONY: setup demo test bench extension clean
+.PHONY: setup demo test test-fast lint bench extension clean
 
 setup: $(STAMP)
 
@@ -29,6 +32,13 @@ demo: setup
 
 test: setup
 	$(PY) -m pytest
+
+# CLOTHLIGHT_TESTS_WITHOUT_BPY makes `import bpy` fail (tests/conftest.py): the tier must not need it.
+test-fast: setup
+	CLOTHLIGHT_TESTS_WITHOUT_BPY=1 $(PY) -m pytest -m "not blender and not render and not slow"
+
+lint: setup
+	$(PY) -m ruff check .
 
 bench: setup
 	$(PY) -m benchmarks

@@ -20,8 +20,8 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from precompute.bake import bake  # noqa: E402
-from precompute.tables import read_table  # noqa: E402
+from precompute.bake import bake
+from precompute.tables import read_table
 
 cache_dir = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-bake-"))
 print(f"{numba.config.NUMBA_NUM_THREADS} threads; cache {cache_dir}")

@@ -22,11 +22,11 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-import numba  # noqa: E402
-import numpy as np  # noqa: E402
+import numba
+import numpy as np
 
-from precompute.optics import load_preset, medium_optics  # noqa: E402
-from precompute.transport import (  # noqa: E402
+from precompute.optics import load_preset, medium_optics
+from precompute.transport import (
     TransportGrids,
     YarnGeometry,
     simulate_hg_slab,
@@ -35,7 +35,7 @@ from precompute.transport import (  # noqa: E402
     yarn_brdf,
     yarn_brdf_at,
 )
-from precompute.transport.cylinder import mean_cos_per_cell  # noqa: E402
+from precompute.transport.cylinder import mean_cos_per_cell
 
 ALL_THREADS = numba.config.NUMBA_NUM_THREADS
 

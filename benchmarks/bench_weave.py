@@ -19,7 +19,7 @@ import tracemalloc
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from clothlight.weave import WeaveParameters, build_woven_mesh  # noqa: E402
+from clothlight.weave import WeaveParameters, build_woven_mesh
 
 COUNT = 100
 REPEATS = 3

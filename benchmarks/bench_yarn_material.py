@@ -7,19 +7,19 @@ import tempfile
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-import bpy  # noqa: E402
+import bpy
 
-from clothlight.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
-from clothlight.measurement_render import configure_measurement_render  # noqa: E402
-from clothlight.sample_object import build_sample_object  # noqa: E402
-from clothlight.weave import WeaveParameters  # noqa: E402
-from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
-from precompute.bake import bake  # noqa: E402
-from render_cost import light_and_camera, print_render_cost  # noqa: E402
+from clothlight.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun
+from clothlight.measurement_render import configure_measurement_render
+from clothlight.sample_object import build_sample_object
+from clothlight.weave import WeaveParameters
+from clothlight.yarn_tables import yarn_tables_from_bake
+from precompute.bake import bake
+from render_cost import light_and_camera, print_render_cost
 
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-material-"))
-tables = yarn_tables_from_bake(bake("red_cotton", ["transport.angular_resolution=8", "transport.incidence_resolution=8"],
-                                    paths_per_cell=500, cache_dir=out / "cache").folder)
+grids = ["transport.angular_resolution=8", "transport.incidence_resolution=8"]
+tables = yarn_tables_from_bake(bake("red_cotton", grids, paths_per_cell=500, cache_dir=out / "cache").folder)
 
 bpy.ops.wm.read_homefile(use_empty=True)
 scene = bpy.context.scene

@@ -26,7 +26,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(prog="python -m clothlight.validate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", required=True, help="output folder: results.json, report.md, sweeps.png, swatches/, renders/")
+    parser.add_argument("--out", required=True,
+                        help="output folder: results.json, report.md, sweeps.png, swatches/, renders/")
     parser.add_argument("--blend", help="open this .blend first (with the bpy module; a real Blender takes it "
                                         "before -P)")
     parser.add_argument("--object", metavar="NAME", help="measure this object of the open file (a ClothLight "
@@ -35,8 +36,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="materials to sweep (default: yarn and baseline with --tables, else baseline); "
                              "yarn_general is the general-lighting mode, compared with yarn when both run")
     parser.add_argument("--tables", help="bake folder of the yarn material (python -m precompute bake --out DIR)")
-    parser.add_argument("--cloth-tables", help="cloth bake folder of the garment material (python -m clothlight.garment "
-                                               "bake --out DIR)")
+    parser.add_argument("--cloth-tables",
+                        help="cloth bake folder of the garment material (python -m clothlight.garment bake --out DIR)")
     parser.add_argument("--measured", help="measured BRDF CSV (format: clothlight/validation/measured_data.py)")
     parser.add_argument("--incidences", type=float, nargs="+", metavar="DEG", help="θi, degrees (default 0 30 45 60)")
     parser.add_argument("--views", type=float, nargs="+", metavar="DEG",
@@ -92,7 +93,8 @@ def main(argv=None) -> int:
         if args.object:
             sample = bpy.data.objects.get(args.object)
             if sample is None:
-                raise ParameterError("object", args.object, f"an object of the open file: {sorted(bpy.data.objects.keys())}")
+                raise ParameterError("object", args.object,
+                                     f"an object of the open file: {sorted(bpy.data.objects.keys())}")
         settings = RigSettings(incidences_deg=tuple(args.incidences or DEFAULT_INCIDENCES_DEG),
                                views_deg=tuple(args.views or DEFAULT_VIEWS_DEG), resolution=args.resolution,
                                samples=args.samples, seed=args.seed, patch_mm=args.patch_mm)

@@ -23,11 +23,11 @@ import pathlib
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from .color import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, channel_ratios, clip_to_gamut, spectral_to_rgb  # noqa: E402
-from .table_layout import brdf_atlas, interpolate_rho  # noqa: E402
+from .color import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, channel_ratios, clip_to_gamut, spectral_to_rgb
+from .table_layout import brdf_atlas, interpolate_rho
 
 #: Incidence angles of the in-plane curves, degrees (the paper's sweep: 0, 30, 45, 60).
 INCIDENCE_DEG = (0, 30, 45, 60)

@@ -36,7 +36,8 @@ INDEX = 1.557
 
 
 def fresnel(c: float, n: float = INDEX) -> float:
-    """Unpolarised Fresnel reflectance of a dielectric (Cook & Torrance's form), c = cos of the angle to the facet normal."""
+    """Unpolarised Fresnel reflectance of a dielectric (Cook & Torrance's form), c = cos of the angle to the
+    facet normal."""
     g = math.sqrt(n * n - 1.0 + c * c)
     return 0.5 * ((g - c) / (g + c)) ** 2 * (1.0 + ((c * (g + c) - 1.0) / (c * (g - c) + 1.0)) ** 2)
 

@@ -16,7 +16,7 @@ import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from clothlight.validate import main  # noqa: E402
+from clothlight.validate import main
 
 argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
 sys.exit(main(argv))

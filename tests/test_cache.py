@@ -155,9 +155,8 @@ def test_a_killed_bake_leaves_no_table(tmp_path):
                "--threads", "1", "--cache-dir", str(tmp_path)]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        deadline = time.time() + 60
         while not any(name.endswith(".partial") for name in entries(tmp_path, "spectral")):
-            assert process.poll() is None and time.time() < deadline, "the bake ended before it could be killed"
+            assert process.poll() is None, "the bake ended before it could be killed"
             time.sleep(0.05)
         time.sleep(0.5)  # well inside the transport
         process.send_signal(signal.SIGKILL)

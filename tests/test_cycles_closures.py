@@ -12,12 +12,7 @@ import numpy as np
 import pytest
 
 from precompute import cycles_closures as cc
-
-bpy = pytest.importorskip("bpy")
-import mathutils  # noqa: E402
-
-from clothlight.measurement_render import configure_measurement_render, render_to_array  # noqa: E402
-from clothlight.osl_shaders import add_script_node  # noqa: E402
+from tests.helpers import add_camera, add_sun, direction, empty_render_scene, script_material
 
 SUN_IRRADIANCE = 2.0
 NORMAL = np.array([0.0, 0.0, 1.0])
@@ -40,42 +35,20 @@ shader closure_probe(int Kind = 0, float R1 = 0.2, float R2 = 0.5, float Alpha =
 """
 
 
-def direction(zenith_deg, azimuth_deg):
-    zenith, azimuth = math.radians(zenith_deg), math.radians(azimuth_deg)
-    return np.array([math.sin(zenith) * math.cos(azimuth), math.sin(zenith) * math.sin(azimuth), math.cos(zenith)])
-
-
 def render_closure(tmp_path, kind, view, light, r1=0.2, r2=0.5, alpha=0.3):
-    bpy.ops.wm.read_homefile(use_empty=True)
-    scene = bpy.context.scene
-    configure_measurement_render(scene, resolution=(4, 4), samples=1)
-    scene.world = None
-    scene.cycles.max_bounces = 0
+    import bpy
+
+    from clothlight.measurement_render import render_to_array
+
+    scene = empty_render_scene(resolution=4, samples=1, bounces=0)
     bpy.ops.mesh.primitive_plane_add(size=40.0)
     plane = bpy.context.active_object
-    material = bpy.data.materials.new("probe")
-    tree = material.node_tree
-    tree.nodes.clear()
-    node = add_script_node(tree, "closure_probe", CLOSURE_SHADER)
-    output = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(node.outputs["BSDF"], output.inputs["Surface"])
+    material, node = script_material("probe", "closure_probe", CLOSURE_SHADER)
     for name, value in (("Kind", kind), ("R1", r1), ("R2", r2), ("Alpha", alpha)):
         node.inputs[name].default_value = value
     plane.data.materials.append(material)
-
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.data.energy = SUN_IRRADIANCE
-    sun.data.angle = 0.0
-    scene.collection.objects.link(sun)
-    sun.rotation_euler = mathutils.Vector(light).to_track_quat("Z", "Y").to_euler()
-
-    camera = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
-    camera.data.type = "ORTHO"
-    camera.data.ortho_scale = 1.0
-    camera.location = tuple(5.0 * view)
-    camera.rotation_euler = mathutils.Vector(view).to_track_quat("Z", "Y").to_euler()
-    scene.collection.objects.link(camera)
-    scene.camera = camera
+    add_sun(scene, light, SUN_IRRADIANCE)
+    add_camera(scene, view)
     pixels = render_to_array(scene, tmp_path / "closure.exr")
     return float(np.median(pixels[..., 0])) / SUN_IRRADIANCE
 
@@ -97,7 +70,7 @@ CASES = [
 
 @pytest.mark.blender
 @pytest.mark.parametrize("kind, view_angles, light_angles, what", CASES, ids=[c[3] for c in CASES])
-def test_twin_matches_cycles(tmp_path, kind, view_angles, light_angles, what):
+def test_twin_matches_cycles(bpy, tmp_path, kind, view_angles, light_angles, what):
     view, light = direction(*view_angles), direction(*light_angles)
     r1, r2, alpha = 0.2, 0.5, 0.3
     kinds = {"hair_reflection": 0, "hair_transmission": 1, "ggx_retro": 2, "beckmann": 3}

@@ -13,39 +13,13 @@ import zipfile
 
 import pytest
 
-REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 from clothlight.jobs import BAKE_DEPENDENCIES, BakeRequest, preset_request
+from tests.helpers import PREBAKED_PRESET, PREBAKED_TRANSPORT
 
+REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("build_extension", REPO_ROOT / "scripts" / "build_extension.py")
 build_extension = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(build_extension)
-
-#: The preset the test build pre-bakes, and with what: one preset, tiny grids and budget, are enough to
-#: test the mechanism (`make extension` pre-bakes every preset's own bake).
-PREBAKED_PRESET = "red_cotton"
-PREBAKED_TRANSPORT = {"paths_per_cell": 64, "n_around": 4, "n_along": 2, "angular_resolution": 4,
-                      "incidence_resolution": 4}
-
-
-def built_zip(tmp_path_factory) -> pathlib.Path:
-    """The linux-x64 zip, built once per test session (tests/test_addon_operators.py uses it too)."""
-    out = tmp_path_factory.getbasetemp() / "clothlight-dist"
-    existing = sorted(out.glob("clothlight-*-linux_x64.zip"))
-    if existing:
-        return existing[0]
-    result = subprocess.run(
-        [sys.executable, str(REPO_ROOT / "scripts" / "build_extension.py"), "--output-dir", str(out),
-         "--platforms", "linux-x64", "--prebake", PREBAKED_PRESET,
-         "--prebake-transport", *(f"{key}={value}" for key, value in PREBAKED_TRANSPORT.items())],
-        capture_output=True, text=True,
-    )
-    assert result.returncode == 0, result.stdout + result.stderr
-    return pathlib.Path(result.stdout.strip().splitlines()[-1])
-
-
-@pytest.fixture(scope="module")
-def extension_zip(tmp_path_factory):
-    return built_zip(tmp_path_factory)
 
 
 def _wheel_name_version(filename: str) -> tuple[str, str]:

@@ -26,6 +26,7 @@ from clothlight.garment.tables import (
 from precompute.closure_fit import LobeShape, lobe_responses
 from precompute.grids import AngularGrid
 from precompute.table_layout import brdf_atlas, interpolate_rho
+from tests.helpers import add_sun_and_camera, cook_torrance_between, empty_render_scene, unit, write_exr
 
 bpy = pytest.importorskip("bpy")
 
@@ -38,12 +39,10 @@ from clothlight.garment.material import (  # noqa: E402
 )
 from clothlight.garment.measure import GoniometerSettings  # noqa: E402
 from clothlight.materials import GENERAL_MODE, SUN_MODE, sync_sun  # noqa: E402
-from clothlight.measurement_render import configure_measurement_render, render_to_array  # noqa: E402
+from clothlight.measurement_render import render_to_array  # noqa: E402
 from clothlight.validation.framing import ParameterError  # noqa: E402
 from clothlight.validation.rig import RigSettings  # noqa: E402
 from clothlight.validation.run import ValidationRun, run_validation  # noqa: E402
-from test_validation_rig import cook_torrance_between  # noqa: E402
-from test_yarn_shader import add_sun_and_camera, unit, write_exr  # noqa: E402
 
 pytestmark = pytest.mark.blender
 
@@ -105,12 +104,8 @@ def synthetic_cloth(tmp_path_factory):
 
 def garment_scene(tables, mode, toward_camera, toward_sun, warp_along_y=False, weave_repeats_per_uv=None,
                   transmission=True):
-    bpy.ops.wm.read_homefile(use_empty=True)
-    scene = bpy.context.scene
-    configure_measurement_render(scene, resolution=(8, 8), samples=1 if mode == SUN_MODE else 16)
+    scene = empty_render_scene(resolution=8, samples=1 if mode == SUN_MODE else 16, bounces=0)
     scene.cycles.shading_system = mode == SUN_MODE  # the general mode is plain nodes: no OSL
-    scene.world = None
-    scene.cycles.max_bounces = 0
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     plane = bpy.context.active_object
     if warp_along_y:  # u along +y: the warp turns with it

@@ -68,33 +68,19 @@ shader map_probe(int Sphere = 1, output closure color BSDF = 0)
 
 @pytest.mark.blender
 @pytest.mark.parametrize("domain", ["hemisphere", "sphere"])
-def test_osl_header_maps_match_python(tmp_path, domain):
-    import bpy
+def test_osl_header_maps_match_python(bpy, tmp_path, domain):
+    from clothlight.measurement_render import render_to_array
+    from tests.helpers import add_camera, empty_render_scene, script_material
 
-    from clothlight.measurement_render import configure_measurement_render, render_to_array
-    from clothlight.osl_shaders import add_script_node
-
-    bpy.ops.wm.read_homefile(use_empty=True)
-    scene = bpy.context.scene
     size = 24
-    configure_measurement_render(scene, resolution=(size, size), samples=1)
+    scene = empty_render_scene(resolution=size, samples=1)
     scene.render.filter_size = 0.01  # sample pixel centres only
-    scene.world = None
     bpy.ops.mesh.primitive_plane_add(size=2.0)
     plane = bpy.context.active_object
-    material = bpy.data.materials.new("probe")
-    tree = material.node_tree
-    tree.nodes.clear()
-    probe = add_script_node(tree, "map_probe", source=MAP_PROBE_SHADER)
+    material, probe = script_material("probe", "map_probe", MAP_PROBE_SHADER)
     probe.inputs["Sphere"].default_value = int(domain == "sphere")
-    tree.links.new(probe.outputs["BSDF"], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
     plane.data.materials.append(material)
-    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
-    cam.data.type = "ORTHO"
-    cam.data.ortho_scale = 2.0
-    cam.location = (0, 0, 3)
-    scene.collection.objects.link(cam)
-    scene.camera = cam
+    add_camera(scene, ortho_scale=2.0, distance=3.0)
     pixels = render_to_array(scene, tmp_path / "probe.exr")
 
     centers = (np.arange(size) + 0.5) / size * 2.0 - 1.0

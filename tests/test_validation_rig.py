@@ -15,20 +15,28 @@ import subprocess
 import sys
 
 import numpy as np
-import OpenEXR
 import pytest
 
-import bpy  # noqa: E402 - Blender as a Python module, a required test dependency
-from clothlight.materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
-from clothlight.validation.framing import SampleBounds, frame_size_mm, largest_patch_mm, pixel_cross_section_mm2
+from clothlight.validation.framing import SampleBounds, frame_size_mm, largest_patch_mm
 from clothlight.validation.measure import measure_view
-from clothlight.validation.rig import RIG_SCENE, RigSettings, build_rig, calibration_plane
-from clothlight.validation.run import ValidationCancelled, ValidationRun, run_validation
 from clothlight.weave import WeaveParameters
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.closure_fit import LOBES, LobeShape
 from precompute.errors import ParameterError
 from precompute.tables import SCHEMA
+from tests.helpers import cook_torrance_between, write_exr
+
+bpy = pytest.importorskip("bpy")
+
+from clothlight.materials import (  # noqa: E402
+    GENERAL_MODE,
+    SUN_MODE,
+    build_baseline_material,
+    build_yarn_material,
+    shader_node,
+)
+from clothlight.validation.rig import RIG_SCENE, RigSettings, build_rig, calibration_plane  # noqa: E402
+from clothlight.validation.run import ValidationCancelled, ValidationRun, run_validation  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SYNTHETIC_CSV = REPO / "clothlight" / "validation" / "data" / "synthetic_red_cotton.csv"
@@ -89,32 +97,6 @@ def cook_torrance(theta_i, theta_v, m=0.8, n=1.557):
                                  [math.sin(theta_v), 0.0, math.cos(theta_v)], m, n)
 
 
-def cook_torrance_between(light, view, m=0.8, n=1.557):
-    """Cook–Torrance (1/sr) about +z between unit directions toward the light and the viewer, from
-    its definition: F D G / (4 (n·l)(n·v)), Beckmann D = exp(−tan²α/m²) / (π m² cos⁴α), Smith's
-    height-correlated G = 1 / (1 + Λ(v) + Λ(l)) of that surface with Λ = (erf(a) − 1)/2 +
-    exp(−a²)/(2a√π), a = cot θ / m, F Cook and Torrance's dielectric Fresnel with g² = n² − 1 + c²,
-    c = v·h; 0 unless both are above the plane."""
-    light, view = np.asarray(light, float), np.asarray(view, float)
-    nl, nv = light[2], view[2]
-    if nl <= 0.0 or nv <= 0.0:
-        return 0.0
-    half = (light + view) / np.linalg.norm(light + view)
-    nh, vh = half[2], view @ half
-    alpha = math.acos(min(nh, 1.0))
-    d = math.exp(-((math.tan(alpha) / m) ** 2)) / (math.pi * m**2 * nh**4)
-
-    def smith_lambda(cos_theta):
-        a = cos_theta / (m * math.sqrt(1.0 - cos_theta**2)) if cos_theta < 1.0 else math.inf
-        return 0.0 if math.isinf(a) else (math.erf(a) - 1) / 2 + math.exp(-a * a) / (2 * a * math.sqrt(math.pi))
-
-    g_att = 1.0 / (1.0 + smith_lambda(nv) + smith_lambda(nl))
-    c = vh
-    g = math.sqrt(n * n - 1 + c * c)
-    f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1 + (c * (g + c) - 1) ** 2 / (c * (g - c) + 1) ** 2)
-    return f * d * g_att / (4 * nl * nv)
-
-
 @pytest.mark.blender
 @pytest.mark.parametrize("mode", [SUN_MODE, GENERAL_MODE])
 @pytest.mark.parametrize("theta_i", [30.0, 45.0, 60.0])
@@ -129,13 +111,6 @@ def test_the_cook_torrance_term_measures_its_formula(tmp_path, theta_i, mode):
         # Cycles evaluates Smith's Λ by Walter's rational approximation (within 1 % of erf's form)
         np.testing.assert_allclose(view.brdf_rgb, [expected] * 3, rtol=1e-3 if mode == SUN_MODE else 1e-2)
     rig.remove()
-
-
-def write_exr(path, image):
-    # OpenEXR reads the array's memory as C-ordered: a broadcast view must be copied out first
-    image = np.ascontiguousarray(image, dtype=np.float32)
-    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, {"RGB": image}) as exr:
-        exr.write(str(path))
 
 
 CONSTANT_RHO = np.array([0.2, 0.1, 0.05])
@@ -225,25 +200,6 @@ def test_woven_views_see_no_sample_edge_and_the_mask_is_the_cloth(tmp_path, monk
     _, edged = measure_woven(12, 5.5, tmp_path)
     _, reference = measure_woven(20, 5.5, tmp_path)
     assert max(abs(a.brdf_rgb[0] / b.brdf_rgb[0] - 1.0) for a, b in zip(edged, reference)) > 1e-3
-
-
-def test_the_mask_sums_cloth_pixels_only_and_the_calibration_formula():
-    n, radiance, alpha = 8, 0.4, np.ones((8, 8))
-    pixels = np.zeros((n, n, 4))
-    pixels[..., :3] = radiance
-    pixels[..., 3] = alpha
-    pixels[0, :, :3], pixels[0, :, 3] = 5.0, 0.0  # a bright row that is not cloth (alpha 0)
-    pixels[1, :, :3], pixels[1, :, 3] = radiance / 2, 0.5  # half-covered pixels: premultiplied
-    for theta_i, theta_v in ((0.0, 0.0), (60.0, -40.0), (30.0, 70.0)):
-        view = measure_view(pixels, theta_i_deg=theta_i, theta_v_deg=theta_v, patch_mm=2.0, sun_irradiance=2.0)
-        cloth_sum = radiance * (n * n - 2 * n) + radiance / 2 * n
-        assert view.cloth_pixels == n * n - n
-        np.testing.assert_allclose(view.rgb_sum, [cloth_sum] * 3)
-        assert view.coverage == pytest.approx((n * n - 2 * n + 0.5 * n) / n**2)
-        # f = Σ L_p a_p / (E cos θi A cos θv): the mean radiance over E cos θi, at every view
-        a_p = pixel_cross_section_mm2(2.0, n, theta_v)
-        assert a_p == pytest.approx((2.0 / n) ** 2 * math.cos(math.radians(theta_v)))
-        np.testing.assert_allclose(view.brdf_rgb, cloth_sum / n**2 / (2.0 * math.cos(math.radians(theta_i))))
 
 
 @pytest.mark.blender

@@ -25,18 +25,21 @@ from .measure import ClothMeasurement, GoniometerSettings, _sample_weave, measur
 from .tables import SUMMARY_FILE, write_cloth_tables
 
 cache = import_precompute("cache")
+sources = import_precompute("sources")
 precompute_tables = import_precompute("tables")
 
 MEASUREMENT_NAMESPACE = "cloth_measurement"
 TABLES_NAMESPACE = "cloth_tables"
 MEASUREMENT_FILE = "measurement.npz"
 _ROOT = pathlib.Path(__file__).resolve().parents[2]
-MEASUREMENT_SOURCES = (
-    "clothlight/garment/goniometry.py", "clothlight/garment/measure.py", "clothlight/materials.py",
-    "clothlight/measurement_render.py", "clothlight/weave/geometry.py", "osl/cloth_yarn.osl", "osl/clothlight.h",
-)
-TABLE_SOURCES = ("clothlight/garment/tables.py", "clothlight/garment/detail.py", "precompute/closure_fit.py",
-                 "precompute/table_layout.py", "precompute/cycles_closures.py")
+#: The code of each stage, digested into its key (``precompute.sources``): the modules it runs and
+#: every project module they import, transitively, with the OSL shaders they compile.  The
+#: measurement runs :mod:`.measure` on the yarn tables :mod:`clothlight.yarn_tables` finds, and of
+#: this file what stores it, without the fit this file imports (tests/test_sources.py checks that
+#: what it calls here comes from those modules).
+MEASUREMENT_SOURCES = {"entries": ("clothlight.garment.measure", "clothlight.yarn_tables"),
+                       "files": ("clothlight/garment/bake.py",)}
+TABLE_SOURCES = {"entries": ("clothlight.garment.bake",)}
 
 
 def measurement_inputs(yarn_tables, settings: GoniometerSettings) -> dict:
@@ -45,7 +48,7 @@ def measurement_inputs(yarn_tables, settings: GoniometerSettings) -> dict:
     which also changes with the closure fit) and the host index of the specular term."""
     rho = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").pixels
     return {"yarn_rho_sha256": precompute_tables.content_hash(rho), "host_index": yarn_tables.host_index,
-            "goniometer": settings.to_dict(), "code_digest": cache.source_digest(_ROOT, MEASUREMENT_SOURCES)}
+            "goniometer": settings.to_dict(), "code_digest": sources.stage_digest(_ROOT, **MEASUREMENT_SOURCES)}
 
 
 #: The per-side arrays of a :class:`ClothMeasurement`, as the cache stores them.
@@ -89,7 +92,7 @@ def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(
                                  measure_cloth(tables, settings, render_dir=renders, progress=progress))
 
         measured_folder, _ = cache.store(cache_dir, MEASUREMENT_NAMESPACE, measured_key, measured_in, measure)
-    tables_in = {"measurement": measured_key, "code_digest": cache.source_digest(_ROOT, TABLE_SOURCES)}
+    tables_in = {"measurement": measured_key, "code_digest": sources.stage_digest(_ROOT, **TABLE_SOURCES)}
     key = cache.cache_key(tables_in)
     folder = cache.lookup(cache_dir, TABLES_NAMESPACE, key)
     if folder is None:

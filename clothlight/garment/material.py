@@ -217,8 +217,8 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
     along_normal = math_node("DOT_PRODUCT", tangent_socket, normal, (-600, -200)).outputs["Value"]
     normal_part = math_node("SCALE", normal, None, (-450, -200))
     links.new(along_normal, normal_part.inputs["Scale"])
-    warp = math_node("NORMALIZE", math_node("SUBTRACT", tangent_socket, normal_part.outputs[0], (-300, -200)).outputs[0],
-                     None, (-150, -200)).outputs[0]
+    in_plane = math_node("SUBTRACT", tangent_socket, normal_part.outputs[0], (-300, -200)).outputs[0]
+    warp = math_node("NORMALIZE", in_plane, None, (-150, -200)).outputs[0]
     weft = math_node("CROSS_PRODUCT", normal, warp, (0, -300)).outputs[0]
     view = nodes.new("ShaderNodeCombineXYZ")
     view.location = (150, 100)

@@ -150,7 +150,8 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
     view_tilt = max(max_tilt(exit_directions(n_o, side)) for side in SIDES)
     light_tilt = max(max_tilt(incidence_directions(n_i, side)) for side in SIDES)
     patch_mm = settings.patch_repeats * repeat
-    pixel_mm = patch_mm * min(abs(d[2]) for side in SIDES for d in exit_directions(n_o, side)) / settings.pixels_per_patch
+    least_cos = min(abs(d[2]) for side in SIDES for d in exit_directions(n_o, side))
+    pixel_mm = patch_mm * least_cos / settings.pixels_per_patch
     layout = plan_regions(n_i * n_i, patch_mm, half_thickness, view_tilt, margin_mm=2.0 * pixel_mm)
     half_size = required_sample_half_size_mm(layout, half_thickness, view_tilt, light_tilt, edge_band_mm=spacing)
     # Whole repeats keep the sample symmetric about its centre, where the layout is centred.

@@ -209,7 +209,8 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
                             for side in SIDES},
         "energy": {
             "max_total": float(total.max()),
-            "worst_incidence_front_frame": side_to_world(AngularGrid("sphere", n_i).cell_centers(), "front")[worst[0]].tolist(),
+            "worst_incidence_front_frame":
+                side_to_world(AngularGrid("sphere", n_i).cell_centers(), "front")[worst[0]].tolist(),
             "per_incidence_total_rgb": total.tolist(),
             "per_incidence_open": energy["open"].tolist(),
         },

@@ -130,7 +130,8 @@ def parse_measurement(text: str) -> Measurement:
     records = [(number, line) for number, line in enumerate(lines, start=1)
                if line.strip() and not line.lstrip().startswith("#")]
     if not records:
-        raise MeasurementFormatError(1, f"no header: expected {','.join(RGB_HEADER)!r} or {','.join(SPECTRAL_HEADER)!r}")
+        raise MeasurementFormatError(
+            1, f"no header: expected {','.join(RGB_HEADER)!r} or {','.join(SPECTRAL_HEADER)!r}")
     header_row, header_line = records[0]
     header = tuple(name.strip() for name in header_line.split(","))
     if header not in (RGB_HEADER, SPECTRAL_HEADER):
@@ -144,8 +145,8 @@ def parse_measurement(text: str) -> Measurement:
         values = _parse_row(row, line, len(header), is_spectral)
         key = tuple(values[:5] if is_spectral else values[:4])
         if key in seen:
-            raise MeasurementFormatError(row, f"repeats the {'direction pair and wavelength' if is_spectral else 'direction pair'} "
-                                              f"of row {seen[key]}")
+            what = "direction pair and wavelength" if is_spectral else "direction pair"
+            raise MeasurementFormatError(row, f"repeats the {what} of row {seen[key]}")
         seen[key] = row
         numbers.append(values)
         rows.append(row)
@@ -199,8 +200,8 @@ def _spectral_measurement(numbers: np.ndarray, rows: np.ndarray, comments: tuple
                                          f"{wavelengths.tolist()}: every pair needs the same")
     low, high = REQUIRED_BAND_NM
     if wavelengths[0] > low or wavelengths[-1] < high:
-        raise MeasurementFormatError(int(rows[first[0]]), f"wavelengths {wavelengths[0]:g}–{wavelengths[-1]:g} nm do not "
-                                     f"cover {low:g}–{high:g} nm, needed for the conversion to RGB")
+        raise MeasurementFormatError(int(rows[first[0]]), f"wavelengths {wavelengths[0]:g}–{wavelengths[-1]:g} nm "
+                                     f"do not cover {low:g}–{high:g} nm, needed for the conversion to RGB")
     angles = np.array(list(pairs))
     spectral = np.array([numbers[members][np.argsort(numbers[members, 4]), 5] for members in pairs.values()])
     color = import_precompute("color")

@@ -52,7 +52,8 @@ def _angle_text(angles) -> str:
 
 class CLOTHLIGHT_OT_validate(bpy.types.Operator):
     """Measure the active ClothLight sample (or a default woven sample) in a virtual gonioreflectometer:
-    cloth BRDF against view angle per incidence, for the yarn material and the paper's baseline, with plots and a report"""
+    cloth BRDF against view angle per incidence, for the yarn material and the paper's baseline, with plots
+    and a report"""
 
     bl_idname = "clothlight.validate"
     bl_label = "Validate in Gonioreflectometer"
@@ -148,7 +149,7 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
         except StopIteration:
             self._stop(context)
             return self._finish(context, self._run)
-        except Exception as error:
+        except Exception as error:  # noqa: BLE001 - a modal operator reports a failed step and ends the run
             self._stop(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
@@ -178,7 +179,8 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
                 image.reload()
         ratios = "; ".join(f"{kind} B/R {e['table1']['B/R']:.3g}, G/R {e['table1']['G/R']:.3g}"
                            for kind, e in results["materials"].items() if e["table1"])
-        self.report({"INFO"}, f"Validation report: {run.out_dir / results['files']['report']}" + (f" ({ratios})" if ratios else ""))
+        report = run.out_dir / results["files"]["report"]
+        self.report({"INFO"}, f"Validation report: {report}" + (f" ({ratios})" if ratios else ""))
         return {"FINISHED"}
 
 

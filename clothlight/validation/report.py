@@ -172,7 +172,8 @@ def markdown_report(results: dict, plots: list[str], plot_note: str | None) -> s
         lines += ["## Lit from the front and from behind (paper §6.1, Figures 9–10)", "",
                   "Both swatches of a material share one exposure (the brighter one's mean colour has its "
                   "largest channel at 0.5); L/E is the mean radiance over the irradiance, 1/sr.", "",
-                  "| material | front | back | front L/E (R, G, B) | back L/E (R, G, B) |", "| --- | --- | --- | --- | --- |"]
+                  "| material | front | back | front L/E (R, G, B) | back L/E (R, G, B) |",
+                  "| --- | --- | --- | --- | --- |"]
         for kind, sw in swatched.items():
             cells = [f"![{kind} {side}]({sw[side]['png']})" for side in ("front", "back")]
             levels = [", ".join(f"{c:.3g}" for c in sw[side]["mean_rgb_per_irradiance"]) for side in ("front", "back")]
@@ -196,11 +197,12 @@ def markdown_report(results: dict, plots: list[str], plot_note: str | None) -> s
                 for channel in ("R", "RGB"):
                     m = (metrics.get(quantity) or {}).get(channel)
                     if m:
-                        lines.append(f"| {kind} | {label} | {channel} | {m['rms']:.4g} | {_ratio_cell(m['relative_rms'])} "
-                                     f"| {_ratio_cell(m['shape_correlation'])} |")
+                        lines.append(f"| {kind} | {label} | {channel} | {m['rms']:.4g} "
+                                     f"| {_ratio_cell(m['relative_rms'])} | {_ratio_cell(m['shape_correlation'])} |")
         factors = ", ".join(f"{k}: {e['paper_normalisation_factor']:.4g}" for k, e in results["materials"].items()
                             if e.get("paper_normalisation_factor"))
-        lines += ["", f"Paper normalisation coefficients (measured / model ΣRGB at θi = θv = 0): {factors or 'none'}.", ""]
+        lines += ["", "Paper normalisation coefficients (measured / model ΣRGB at θi = θv = 0): "
+                  f"{factors or 'none'}.", ""]
 
     kinds = list(results["materials"])
     lines += ["## Cloth BRDF per view (1/sr, R G B)", "",

@@ -136,7 +136,8 @@ class ValidationRun:
         self.out_dir = pathlib.Path(out_dir)
         self.settings = settings
         self.swatches = bool(swatches)
-        per_material = len(settings.incidences_deg) * len(settings.views_deg) + (len(SWATCH_INCIDENCES_DEG) if swatches else 0)
+        per_material = (len(settings.incidences_deg) * len(settings.views_deg)
+                        + (len(SWATCH_INCIDENCES_DEG) if swatches else 0))
         self.total = len(self.materials) * per_material
         self.results: dict | None = None
 
@@ -167,7 +168,8 @@ class ValidationRun:
                     rig.set_incidence(theta_i)
                     for theta_v in self.settings.views_deg:
                         rig.set_view(theta_v)
-                        views.append(rig.measure(self.out_dir / "renders" / kind / f"i{theta_i:+05.1f}_v{theta_v:+05.1f}.exr"))
+                        render = self.out_dir / "renders" / kind / f"i{theta_i:+05.1f}_v{theta_v:+05.1f}.exr"
+                        views.append(rig.measure(render))
                         done += 1
                         yield Progress(done, self.total, f"{kind}: θi = {theta_i:g}°, θv = {theta_v:g}°")
                 curves[kind] = views

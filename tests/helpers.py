@@ -1,0 +1,168 @@
+"""What several test modules share: vectors, EXR writing, a reference BRDF, and the small scenes
+the render tests are built from.  Importable without bpy: the scene helpers import it when called."""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import subprocess
+import sys
+
+import numpy as np
+import OpenEXR
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+
+# -- vectors and files ----------------------------------------------------------------------------
+
+
+def unit(v) -> np.ndarray:
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v)
+
+
+def direction(zenith_deg: float, azimuth_deg: float) -> np.ndarray:
+    """The unit vector at ``zenith_deg`` from +z and ``azimuth_deg`` from +x."""
+    zenith, azimuth = math.radians(zenith_deg), math.radians(azimuth_deg)
+    return np.array([math.sin(zenith) * math.cos(azimuth), math.sin(zenith) * math.sin(azimuth), math.cos(zenith)])
+
+
+def write_exr(path, image) -> None:
+    """An RGB float32 OpenEXR (ZIP), as the bake writes its tables; ``image`` is (rows, columns, 3)."""
+    # OpenEXR reads the array's memory as C-ordered: a broadcast view must be copied out first
+    image = np.ascontiguousarray(image, dtype=np.float32)
+    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, {"RGB": image}) as exr:
+        exr.write(str(path))
+
+
+# -- a reference BRDF -----------------------------------------------------------------------------
+
+
+def cook_torrance_between(light, view, m=0.8, n=1.557) -> float:
+    """Cook–Torrance (1/sr) about +z between unit directions toward the light and the viewer, from
+    its definition: F D G / (4 (n·l)(n·v)), Beckmann D = exp(−tan²α/m²) / (π m² cos⁴α), Smith's
+    height-correlated G = 1 / (1 + Λ(v) + Λ(l)) of that surface with Λ = (erf(a) − 1)/2 +
+    exp(−a²)/(2a√π), a = cot θ / m, F Cook and Torrance's dielectric Fresnel with g² = n² − 1 + c²,
+    c = v·h; 0 unless both are above the plane."""
+    light, view = np.asarray(light, float), np.asarray(view, float)
+    nl, nv = light[2], view[2]
+    if nl <= 0.0 or nv <= 0.0:
+        return 0.0
+    half = (light + view) / np.linalg.norm(light + view)
+    nh, vh = half[2], view @ half
+    alpha = math.acos(min(nh, 1.0))
+    d = math.exp(-((math.tan(alpha) / m) ** 2)) / (math.pi * m**2 * nh**4)
+
+    def smith_lambda(cos_theta):
+        a = cos_theta / (m * math.sqrt(1.0 - cos_theta**2)) if cos_theta < 1.0 else math.inf
+        return 0.0 if math.isinf(a) else (math.erf(a) - 1) / 2 + math.exp(-a * a) / (2 * a * math.sqrt(math.pi))
+
+    g_att = 1.0 / (1.0 + smith_lambda(nv) + smith_lambda(nl))
+    c = vh
+    g = math.sqrt(n * n - 1 + c * c)
+    f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1 + (c * (g + c) - 1) ** 2 / (c * (g - c) + 1) ** 2)
+    return f * d * g_att / (4 * nl * nv)
+
+
+# -- small scenes for renders (bpy) ---------------------------------------------------------------
+
+
+def empty_render_scene(*, resolution: int, samples: int, bounces: int | None = None):
+    """A new empty file's scene set up for a measurement render: no world light, and at most
+    ``bounces`` bounces when given."""
+    import bpy
+
+    from clothlight.measurement_render import configure_measurement_render
+
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    configure_measurement_render(scene, resolution=(resolution, resolution), samples=samples)
+    scene.world = None
+    if bounces is not None:
+        scene.cycles.max_bounces = bounces
+    return scene
+
+
+def script_material(name: str, shader: str, source: str | None = None):
+    """A material whose surface is the closure output ``BSDF`` of OSL shader ``shader`` (of ``osl/``,
+    or ``source``); returns the material and its script node."""
+    import bpy
+
+    from clothlight.osl_shaders import add_script_node
+
+    material = bpy.data.materials.new(name)
+    tree = material.node_tree
+    tree.nodes.clear()
+    node = add_script_node(tree, shader, source)
+    tree.links.new(node.outputs["BSDF"], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    return material, node
+
+
+def _rotation_to(toward):
+    """Quaternion turning local +Z onto ``toward`` (a camera looks, and a sun shines, along −Z)."""
+    from mathutils import Vector
+
+    return Vector((0.0, 0.0, 1.0)).rotation_difference(Vector(tuple(toward)).normalized())
+
+
+def add_sun(scene, toward_sun, irradiance: float):
+    """A sun of ``irradiance`` (W/m²) and no angular size, shining from ``toward_sun``."""
+    import bpy
+
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+    sun.data.energy = irradiance
+    sun.data.angle = 0.0
+    scene.collection.objects.link(sun)
+    sun.rotation_mode = "QUATERNION"
+    sun.rotation_quaternion = _rotation_to(toward_sun)
+    return sun
+
+
+def add_camera(scene, toward_camera=(0.0, 0.0, 1.0), *, ortho_scale: float = 1.0, distance: float = 5.0):
+    """An orthographic camera ``ortho_scale`` wide at ``distance`` along ``toward_camera``, looking
+    back at the origin; made the scene's camera."""
+    import bpy
+
+    camera = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    camera.data.type = "ORTHO"
+    camera.data.ortho_scale = ortho_scale
+    camera.location = tuple(distance * unit(toward_camera))
+    camera.rotation_mode = "QUATERNION"
+    camera.rotation_quaternion = _rotation_to(toward_camera)
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    return camera
+
+
+def add_sun_and_camera(scene, toward_sun, toward_camera, irradiance: float):
+    """:func:`add_sun` and a camera 1 unit wide along ``toward_camera`` (:func:`add_camera`); returns the sun."""
+    import bpy
+
+    sun = add_sun(scene, toward_sun, irradiance)
+    add_camera(scene, toward_camera)
+    bpy.context.view_layer.update()
+    return sun
+
+
+# -- the extension zip ----------------------------------------------------------------------------
+
+#: The preset the test build pre-bakes, and with what: one preset, tiny grids and budget, are enough to
+#: test the mechanism (`make extension` pre-bakes every preset's own bake).
+PREBAKED_PRESET = "red_cotton"
+PREBAKED_TRANSPORT = {"paths_per_cell": 64, "n_around": 4, "n_along": 2, "angular_resolution": 4,
+                      "incidence_resolution": 5}
+
+
+def build_extension_zip(out: pathlib.Path) -> pathlib.Path:
+    """The linux-x64 zip as `make extension` builds it, pre-baking only :data:`PREBAKED_PRESET`."""
+    existing = sorted(out.glob("clothlight-*-linux_x64.zip"))
+    if existing:
+        return existing[0]
+    result = subprocess.run(
+        [sys.executable, str(REPO / "scripts" / "build_extension.py"), "--output-dir", str(out),
+         "--platforms", "linux-x64", "--prebake", PREBAKED_PRESET,
+         "--prebake-transport", *(f"{key}={value}" for key, value in PREBAKED_TRANSPORT.items())],
+        capture_output=True, text=True,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    return pathlib.Path(result.stdout.strip().splitlines()[-1])

@@ -82,7 +82,8 @@ class BakeRequest:
         albedo to reach.  Exactly one is set.
     n_around, n_along, angular_resolution, incidence_resolution
         Transport and table grids (``[transport]`` of a preset, see :mod:`precompute.bake`); the
-        defaults are the bake's.
+        defaults are the bake's.  ``incidence_resolution`` is an odd integer or ``AUTO_RESOLUTION``
+        (the bake chooses it by its accuracy checks).
     """
 
     preset: str = "red_cotton"
@@ -93,7 +94,7 @@ class BakeRequest:
     n_around: int = 16
     n_along: int = 8
     angular_resolution: int = 12
-    incidence_resolution: int = 12
+    incidence_resolution: int | str = "auto"
 
     def __post_init__(self):
         object.__setattr__(self, "overrides", tuple(sorted((str(k), typed_number(v)) for k, v in self.overrides)))

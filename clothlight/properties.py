@@ -271,8 +271,9 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         name="Angular Resolution", default=_REQUEST.angular_resolution, min=2, max=64, soft_max=32,
         description="N of the N × N equal-solid-angle hemisphere grids of the BSSRDF (the paper: 12, 144 cells)")
     incidence_resolution: IntProperty(
-        name="Incidence Resolution", default=_REQUEST.incidence_resolution, min=2, max=64, soft_max=32,
-        description="N of the N × N sphere grid of incidence directions in the tables")
+        name="Incidence Resolution", default=0, min=0, max=63, soft_max=33,
+        description="N of the N × N sphere grid of incidence directions in the tables, odd; 0: automatic "
+                    "(the coarsest grid that meets the bake's lookup and energy checks)")
     tables_dir: StringProperty(
         name="Tables", subtype="DIR_PATH", default="", update=_forget_request,
         description="Folder of baked tables Apply Material uses (set by Bake Tables, or any folder made by "
@@ -288,8 +289,9 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         for prop, key in medium_keys(config).items():
             setattr(self, prop, float(config_value(config, key)))
         request = preset_request(name)
-        for field in ("n_around", "n_along", "angular_resolution", "incidence_resolution", "seed"):
+        for field in ("n_around", "n_along", "angular_resolution", "seed"):
             setattr(self, field, getattr(request, field))
+        self.incidence_resolution = 0 if request.incidence_resolution == "auto" else request.incidence_resolution
         if request.paths_per_cell is not None:
             self.budget, self.paths_per_cell = "PATHS", request.paths_per_cell
         else:
@@ -309,7 +311,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
             paths_per_cell=self.paths_per_cell if fixed else None,
             target_rel_stderr=None if fixed else self.target_error,
             n_around=self.n_around, n_along=self.n_along,
-            angular_resolution=self.angular_resolution, incidence_resolution=self.incidence_resolution)
+            angular_resolution=self.angular_resolution, incidence_resolution=self.incidence_resolution or "auto")
 
 
 def _is_sun(_self, obj) -> bool:

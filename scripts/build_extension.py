@@ -290,7 +290,10 @@ def main(argv=None) -> None:
         if key not in ("seed", "paths_per_cell", "target_rel_stderr", "n_around", "n_along", "angular_resolution",
                        "incidence_resolution") or not value:
             parser.error(f"--prebake-transport: {item!r} is not KEY=VALUE with a transport key of BakeRequest")
-        transport[key] = float(value) if key == "target_rel_stderr" else int(value)
+        if key == "target_rel_stderr":
+            transport[key] = float(value)
+        else:
+            transport[key] = value if (key, value) == ("incidence_resolution", "auto") else int(value)
     if "paths_per_cell" in transport:
         transport.setdefault("target_rel_stderr", None)
     platforms = None if args.no_wheels else (list(PLATFORM_TAGS) if "all" in args.platforms else args.platforms)

@@ -347,7 +347,7 @@ def test_the_bundled_wheels_and_blenders_numpy_alone_can_bake(addon, tmp_path):
         if sibling.name == "numpy" or sibling.name.startswith(("numpy.libs", "numpy-")):
             (numpy_only / sibling.name).symlink_to(sibling)
     request = jobs.BakeRequest(seed=11, paths_per_cell=64, target_rel_stderr=None, n_around=4, n_along=2,
-                               angular_resolution=4, incidence_resolution=4)
+                               angular_resolution=4, incidence_resolution=5)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(jobs.PACKAGE_ROOT), str(site), str(numpy_only)]),
            "NUMBA_CACHE_DIR": addon["preferences"].numba_cache_directory()}
     log = tmp_path / "stderr.txt"

@@ -15,11 +15,12 @@ from precompute.medium import PRESET_DIR, load_preset
 from precompute.table_layout import interpolate_rho
 from precompute.tables import HASH_KEY, SCHEMA, content_hash, read_table
 
-N_I, N_O, PATHS, SEED = 4, 6, 300, 11
+N_I, N_O, PATHS, SEED = 5, 6, 300, 11
 SMALL = [f"transport.incidence_resolution={N_I}", f"transport.angular_resolution={N_O}",
          "transport.n_around=8", "transport.n_along=4"]
 SMALL_CLI = [arg for setting in SMALL for arg in ("--set", setting)]
-TABLES = {"brdf": "brdf.exr", "brdf_stderr": "brdf_stderr.exr", "albedo": "albedo.exr", "closure_lobes": "lobes.exr"}
+TABLES = {"brdf": "brdf.exr", "brdf_stderr": "brdf_stderr.exr", "albedo": "albedo.exr", "closure_lobes": "lobes.exr",
+          "unscattered": "unscattered.exr"}
 
 
 def cli(*args):
@@ -109,7 +110,7 @@ def test_second_command_line_bake_is_a_cache_hit(baked):
 
 def test_a_preset_file_with_transport_and_bake_tables(tmp_path):
     preset = (PRESET_DIR / "undyed_cotton.toml").read_text()
-    preset += ("\n[transport]\nn_around = 8\nn_along = 4\nangular_resolution = 4\nincidence_resolution = 4\n"
+    preset += ("\n[transport]\nn_around = 8\nn_along = 4\nangular_resolution = 4\nincidence_resolution = 5\n"
                "paths_per_cell = 64\nseed = 3\n\n[bake]\nilluminant = \"D50\"\n")
     (tmp_path / "mine.toml").write_text(preset)
     run = cli("bake", "--config", str(tmp_path / "mine.toml"), "--cache-dir", str(tmp_path / "cache"), "--json")

@@ -14,7 +14,7 @@ from precompute import cache
 from precompute.bake import bake
 from precompute.tables import read_table
 
-SMALL = ["transport.angular_resolution=4", "transport.incidence_resolution=4",
+SMALL = ["transport.angular_resolution=4", "transport.incidence_resolution=5",
          "transport.n_around=8", "transport.n_along=4"]
 SMALL_CLI = [arg for setting in SMALL for arg in ("--set", setting)]
 

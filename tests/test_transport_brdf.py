@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from precompute import ballistic
 from precompute.transport import (
     TransportGrids,
     YarnGeometry,
@@ -57,7 +58,8 @@ def compare(transport, beam):
 
 def test_beam_energy_bookkeeping(beams):
     for beam in beams:
-        total = beam.specular + beam.exit_fraction + beam.absorbed_fraction + beam.lost_fraction
+        total = (beam.specular + beam.exit_fraction + beam.unscattered_fraction + beam.absorbed_fraction
+                 + beam.lost_fraction)
         np.testing.assert_allclose(total, 1.0, atol=3e-3)
 
 
@@ -132,3 +134,39 @@ def test_light_from_behind_reaches_the_point_through_the_yarn(transport):
     assert np.all(albedo_[behind] > 0.0)
     # the dense, bright first wavelength diffuses most light back toward the lit side
     assert albedo_[front, 0] > 5 * albedo_[behind, 0]
+
+
+def test_the_closed_form_unscattered_light_is_what_the_beam_sees_leave_without_a_collision():
+    """The beam tallies the light that crosses the yarn without a collision by receiving point and
+    exit direction; the closed form (precompute/ballistic.py), its deltas spread over a narrow cone
+    and averaged over the same cells, must give the same radiance cell by cell."""
+    thin = henyey_greenstein_medium([0.5], [0.3], mu_t=[3.0])
+    toward_light = BEAMS[1]
+    beam = simulate_parallel_beam(thin, GEOMETRY, toward_light, n_around=16, angular_resolution=6,
+                                  paths=400_000, seed=7)
+    grid = beam.exit_grid
+    n, sub = grid.resolution, 40
+    offsets = (np.arange(sub) + 0.5) / sub
+    cells = np.arange(n)
+    s = (cells[None, :, None, None] + offsets[None, None, None, :]) / n
+    t = (cells[:, None, None, None] + offsets[None, None, :, None]) / n
+    s, t = np.broadcast_arrays(s, t)
+    wo = grid.square_to_direction(s, t).reshape(n * n, sub * sub, 3)
+    paths, fresnel, length = ballistic.unscattered_paths(wo, GEOMETRY.index)
+    radiance = fresnel * np.exp(-thin.mu_t[0] * GEOMETRY.radius_mm * length)  # (cells, sub², K)
+    expected = np.zeros(n * n)
+    psi = (np.arange(64) + 0.5) * 2 * math.pi / 64
+    for p in psi:  # the light in the frame of a receiving point at azimuth p (as receiving_directions)
+        w = toward_light
+        light = np.array([w[2], math.sin(p) * w[0] - math.cos(p) * w[1], math.cos(p) * w[0] + math.sin(p) * w[1]])
+        cone = ballistic.cone_kernel(paths @ light, 0.03)
+        # the cell's radiance as the beam averages it: weighted by cos θ_o
+        expected += np.sum(np.sum(radiance * cone, axis=-1) * wo[..., 2], axis=1) / wo[..., 2].sum(axis=1) / len(psi)
+    measured = beam.unscattered_rho.mean(axis=0)[:, 0]
+    assert beam.unscattered_fraction[0] > 0.4
+    significant = measured > 0.05 * measured.max()
+    assert significant.sum() >= 4
+    np.testing.assert_allclose(measured[significant], expected[significant], rtol=0.1)
+    # in all, nothing missing or extra
+    weight = mean_cos_per_cell(grid) * grid.cell_solid_angle
+    assert np.sum(expected * weight) == pytest.approx(np.sum(measured * weight), rel=0.03)

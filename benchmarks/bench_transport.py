@@ -6,8 +6,8 @@ the hemispherical albedo of every incidence cell, at every wavelength, in ≤ 60
 Per-core rates are given per second of wall time and per second of CPU time: the second
 does not depend on other programs sharing the machine (the load average is printed).
 Also prints how far eq. (5) at the default grids is from a direct parallel-beam simulation
-for red cotton (the discretisation error of the tables: the clear red end's transmitted
-caustic is narrower than a surface cell, docs/transport.md).
+for red cotton, both of the scattered light (the discretisation error of the tables; the
+unscattered light is exact, precompute/ballistic.py, docs/transport.md).
 
     python benchmarks/bench_transport.py [slab] [yarn] [bake]
 """
@@ -83,7 +83,7 @@ def bake() -> None:
     simulate_yarn(optics, geometry, TransportGrids(16, 8, 4), paths_per_cell=100)  # compile
     transport, wall, cpu = timed(lambda: simulate_yarn(optics, geometry, TransportGrids(16, 8, 12),
                                                        target_rel_stderr=0.01, seed=0))
-    brdf, brdf_wall, _ = timed(lambda: yarn_brdf(transport, 12))
+    brdf, brdf_wall, _ = timed(lambda: yarn_brdf(transport, 21))
     print(f"default red-cotton tables to 1 % on every incidence cell's albedo at all 35 wavelengths, "
           f"{numba.get_num_threads()} threads: transport {wall:.1f} s wall ({cpu:.1f} s CPU, load "
           f"{os.getloadavg()[0]:.1f}), BRDF (eq. 5) {brdf_wall:.1f} s; {transport.paths_per_cell.sum():,} paths "

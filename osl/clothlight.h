@@ -252,19 +252,20 @@ color cl_unscattered_attenuation(string file, int samples, float length_over_rad
     return cl_table_texel(file, (x + 0.5) / samples, 0.5);
 }
 
-color cl_unscattered_rho(string file, int samples, float eta, vector wi, vector wo, float spread)
+// The unscattered paths that leave toward wo (yarn frame): direction toward the light, (1 - F)^2 F^k
+// and length / R of path k, followed backwards hit by hit (precompute.ballistic.unscattered_paths).
+void cl_unscattered_paths(vector wo, float eta, output vector toward_light[CL_UNSCATTERED_ORDERS],
+                          output float fresnel_factor[CL_UNSCATTERED_ORDERS],
+                          output float length_over_radius[CL_UNSCATTERED_ORDERS])
 {
-    float kappa = 1.0 / (spread * spread);
-    float cone_norm = kappa / (M_2PI * (1.0 - exp(-2.0 * kappa)));
     float F = cl_fresnel_dielectric(wo[2], eta);
-    // the light followed backwards, lengths in yarn radii, section centre at the origin
+    // lengths in yarn radii, section centre at the origin
     vector u = vector(-wo[0] / eta, -wo[1] / eta, 0.0);
     u[2] = -sqrt(max(0.0, 1.0 - u[0] * u[0] - u[1] * u[1]));
     float py = 0.0;
     float pz = 1.0;
     float travelled = 0.0;
     float factor = (1.0 - F) * (1.0 - F);
-    color rho = 0;
     for (int k = 0; k < CL_UNSCATTERED_ORDERS; k++) {
         float a = max(u[1] * u[1] + u[2] * u[2], 1e-20);
         float b = py * u[1] + pz * u[2];
@@ -277,14 +278,64 @@ color cl_unscattered_rho(string file, int samples, float eta, vector wi, vector 
         vector n = vector(0.0, py * inv, pz * inv);
         float cos_hit = dot(u, n);
         vector tangential = (u - cos_hit * n) * eta;
-        vector out = tangential + sqrt(max(0.0, 1.0 - dot(tangential, tangential))) * n;
-        float cone = cone_norm * exp(kappa * (dot(wi, out) - 1.0));
-        if (cone > 0.0)
-            rho += factor * cone * cl_unscattered_attenuation(file, samples, travelled);
+        toward_light[k] = tangential + sqrt(max(0.0, 1.0 - dot(tangential, tangential))) * n;
+        fresnel_factor[k] = factor;
+        length_over_radius[k] = travelled;
         factor *= F;
         u -= 2.0 * cos_hit * n;
     }
+}
+
+// Sun mode: rho_u(wi, wo), each path's delta spread over a normalised von Mises-Fisher cone.
+color cl_unscattered_rho(string file, int samples, float eta, vector wi, vector wo, float spread)
+{
+    float kappa = 1.0 / (spread * spread);
+    float cone_norm = kappa / (M_2PI * (1.0 - exp(-2.0 * kappa)));
+    vector toward_light[CL_UNSCATTERED_ORDERS];
+    float fresnel_factor[CL_UNSCATTERED_ORDERS];
+    float length_over_radius[CL_UNSCATTERED_ORDERS];
+    cl_unscattered_paths(wo, eta, toward_light, fresnel_factor, length_over_radius);
+    color rho = 0;
+    for (int k = 0; k < CL_UNSCATTERED_ORDERS; k++) {
+        float cone = cone_norm * exp(kappa * (dot(wi, toward_light[k]) - 1.0));
+        if (cone > 0.0)
+            rho += fresnel_factor[k] * cone * cl_unscattered_attenuation(file, samples, length_over_radius[k]);
+    }
     return rho;
+}
+
+// General mode: each path as a narrow lobe about its exact direction that Cycles samples, of unit
+// integral (checked by rendering: tests/test_yarn_shader.py).  Light in front of the surface: the
+// hair reflection lobe about the axis V - L, whose mirror direction is L; light from behind: GGX
+// refraction about the generalised half vector -(V + eta_l L), eta_l large enough for L to be
+// reachable.  A path whose light would arrive within ~6 degrees of the view's side plane from behind
+// has no such refraction and is left out.
+closure color cl_unscattered_closures(string file, int samples, float eta, vector wo, vector V, vector x, vector y,
+                                      vector z, float roughness)
+{
+    vector toward_light[CL_UNSCATTERED_ORDERS];
+    float fresnel_factor[CL_UNSCATTERED_ORDERS];
+    float length_over_radius[CL_UNSCATTERED_ORDERS];
+    cl_unscattered_paths(wo, eta, toward_light, fresnel_factor, length_over_radius);
+    closure color lobes = 0;
+    for (int k = 0; k < CL_UNSCATTERED_ORDERS; k++) {
+        vector L = normalize(toward_light[k][0] * x + toward_light[k][1] * y + toward_light[k][2] * z);
+        color weight = fresnel_factor[k] * cl_unscattered_attenuation(file, samples, length_over_radius[k]);
+        if (dot(L, z) >= 0.0) {
+            vector axis = V - L;
+            if (dot(axis, axis) < 1e-8)  // retro-reflection: any axis across the view mirrors it onto itself
+                axis = x - dot(x, V) * V;
+            lobes += weight * hair_reflection(z, roughness, roughness, normalize(axis), 0.0);
+        }
+        else {
+            float cos_vl = dot(V, L);
+            if (cos_vl < -0.1) {
+                float eta_l = max(1.3, -1.5 / cos_vl);
+                lobes += weight * microfacet("ggx", normalize(-(V + eta_l * L)), roughness, eta_l, 1);
+            }
+        }
+    }
+    return lobes;
 }
 
 // Number of closure-mixture lobes: the tiles of lobes.exr (precompute.closure_fit.LOBES).

@@ -41,7 +41,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import json
-import math
 import os
 import pathlib
 import secrets
@@ -75,7 +74,6 @@ from .table_layout import (
     brdf_atlas,
     interpolate_attenuation,
     interpolate_rho,
-    interpolate_unscattered_rho,
     lobe_atlas,
 )
 from .tables import SCHEMA, write_table
@@ -457,15 +455,9 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
         attenuation, _ = clip_to_gamut(to_rgb(attenuation_spectra))
         unscattered_table = attenuation[None]
         host_index = spectral["host_index"]
-        # The general mode's closures carry the unscattered light too, spread over an incidence cell.
-        cell_spread = math.sqrt(4.0 * math.pi) / n_i / 2.0
-
-        def unscattered(wi, wo):
-            return interpolate_unscattered_rho(unscattered_table, host_index, wi, wo, cell_spread)
-
         lobe_shape = LobeShape()
         weights, fit_error = fit_closure_weights(
-            atlas, n_i, lobe_shape, subsamples=max(1, round(CLOSURE_FIT_SAMPLES_PER_SIDE / n_i)), added_rho=unscattered
+            atlas, n_i, lobe_shape, subsamples=max(1, round(CLOSURE_FIT_SAMPLES_PER_SIDE / n_i))
         )
         rho_normal = _normal_rgb(atlas, n_i)
         rho_normal_unclipped = _normal_rgb(brdf_atlas(rho_unclipped), n_i)

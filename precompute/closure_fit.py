@@ -41,7 +41,6 @@ few cells of direct transmission, whose values are ~50× the rest.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -158,7 +157,6 @@ def fit_closure_weights(
     lobes: tuple[str, ...] = LOBES,
     views: np.ndarray | None = None,
     weighting: str = "relative",
-    added_rho: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Non-negative lobe weights per exit cell and channel, and the fit's relative error.
 
@@ -180,9 +178,6 @@ def fit_closure_weights(
         What the least squares weigh: ``"relative"`` the residual over ρ + mean ρ (every
         incidence alike, dark ones included), ``"absolute"`` the residual itself (where ρ is
         large, as in the light a mixture reflects under broad lighting, an integral of ρ).
-    added_rho
-        ``f(wi, wo) -> (…, C)`` in 1/sr added to the atlas' ρ in the target: the unscattered light
-        (:func:`precompute.ballistic.unscattered_rho`), which the atlas does not hold.
 
     Returns
     -------
@@ -208,8 +203,6 @@ def fit_closure_weights(
     relative_error = np.zeros((len(views), channels))
     for exit_cell, view in enumerate(views):
         target = interpolate_rho(atlas, incidence_resolution, light, np.broadcast_to(view, light.shape))
-        if added_rho is not None:
-            target = target + added_rho(light, np.broadcast_to(view, light.shape))
         design = lobe_responses(view, light, shape, lobes)
         for channel in range(channels):
             relative = 1.0 / (target[:, channel] + target[:, channel].mean() + 1e-30)

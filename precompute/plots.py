@@ -180,6 +180,7 @@ def plot_swatches(spectral: dict, incidence_resolution: int, path,
         axes[1, column].set_xlabel(f"B/R = {ratios['B/R']:.3g}, G/R = {ratios['G/R']:.3g}", fontsize=9)
     axes[0, 0].set_ylabel("same exposure", fontsize=9)
     axes[1, 0].set_ylabel("each at its own exposure", fontsize=9)
-    fig.suptitle(f"yarn seen along its normal ({illuminant} white; exit grid {n_o}×{n_o})", fontsize=10)
+    fig.suptitle(f"scattered light of the yarn seen along its normal ({illuminant} white; exit grid {n_o}×{n_o})",
+                 fontsize=10)
     fig.tight_layout()
     return _save(fig, path)

@@ -7,6 +7,7 @@ analytic ρ to within the grid's interpolation error at off-centre directions;
 general mode must turn lobe weights into clamped-cosine responses.
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -15,7 +16,13 @@ import pytest
 from precompute.closure_fit import LOBES, LobeShape, lobe_responses
 from precompute.grids import AngularGrid
 from precompute import ballistic
-from precompute.table_layout import brdf_atlas, interpolate_rho, interpolate_unscattered_rho, lobe_atlas
+from precompute.table_layout import (
+    brdf_atlas,
+    interpolate_attenuation,
+    interpolate_rho,
+    interpolate_unscattered_rho,
+    lobe_atlas,
+)
 from tests.helpers import add_sun_and_camera, direction, empty_render_scene, unit, write_exr
 
 bpy = pytest.importorskip("bpy")
@@ -127,6 +134,34 @@ def test_sun_mode_adds_the_unscattered_light_as_its_numpy_twin(tmp_path, synthet
 
 
 @pytest.mark.blender
+@pytest.mark.parametrize("view_zenith, view_azimuth", [(0.0, 0.0), (30.0, 60.0), (55.0, 170.0)])
+def test_general_mode_renders_each_unscattered_path_as_a_lobe_of_its_weight(
+        tmp_path, synthetic_tables, view_zenith, view_azimuth):
+    # Under a uniform sky of radiance 1 each lobe of unit integral gives its weight: the patch
+    # (no scattered light: ρ and the lobe weights zero) must shine with the closed form's
+    # ∫ρ_u dω_i, and the lit-from-behind lobes (GGX refraction) are not lost.
+    tables = synthetic_tables[0]
+    folder = tmp_path
+    write_exr(folder / "rho.exr", np.zeros((N_I * N_O, N_I * N_O, 3)))
+    write_exr(folder / "lobes.exr", np.zeros((N_O, len(LOBES) * N_O, 3)))
+    dark = YarnTableFiles(folder / "rho.exr", folder / "lobes.exr", tables.unscattered_path, N_I, N_O,
+                          LobeShape().to_dict(), INDEX, ballistic.ATTENUATION_SAMPLES)
+    scene, wo = patch_scene(dark, GENERAL_MODE, view_zenith, view_azimuth, unit([0.0, 0.0, 1.0]))
+    scene.cycles.samples = 256
+    for obj in [o for o in scene.objects if o.type == "LIGHT"]:
+        bpy.data.objects.remove(obj)
+    scene.world = bpy.data.worlds.new("sky")
+    background = scene.world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    background.inputs["Strength"].default_value = 1.0
+    pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
+    attenuation = synthetic_tables[3]
+    expected = ballistic.unscattered_radiance_factor(
+        wo, INDEX, lambda length: np.asarray(interpolate_attenuation(attenuation, length)))
+    np.testing.assert_allclose(pixels.mean(axis=0), expected, rtol=0.02)
+
+
+@pytest.mark.blender
 @pytest.mark.parametrize(
     "view_zenith, view_azimuth, sun_direction",
     [(20.0, 40.0, unit([0.3, -0.2, 0.9])),  # front: diffuse, fibre cone, retro-reflection
@@ -135,6 +170,9 @@ def test_sun_mode_adds_the_unscattered_light_as_its_numpy_twin(tmp_path, synthet
     ids=["front", "cone", "behind"])
 def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_zenith, view_azimuth, sun_direction):
     tables, _, weights, _ = synthetic_tables
+    # the mixture alone: a yarn that lets no light through unscattered
+    write_exr(tmp_path / "opaque.exr", np.zeros((1, ballistic.ATTENUATION_SAMPLES, 3)))
+    tables = dataclasses.replace(tables, unscattered_path=tmp_path / "opaque.exr")
     scene, wo = patch_scene(tables, GENERAL_MODE, view_zenith, view_azimuth, sun_direction)
     pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
     expected = SUN_IRRADIANCE * lobe_responses(wo, sun_direction) @ weights[0]

@@ -245,6 +245,7 @@ color cl_yarn_rho(string file, int incidence_resolution, int exit_resolution, ve
 
 #define CL_UNSCATTERED_ORDERS 4
 #define CL_UNSCATTERED_MAX_LENGTH 8.0
+#define CL_UNSCATTERED_MIN_FACTOR 0.003
 
 color cl_unscattered_attenuation(string file, int samples, float length_over_radius)
 {
@@ -309,7 +310,9 @@ color cl_unscattered_rho(string file, int samples, float eta, vector wi, vector 
 // hair reflection lobe about the axis V - L, whose mirror direction is L; light from behind: GGX
 // refraction about the generalised half vector -(V + eta_l L), eta_l large enough for L to be
 // reachable.  A path whose light would arrive within ~6 degrees of the view's side plane from behind
-// has no such refraction and is left out.
+// has no such refraction and is left out, and so is a path whose Fresnel factor is below
+// CL_UNSCATTERED_MIN_FACTOR: each closure costs every light sample an evaluation, and the paths left
+// out carry at most ~0.3 % of the unscattered light.
 closure color cl_unscattered_closures(string file, int samples, float eta, vector wo, vector V, vector x, vector y,
                                       vector z, float roughness)
 {
@@ -319,6 +322,8 @@ closure color cl_unscattered_closures(string file, int samples, float eta, vecto
     cl_unscattered_paths(wo, eta, toward_light, fresnel_factor, length_over_radius);
     closure color lobes = 0;
     for (int k = 0; k < CL_UNSCATTERED_ORDERS; k++) {
+        if (fresnel_factor[k] < CL_UNSCATTERED_MIN_FACTOR)
+            break;  // the factors fall with k
         vector L = normalize(toward_light[k][0] * x + toward_light[k][1] * y + toward_light[k][2] * z);
         color weight = fresnel_factor[k] * cl_unscattered_attenuation(file, samples, length_over_radius[k]);
         if (dot(L, z) >= 0.0) {

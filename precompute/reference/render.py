@@ -11,8 +11,9 @@ Mitsuba's own ``volpath`` integrator, ``scalar_mono`` variant where the wheel ha
 render either way; the llvm variants need a newer libLLVM than some systems have).
 
 The first-surface glint is removed by a Python BSDF wrapping Mitsuba's ``dielectric`` (registered
-as :data:`GLINT_FREE_PLUGIN` by :func:`mitsuba`): seen from outside it always refracts, with weight (1 − F) — the reflection from
-the outside, which on a convex cylinder is exactly the glint, is zero — and from inside it is the
+as :data:`GLINT_FREE_PLUGIN` by :func:`mitsuba`): seen from outside it always refracts, with weight
+(1 − F) — the reflection from the outside, which on a convex cylinder is exactly the glint, is zero —
+and from inside it is the
 plain dielectric (internal reflection and refraction out kept).
 
 Conventions checked on Mitsuba 3.9.1 (tests/test_brute_force_reference.py): ``tabphase`` values

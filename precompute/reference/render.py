@@ -13,8 +13,7 @@ render either way; the llvm variants need a newer libLLVM than some systems have
 The first-surface glint is removed by a Python BSDF wrapping Mitsuba's ``dielectric`` (registered
 as :data:`GLINT_FREE_PLUGIN` by :func:`mitsuba`): seen from outside it always refracts, with weight
 (1 − F) — the reflection from the outside, which on a convex cylinder is exactly the glint, is zero —
-and from inside it is the
-plain dielectric (internal reflection and refraction out kept).
+and from inside it is the plain dielectric (internal reflection and refraction out kept).
 
 Conventions checked on Mitsuba 3.9.1 (tests/test_brute_force_reference.py): ``tabphase`` values
 run over cos θ from −1 to +1 with cos θ = +1 forward scattering, the project's convention

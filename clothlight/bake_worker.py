@@ -11,6 +11,7 @@ from __future__ import annotations
 import _thread
 import argparse
 import json
+import signal
 import sys
 import threading
 import traceback
@@ -38,6 +39,9 @@ def main(argv=None) -> int:
     parser.add_argument("--cache-dir", required=True)
     parser.add_argument("--threads", type=int)
     args = parser.parse_args(argv)
+    # A process started in the background of a shell inherits SIGINT ignored, and then
+    # interrupt_main() raises nothing: the cancel would be lost.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     threading.Thread(target=_watch_stdin, daemon=True).start()
     try:
         # colour-science probes for matplotlib and warns when it is absent: its plots are not used here.

@@ -20,6 +20,8 @@ from clothlight.garment.tables import (
     LOBE_FILE,
     LOBE_TILES,
     SPECULAR_VISIBILITY_FILES,
+    SUMMARY_FILE,
+    SUMMARY_SCHEMA,
     lobe_image,
     projected_view_grid,
 )
@@ -220,6 +222,12 @@ def test_garment_material_refuses_meshes_without_uvs_and_incomplete_bakes(tmp_pa
         apply_garment_material(obj, tables)
     with pytest.raises(FileNotFoundError):
         cloth_tables_from_bake(tmp_path)
+    older = tmp_path / "older"
+    older.mkdir()
+    (older / SUMMARY_FILE).write_text(json.dumps({"schema": SUMMARY_SCHEMA, "table_schema": "clothlight-table/3",
+                                                   "lobe_tiles": list(LOBE_TILES)}))
+    with pytest.raises(ValueError, match="schema 'clothlight-table/3'.*bake the cloth again"):
+        cloth_tables_from_bake(older)  # measured from yarn tables whose ρ held the unscattered light
     with pytest.raises(ParameterError, match="cloth_dir"):
         ValidationRun(None, tmp_path, materials=("garment",), cloth_dir=tmp_path)
     with pytest.raises(ValueError, match="mode"):

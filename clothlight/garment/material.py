@@ -32,6 +32,7 @@ from .tables import (
     SPECULAR_VISIBILITY_FILES,
     SUMMARY_FILE,
     SUMMARY_SCHEMA,
+    precompute_tables,
 )
 
 SHADER = "cloth_garment"
@@ -67,6 +68,10 @@ def cloth_tables_from_bake(folder) -> ClothTableFiles:
     if summary.get("schema") != SUMMARY_SCHEMA:
         raise ValueError(f"{summary_path}: schema {summary.get('schema')!r}, this ClothLight reads "
                          f"{SUMMARY_SCHEMA!r}: bake the cloth again")
+    if summary.get("table_schema") != precompute_tables.SCHEMA:
+        # measured from yarn tables of another schema: what their ρ held differs (docs/table-spec.md)
+        raise ValueError(f"{summary_path}: measured from tables of schema {summary.get('table_schema')!r}, "
+                         f"this ClothLight reads {precompute_tables.SCHEMA!r}: bake the cloth again")
     if list(summary.get("lobe_tiles", [])) != list(LOBE_TILES):
         raise ValueError(f"{summary_path}: lobe tiles {summary.get('lobe_tiles')}, this ClothLight reads "
                          f"{list(LOBE_TILES)}: bake the cloth again")

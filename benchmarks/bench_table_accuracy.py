@@ -30,14 +30,7 @@ result = bake("red_cotton")
 arrays, spectral = load_spectral(result.folder / SPECTRAL_FILE)
 wavelengths = arrays["wavelengths_nm"]
 resolution = spectral["transport"]["angular_resolution"]
-grid = AngularGrid("hemisphere", resolution)
-sub = 24
-offsets = (np.arange(sub) + 0.5) / sub
-cells = np.arange(resolution)
-s = (cells[None, :, None, None] + offsets[None, None, None, :]) / resolution
-t = (cells[:, None, None, None] + offsets[None, None, :, None]) / resolution
-s, t = np.broadcast_arrays(s, t)
-directions = grid.square_to_direction(s, t).reshape(resolution**2, sub * sub, 3)
+directions = AngularGrid("hemisphere", resolution).cell_samples(24)
 mu_t = arrays["mu_s"] + arrays["mu_a"]
 factor = ballistic.unscattered_radiance_factor(
     directions, spectral["host_index"], lambda length: ballistic.attenuation(mu_t, spectral["radius_mm"], length))

@@ -138,15 +138,7 @@ def lobe_responses(view: np.ndarray, light: np.ndarray, shape: LobeShape = LobeS
 def incidence_samples(grid: AngularGrid, subsamples: int) -> np.ndarray:
     """Directions (n_cells·subsamples², 3) on a ``subsamples × subsamples`` lattice inside every
     cell of the equal-area square of ``grid``: uniform in solid angle."""
-    if subsamples < 1:
-        raise ParameterError("subsamples", subsamples, "an integer ≥ 1")
-    n = grid.resolution
-    offsets = (np.arange(subsamples) + 0.5) / subsamples
-    cell = np.arange(n)
-    s = (cell[None, :, None, None] + offsets[None, None, None, :]) / n
-    t = (cell[:, None, None, None] + offsets[None, None, :, None]) / n
-    s, t = np.broadcast_arrays(s, t)
-    return grid.square_to_direction(s, t).reshape(-1, 3)
+    return grid.cell_samples(subsamples).reshape(-1, 3)
 
 
 def fit_closure_weights(

@@ -232,6 +232,18 @@ class AngularGrid:
         j = np.clip((st[..., 1] * n).astype(int), 0, n - 1)
         return j * n + i
 
+    def cell_samples(self, subsamples: int) -> np.ndarray:
+        """Directions (N², subsamples², 3) on a ``subsamples × subsamples`` lattice inside every cell
+        of the equal-area square, flat cell order: uniform in solid angle over each cell."""
+        if not isinstance(subsamples, (int, np.integer)) or subsamples < 1:
+            raise ParameterError("subsamples", subsamples, "an integer ≥ 1")
+        n = self.resolution
+        offsets = (np.arange(subsamples) + 0.5) / subsamples
+        cells = np.arange(n)
+        s = (cells[None, :, None, None] + offsets[None, None, None, :]) / n  # [j, i, sub_t, sub_s]
+        t = (cells[:, None, None, None] + offsets[None, None, :, None]) / n
+        return self.square_to_direction(*np.broadcast_arrays(s, t)).reshape(n * n, subsamples * subsamples, 3)
+
     def cell_centers(self) -> np.ndarray:
         """Direction at the square-space center of every cell, shape (N², 3), flat order."""
         n = self.resolution

@@ -109,6 +109,25 @@ def interpolate_exit_tile(tile: np.ndarray, wo: np.ndarray) -> np.ndarray:
     return _bilinear_in_tile(tile, 0, 0, tile.shape[0], st[..., 0], st[..., 1])
 
 
+def incidence_corners(incidence_resolution: int, wi: np.ndarray):
+    """The four incidence cells the shader blends for light from ``wi`` (…, 3) and their bilinear
+    weights: tile columns, tile rows (…, 4) int and weights (…, 4), between the cells' centres,
+    clamped at the square's border (step 2 of docs/table-spec.md)."""
+    n_i = incidence_resolution
+    st = AngularGrid("sphere", n_i).direction_to_square(wi)
+    fx = np.clip(st[..., 0] * n_i - 0.5, 0.0, n_i - 1.0)
+    fy = np.clip(st[..., 1] * n_i - 0.5, 0.0, n_i - 1.0)
+    i0 = np.floor(fx).astype(int)
+    j0 = np.floor(fy).astype(int)
+    i1 = np.minimum(i0 + 1, n_i - 1)
+    j1 = np.minimum(j0 + 1, n_i - 1)
+    ax, ay = fx - i0, fy - j0
+    columns = np.stack([i0, i1, i0, i1], axis=-1)
+    rows = np.stack([j0, j0, j1, j1], axis=-1)
+    weights = np.stack([(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay], axis=-1)
+    return columns, rows, weights
+
+
 def interpolate_rho(atlas: np.ndarray, incidence_resolution: int, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     """ρ(ω_i, ω_o) from a BRDF atlas exactly as the shader interpolates it.
 
@@ -120,23 +139,11 @@ def interpolate_rho(atlas: np.ndarray, incidence_resolution: int, wi: np.ndarray
     n_i = incidence_resolution
     n_o = atlas.shape[0] // n_i
     wi, wo = np.broadcast_arrays(np.asarray(wi, float), np.asarray(wo, float))
-    st_i = AngularGrid("sphere", n_i).direction_to_square(wi)
+    columns, rows, weights = incidence_corners(n_i, wi)
     st_o = AngularGrid("hemisphere", n_o).direction_to_square(wo)
-    fx = np.clip(st_i[..., 0] * n_i - 0.5, 0.0, n_i - 1.0)
-    fy = np.clip(st_i[..., 1] * n_i - 0.5, 0.0, n_i - 1.0)
-    i0 = np.floor(fx).astype(int)
-    j0 = np.floor(fy).astype(int)
-    i1 = np.minimum(i0 + 1, n_i - 1)
-    j1 = np.minimum(j0 + 1, n_i - 1)
-    ax = (fx - i0)[..., None]
-    ay = (fy - j0)[..., None]
-    so, to = st_o[..., 0], st_o[..., 1]
-
-    def tile(col, row):
-        return _bilinear_in_tile(atlas, col, row, n_o, so, to)
-
-    c00, c10, c01, c11 = tile(i0, j0), tile(i1, j0), tile(i0, j1), tile(i1, j1)
-    return (c00 * (1 - ax) + c10 * ax) * (1 - ay) + (c01 * (1 - ax) + c11 * ax) * ay
+    return sum(weights[..., k, None] * _bilinear_in_tile(atlas, columns[..., k], rows[..., k], n_o, st_o[..., 0],
+                                                           st_o[..., 1])
+               for k in range(4))
 
 
 def interpolate_attenuation(table: np.ndarray, length_over_radius) -> np.ndarray:

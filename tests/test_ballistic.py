@@ -84,14 +84,7 @@ def test_the_transport_sees_the_closed_form_leave_unscattered():
     geometry = YarnGeometry(0.1, INDEX)
     resolution = 6
     transport = simulate_yarn(medium, geometry, TransportGrids(8, 4, resolution), paths_per_cell=40_000, seed=3)
-    grid = AngularGrid("hemisphere", resolution)
-    sub = 24
-    offsets = (np.arange(sub) + 0.5) / sub
-    cells = np.arange(resolution)
-    s = (cells[None, :, None, None] + offsets[None, None, None, :]) / resolution
-    t = (cells[:, None, None, None] + offsets[None, None, :, None]) / resolution
-    s, t = np.broadcast_arrays(s, t)
-    directions = grid.square_to_direction(s, t).reshape(resolution**2, sub * sub, 3)
+    directions = AngularGrid("hemisphere", resolution).cell_samples(24)
     factor = ballistic.unscattered_radiance_factor(
         directions, INDEX, lambda length: ballistic.attenuation(medium.mu_t, geometry.radius_mm, length))
     cos = directions[..., 2][..., None]

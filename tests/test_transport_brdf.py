@@ -145,16 +145,10 @@ def test_the_closed_form_unscattered_light_is_what_the_beam_sees_leave_without_a
     beam = simulate_parallel_beam(thin, GEOMETRY, toward_light, n_around=16, angular_resolution=6,
                                   paths=400_000, seed=7)
     grid = beam.exit_grid
-    n, sub = grid.resolution, 40
-    offsets = (np.arange(sub) + 0.5) / sub
-    cells = np.arange(n)
-    s = (cells[None, :, None, None] + offsets[None, None, None, :]) / n
-    t = (cells[:, None, None, None] + offsets[None, None, :, None]) / n
-    s, t = np.broadcast_arrays(s, t)
-    wo = grid.square_to_direction(s, t).reshape(n * n, sub * sub, 3)
+    wo = grid.cell_samples(40)
     paths, fresnel, length = ballistic.unscattered_paths(wo, GEOMETRY.index)
     radiance = fresnel * np.exp(-thin.mu_t[0] * GEOMETRY.radius_mm * length)  # (cells, sub², K)
-    expected = np.zeros(n * n)
+    expected = np.zeros(grid.n_cells)
     psi = (np.arange(64) + 0.5) * 2 * math.pi / 64
     for p in psi:  # the light in the frame of a receiving point at azimuth p (as receiving_directions)
         w = toward_light

@@ -126,32 +126,13 @@ def predict_bins(rho: Rho | None, light, *, bins: int = 16, edge: float = DEFAUL
 # ---- ρ from the project's data ------------------------------------------------------------------
 
 
-def _bilinear_tiles(tiles: np.ndarray, st: np.ndarray) -> np.ndarray:
-    """Per-direction exit tiles (n, N, N) read at square coordinates (n, 2) between pixel centres,
-    clamped as :func:`precompute.table_layout.interpolate_exit_tile` reads one tile."""
-    n = tiles.shape[-1]
-    half = 0.5 / n
-    x = np.clip(st[:, 0], half, 1.0 - half) * n - 0.5
-    y = np.clip(st[:, 1], half, 1.0 - half) * n - 0.5
-    x0 = np.clip(np.floor(x).astype(int), 0, n - 1)
-    y0 = np.clip(np.floor(y).astype(int), 0, n - 1)
-    x1, y1 = np.minimum(x0 + 1, n - 1), np.minimum(y0 + 1, n - 1)
-    ax, ay = x - x0, y - y0
-    rows = np.arange(len(tiles))
-    top = tiles[rows, y0, x0] * (1 - ax) + tiles[rows, y0, x1] * ax
-    bottom = tiles[rows, y1, x0] * (1 - ax) + tiles[rows, y1, x1] * ax
-    return top * (1 - ay) + bottom * ay
-
-
 def transport_rho(transport, wavelength_index: int = 0, *, chunk: int = 1024) -> tuple[Rho, Rho]:
     """ρ and its standard error straight from a :class:`~precompute.transport.YarnTransport`: eq. (5) at
     the exact ω_i (``yarn_brdf_at``), read between exit-cell centres at ω_o as a table tile is read.
     No incidence grid is involved.  Returns two functions ``(wi, wo) -> (…,)`` in 1/sr."""
-    from ..grids import AngularGrid
     from ..transport import yarn_brdf_at
 
-    n_o = transport.exit_grid.resolution
-    grid = AngularGrid("hemisphere", n_o)
+    grid = transport.exit_grid
 
     def evaluate(wi, wo, which):
         wi, wo = np.broadcast_arrays(np.asarray(wi, float), np.asarray(wo, float))
@@ -160,14 +141,15 @@ def transport_rho(transport, wavelength_index: int = 0, *, chunk: int = 1024) ->
         for start in range(0, len(flat_i), chunk):
             part = slice(start, start + chunk)
             result = yarn_brdf_at(transport, flat_i[part])[which][:, :, wavelength_index]
-            out[part] = _bilinear_tiles(result.reshape(-1, n_o, n_o), grid.direction_to_square(flat_o[part]))
+            out[part] = np.einsum("ko,ko->k", _exit_weights(grid, flat_o[part]), result)
         return out.reshape(wi.shape[:-1])
 
     return (lambda wi, wo: evaluate(wi, wo, 0)), (lambda wi, wo: evaluate(wi, wo, 1))
 
 
 def _exit_weights(grid, wo: np.ndarray) -> np.ndarray:
-    """Bilinear weights (n, N²) of the exit cells for directions ``wo`` (n, 3), as :func:`_bilinear_tiles` reads."""
+    """Bilinear weights (n, N²) of the exit cells for directions ``wo`` (n, 3): between pixel centres,
+    clamped, as :func:`precompute.table_layout.interpolate_exit_tile` reads one tile."""
     n = grid.resolution
     st = grid.direction_to_square(wo)
     half = 0.5 / n

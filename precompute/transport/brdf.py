@@ -31,6 +31,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..grids import AngularGrid
+from ..table_layout import incidence_corners
 from ._checks import integer_at_least
 from .cylinder import ALBEDO_FLOOR, YarnTransport, mean_cos_per_cell
 
@@ -205,23 +206,10 @@ def fibonacci_sphere(count: int) -> np.ndarray:
 
 def incidence_lookup(rho: np.ndarray, resolution: int, wi: np.ndarray) -> np.ndarray:
     """ρ (n_dirs, n_out, L) for light from ``wi`` (n_dirs, 3) by the tables' bilinear incidence
-    lookup between the cell centres of ``rho`` (N_i², n_out, L) (:func:`precompute.table_layout.interpolate_rho`
-    without the exit interpolation)."""
-    n = resolution
-    st = AngularGrid("sphere", n).direction_to_square(wi)
-    fx = np.clip(st[:, 0] * n - 0.5, 0.0, n - 1.0)
-    fy = np.clip(st[:, 1] * n - 0.5, 0.0, n - 1.0)
-    i0 = np.floor(fx).astype(int)
-    j0 = np.floor(fy).astype(int)
-    i1 = np.minimum(i0 + 1, n - 1)
-    j1 = np.minimum(j0 + 1, n - 1)
-    ax = (fx - i0)[:, None, None]
-    ay = (fy - j0)[:, None, None]
-
-    def cell(i, j):
-        return rho[j * n + i]
-
-    return (cell(i0, j0) * (1 - ax) + cell(i1, j0) * ax) * (1 - ay) + (cell(i0, j1) * (1 - ax) + cell(i1, j1) * ax) * ay
+    lookup between the cell centres of ``rho`` (N_i², n_out, L)
+    (:func:`precompute.table_layout.interpolate_rho` without the exit interpolation)."""
+    columns, rows, weights = incidence_corners(resolution, wi)
+    return np.einsum("dk,dkol->dol", weights, rho[rows * resolution + columns])
 
 
 def check_incidence_grid(transport: YarnTransport, brdf: YarnBRDF, test_directions: np.ndarray,

@@ -169,13 +169,7 @@ class YarnTransport:
 
 def mean_cos_per_cell(grid: AngularGrid, subsamples: int = 64) -> np.ndarray:
     """Mean of cos θ over each cell of a hemisphere grid (directions uniform in solid angle)."""
-    n = grid.resolution
-    offsets = (np.arange(subsamples) + 0.5) / subsamples
-    cells = np.arange(n)
-    s = (cells[None, :, None, None] + offsets[None, None, None, :]) / n
-    t = (cells[:, None, None, None] + offsets[None, None, :, None]) / n
-    s, t = np.broadcast_arrays(s, t)
-    return grid.square_to_direction(s, t)[..., 2].mean(axis=(2, 3)).reshape(-1)
+    return grid.cell_samples(subsamples)[..., 2].mean(axis=1)
 
 
 def max_cos_per_cell(resolution: int) -> np.ndarray:

@@ -4,4 +4,7 @@ Blender imports this folder as ``bl_ext.<repo>.clothlight``; everything inside
 is imported relatively from there.
 """
 
-from .clothlight import register, unregister  # noqa: F401
+# pytest imports this file as a top-level module when the checkout's folder name is no Python
+# identifier (a `mktemp -d` clone): there is no package to import relatively from, and nothing to register.
+if __package__:
+    from .clothlight import register, unregister  # noqa: F401

@@ -1,7 +1,7 @@
 """Transport speed and the default bake's cost; figures are printed, never asserted.
 
 Targets (issue 4): ≥ 10 M scattering events/s per core; the default red-cotton tables
-(16 × 8 spatial, 144 × 144 angular, 35 wavelengths) to ≤ 1 % relative standard error on
+(32 × 4 spatial, 144 × 144 angular, 35 wavelengths) to ≤ 1 % relative standard error on
 the hemispherical albedo of every incidence cell, at every wavelength, in ≤ 60 s on 2 cores.
 Per-core rates are given per second of wall time and per second of CPU time: the second
 does not depend on other programs sharing the machine (the load average is printed).

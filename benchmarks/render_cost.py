@@ -41,13 +41,17 @@ def principled_with_sheen():
 def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: int = 5) -> dict:
     """Render ``obj`` with the reference and each of ``materials`` (label → material): a warm-up
     each (shader compile, BVH), then ``repeats`` rounds of one timed render per material, taken in
-    turn so that a machine whose speed drifts slows them alike; print the medians and ratios."""
+    turn so that a machine whose speed drifts slows them alike; print the medians and ratios.  The
+    reference renders under Cycles' default SVM, as a user would render it; the materials under the
+    scene's shading system (OSL where the ClothLight shaders need it)."""
     every = {REFERENCE: principled_with_sheen(), **materials}
+    shading_systems = {label: label != REFERENCE and scene.cycles.shading_system for label in every}
     runs = {label: [] for label in every}
     for round_index in range(repeats + 1):
         for label, material in every.items():
             obj.data.materials.clear()
             obj.data.materials.append(material)
+            scene.cycles.shading_system = shading_systems[label]
             scene.render.filepath = str(out / f"{label}.exr")
             start = time.perf_counter()
             bpy.ops.render.render(write_still=True)

@@ -91,8 +91,8 @@ class BakeRequest:
     seed: int = 0
     paths_per_cell: int | None = None
     target_rel_stderr: float | None = 0.01
-    n_around: int = 16
-    n_along: int = 8
+    n_around: int = 32
+    n_along: int = 4
     angular_resolution: int = 12
     incidence_resolution: int | str = "auto"
 

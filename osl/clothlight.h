@@ -348,21 +348,29 @@ closure color cl_unscattered_closures(string file, int samples, float eta, vecto
 
 // The general-lighting closure mixture of a baked rho for the view wo (frame x, y, z; V the world
 // view): five Cycles closures weighted per exit cell, in the order of precompute.closure_fit.LOBES.
+// A lobe of zero weight adds no closure: each costs Cycles an evaluation per light sample, and the
+// fit leaves out the minor ones (precompute.closure_fit.MIN_LOBE_SHARE).
 closure color cl_closure_mixture(string lobe_table, int exit_resolution, vector wo, vector V, vector x,
                                  vector z, float reflection_r1, float reflection_r2, float transmission_r1,
                                  float transmission_r2, float retroreflection_alpha)
 {
     float so, to;
     cl_hemisphere_to_square(wo, so, to);
-    int n = exit_resolution;
-    return cl_tile_lookup(lobe_table, 0, 0, CL_LOBE_COUNT, 1, n, so, to) * diffuse(z)
-        + cl_tile_lookup(lobe_table, 1, 0, CL_LOBE_COUNT, 1, n, so, to) * translucent(z)
-        + cl_tile_lookup(lobe_table, 2, 0, CL_LOBE_COUNT, 1, n, so, to)
-            * hair_reflection(z, reflection_r1, reflection_r2, x, 0.0)
-        + cl_tile_lookup(lobe_table, 3, 0, CL_LOBE_COUNT, 1, n, so, to)
-            * hair_transmission(z, transmission_r1, transmission_r2, x, 0.0)
-        + cl_tile_lookup(lobe_table, 4, 0, CL_LOBE_COUNT, 1, n, so, to)
-            * microfacet("ggx", V, retroreflection_alpha, 1.0, 0);
+    color weight[CL_LOBE_COUNT];
+    for (int k = 0; k < CL_LOBE_COUNT; k++)
+        weight[k] = cl_tile_lookup(lobe_table, k, 0, CL_LOBE_COUNT, 1, exit_resolution, so, to);
+    closure color mixture = 0;
+    if (weight[0] != color(0))
+        mixture += weight[0] * diffuse(z);
+    if (weight[1] != color(0))
+        mixture += weight[1] * translucent(z);
+    if (weight[2] != color(0))
+        mixture += weight[2] * hair_reflection(z, reflection_r1, reflection_r2, x, 0.0);
+    if (weight[3] != color(0))
+        mixture += weight[3] * hair_transmission(z, transmission_r1, transmission_r2, x, 0.0);
+    if (weight[4] != color(0))
+        mixture += weight[4] * microfacet("ggx", V, retroreflection_alpha, 1.0, 0);
+    return mixture;
 }
 
 #endif

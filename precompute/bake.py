@@ -23,8 +23,8 @@ again.
 Preset TOML tables owned here (defaults merged when absent)::
 
     [transport]
-    n_around = 16              # spatial cells around the yarn (the paper: 16 × 8 = 128)
-    n_along = 8                # spatial cells along the yarn, even
+    n_around = 32              # spatial cells around the yarn (the paper: 16 × 8 = 128 cells)
+    n_along = 4                # spatial cells along the yarn, even
     angular_resolution = 12    # N of the N × N hemisphere grids of the BSSRDF (the paper: 144 cells)
     incidence_resolution = "auto"  # N_i of the tables' sphere grid of incidence: odd, or "auto"
     target_rel_stderr = 0.01   # relative standard error of every cell's albedo to reach, or
@@ -81,9 +81,9 @@ from .transport import TransportGrids, YarnGeometry, simulate_yarn
 from .transport.brdf import INCIDENCE_RESOLUTIONS, yarn_brdf_to_tolerance
 
 TRANSPORT_DEFAULTS = {
-    "n_around": 16,
-    "n_along": 8,
-    "angular_resolution": 12,
+    "n_around": TransportGrids.n_around,
+    "n_along": TransportGrids.n_along,
+    "angular_resolution": TransportGrids.angular_resolution,
     "incidence_resolution": "auto",
     "paths_per_cell": None,
     "target_rel_stderr": 0.01,

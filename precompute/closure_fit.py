@@ -53,6 +53,11 @@ from .table_layout import interpolate_rho
 
 #: The lobes in the order of ``lobes.exr``'s tiles and of the shader's sum.
 LOBES = ("diffuse", "translucent", "fibre_reflection", "fibre_transmission", "retroreflection")
+#: A lobe whose weight (mean over channels) is below this share of the exit cell's mixture is left
+#: out and the others refitted without it: each closure costs Cycles an evaluation per light
+#: sample, and the fibre cones carry < 1 % of the red cotton's ρ in most exit cells.  The shader
+#: adds no closure of zero weight.
+MIN_LOBE_SHARE = 0.01
 YARN_AXIS = np.array([1.0, 0.0, 0.0])
 YARN_NORMAL = np.array([0.0, 0.0, 1.0])
 
@@ -175,7 +180,8 @@ def fit_closure_weights(
     -------
     weights
         Shape (n_views, len(lobes), C), dimensionless (each lobe integrates to at
-        most 1, so a weight is the lobe's albedo).
+        most 1, so a weight is the lobe's albedo); lobes below ``MIN_LOBE_SHARE`` of a
+        view's mixture are zero in every channel.
     relative_error
         Shape (n_views, C): RMS over the samples of ``(fit − ρ) / (ρ + mean ρ)``.
     """
@@ -196,12 +202,21 @@ def fit_closure_weights(
     for exit_cell, view in enumerate(views):
         target = interpolate_rho(atlas, incidence_resolution, light, np.broadcast_to(view, light.shape))
         design = lobe_responses(view, light, shape, lobes)
-        for channel in range(channels):
-            relative = 1.0 / (target[:, channel] + target[:, channel].mean() + 1e-30)
-            scale = relative if weighting == "relative" else np.ones_like(relative)
-            w, _ = nnls(design * scale[:, None], target[:, channel] * scale)
-            weights[exit_cell, :, channel] = w
-            relative_error[exit_cell, channel] = math.sqrt(np.mean(((design @ w - target[:, channel]) * relative) ** 2))
+        relative = 1.0 / (target + target.mean(axis=0) + 1e-30)
+        scale = relative if weighting == "relative" else np.ones_like(relative)
+
+        def fit(kept):
+            w = np.zeros((len(lobes), channels))
+            for channel in range(channels):
+                w[kept, channel], _ = nnls(design[:, kept] * scale[:, channel, None], target[:, channel] * scale[:, channel])
+            return w
+
+        w = fit(np.arange(len(lobes)))
+        minor = w.mean(axis=1) < MIN_LOBE_SHARE * w.mean(axis=1).sum()
+        if minor.any() and not minor.all():
+            w = fit(np.flatnonzero(~minor))
+        weights[exit_cell] = w
+        relative_error[exit_cell] = np.sqrt(np.mean(((design @ w - target) * relative) ** 2, axis=0))
     return weights, relative_error
 
 

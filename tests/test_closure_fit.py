@@ -5,6 +5,7 @@ import pytest
 
 from precompute.closure_fit import (
     LOBES,
+    MIN_LOBE_SHARE,
     LobeShape,
     evaluate_closure_mixture,
     fit_closure_weights,
@@ -49,6 +50,31 @@ def test_a_smooth_mixture_is_recovered():
     # The residual left is the table's own bilinear blur of the cosines' kink at the horizon
     # (0.058 at N_i = 12), well below the 0.17 of a fibre cone fitted with its own lobe.
     assert np.median(error) < 0.1
+
+
+def test_a_minor_lobe_is_left_out_and_its_light_refitted():
+    """A fibre cone of 0.5 % of the mixture adds no closure: its weight is exactly zero in every
+    channel and the diffuse and translucent lobes, refitted without it, keep the energy; a cone of
+    5 % stays."""
+    shape = LobeShape(reflection_longitudinal=0.3, reflection_azimuthal=0.6)
+    main = np.zeros((len(LOBES), 3))
+    main[LOBES.index("diffuse")] = [0.5, 0.4, 0.3]
+    main[LOBES.index("translucent")] = [0.3, 0.3, 0.3]
+    cone = np.zeros_like(main)
+    cone[LOBES.index("fibre_reflection")] = 1.0
+    fibre = LOBES.index("fibre_reflection")
+    for share, kept in ((0.5 * MIN_LOBE_SHARE, False), (5 * MIN_LOBE_SHARE, True)):
+        true = main + share * main.sum() / 3 * cone
+        atlas, views = atlas_of(lambda view, lights, true=true: lobe_responses(view, lights, shape) @ true)
+        weights, _ = fit_closure_weights(atlas, N_I, shape)
+        assert np.all(weights[:, fibre, :] > 0) if kept else np.all(weights[:, fibre, :] == 0)
+        shares = weights.mean(axis=2) / weights.mean(axis=2).sum(axis=1, keepdims=True)
+        assert np.all((shares == 0) | (shares >= MIN_LOBE_SHARE))
+        lights = incidence_samples(AngularGrid("sphere", N_I), 3)
+        for view, w in zip(views, weights):
+            fitted = evaluate_closure_mixture(w, view, lights, shape).mean(axis=0)
+            exact = (lobe_responses(view, lights, shape) @ true).mean(axis=0)
+            np.testing.assert_allclose(fitted, exact, rtol=0.05)
 
 
 def test_a_fibre_cone_goes_to_the_fibre_lobe():

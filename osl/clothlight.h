@@ -246,6 +246,9 @@ color cl_yarn_rho(string file, int incidence_resolution, int exit_resolution, ve
 #define CL_UNSCATTERED_ORDERS 4
 #define CL_UNSCATTERED_MAX_LENGTH 8.0
 #define CL_UNSCATTERED_MIN_FACTOR 0.003
+// The sun mode's cone is zero where kappa (1 - cos) exceeds this (precompute.ballistic.CONE_CUTOFF):
+// the path's attenuation lookup is skipped there, most of the sun mode's cost for it.
+#define CL_CONE_CUTOFF 14.0
 
 color cl_unscattered_attenuation(string file, int samples, float length_over_radius)
 {
@@ -298,9 +301,10 @@ color cl_unscattered_rho(string file, int samples, float eta, vector wi, vector 
     cl_unscattered_paths(wo, eta, toward_light, fresnel_factor, length_over_radius);
     color rho = 0;
     for (int k = 0; k < CL_UNSCATTERED_ORDERS; k++) {
-        float cone = cone_norm * exp(kappa * (dot(wi, toward_light[k]) - 1.0));
-        if (cone > 0.0)
-            rho += fresnel_factor[k] * cone * cl_unscattered_attenuation(file, samples, length_over_radius[k]);
+        float exponent = kappa * (dot(wi, toward_light[k]) - 1.0);
+        if (exponent >= -CL_CONE_CUTOFF)
+            rho += fresnel_factor[k] * cone_norm * exp(exponent)
+                * cl_unscattered_attenuation(file, samples, length_over_radius[k]);
     }
     return rho;
 }

@@ -53,6 +53,9 @@ ORDERS = 4
 #: Samples of the attenuation table over ℓ / R ∈ [0, 2 · ORDERS] (a chord is at most 2 R).
 ATTENUATION_SAMPLES = 257
 MAX_LENGTH_OVER_RADIUS = 2.0 * ORDERS
+#: The cone of :func:`cone_kernel` is zero where κ (1 − cos γ) exceeds this: e^{−14} ≈ 8·10⁻⁷ of its
+#: peak.  The shader then skips the path's attenuation lookup, most of the sun mode's cost for it.
+CONE_CUTOFF = 14.0
 
 
 def _fresnel(cos_i: np.ndarray, eta: float) -> np.ndarray:
@@ -145,12 +148,14 @@ def attenuation(mu_t_per_mm, radius_mm: float, length_over_radius) -> np.ndarray
 def cone_kernel(cos_angle, spread_rad: float) -> np.ndarray:
     """The normalised cone that a delta direction is spread over, in 1/sr: a von Mises–Fisher
     density of concentration κ = 1/σ² (σ = ``spread_rad``, its angular standard deviation per axis
-    for small σ), ``κ e^{κ(cos γ − 1)} / (2π (1 − e^{−2κ}))``, integrating to 1 over the sphere."""
+    for small σ), ``κ e^{κ(cos γ − 1)} / (2π (1 − e^{−2κ}))``, integrating to 1 over the sphere
+    (to 1 − e^{−CONE_CUTOFF} with its tail cut off at ``CONE_CUTOFF``)."""
     if not spread_rad > 0.0:
         raise ParameterError("spread_rad", spread_rad, "an angle > 0 rad")
     kappa = 1.0 / (spread_rad * spread_rad)
-    c = np.clip(np.asarray(cos_angle, float), -1.0, 1.0)
-    return kappa * np.exp(kappa * (c - 1.0)) / (2.0 * np.pi * -np.expm1(-2.0 * kappa))
+    exponent = kappa * (np.clip(np.asarray(cos_angle, float), -1.0, 1.0) - 1.0)
+    cone = kappa * np.exp(exponent) / (2.0 * np.pi * -np.expm1(-2.0 * kappa))
+    return np.where(exponent < -CONE_CUTOFF, 0.0, cone)
 
 
 def unscattered_rho(wi, wo, index: float, attenuation_of_length, spread_rad: float,

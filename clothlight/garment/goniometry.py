@@ -115,11 +115,12 @@ class RegionLayout:
 
     def patch_of(self, xy) -> np.ndarray:
         """Index of the patch containing each point (…, 2), or −1 when in no patch."""
-        xy = np.asarray(xy, float)
-        region = self.region_of(xy)
-        centers = self.region_centers()[np.clip(region, 0, None)]
-        inside = np.all(np.abs(xy - centers) <= self.patch_mm / 2.0, axis=-1)
-        return np.where((region >= 0) & inside, region, -1)
+        # In pitches from the grid's corner, per axis: the region's cell and where in it.
+        local = (np.asarray(xy, float) - np.asarray(self.center[:2])) / self.pitch_mm + self.grid / 2.0
+        cell = np.floor(local)
+        in_patch = np.abs(local - cell - 0.5) <= self.patch_mm / (2.0 * self.pitch_mm)
+        inside = in_patch & (cell >= 0) & (cell < self.grid)
+        return np.where(inside[..., 0] & inside[..., 1], cell[..., 1] * self.grid + cell[..., 0], -1).astype(int)
 
 
 def plan_regions(count: int, patch_mm: float, half_thickness_mm: float, view_tilt: float,
@@ -177,13 +178,15 @@ class OrthographicView:
         """Where the rays through image points (``columns``, ``rows``: pixel units from the
         top-left corner, so pixel (i, j) has its centre at (i + ½, j + ½)) cross the plane z =
         centre z: (…, 2) x, y, mm."""
-        w, r, u, c = (np.asarray(v) for v in (self.toward_camera, self.right, self.up, self.center))
+        w, r, u, c = (np.asarray(v, float) for v in (self.toward_camera, self.right, self.up, self.center))
         a = (np.asarray(columns, float) - self.width / 2.0) * self.pixel_mm
         b = (self.height / 2.0 - np.asarray(rows, float)) * self.pixel_mm
-        on_plane = c + a[..., None] * r + b[..., None] * u
-        # Slide along the view direction back to the mid-plane.
-        t = (on_plane[..., 2] - c[2]) / w[2]
-        return (on_plane - t[..., None] * w)[..., :2]
+        # The point c + a r + b u of the image plane slid along the view direction back to the
+        # mid-plane: an affine map of (a, b), taken per coordinate so that a row of columns and a
+        # column of rows broadcast to the image without (…, 3) temporaries.
+        right, up = r[:2] - r[2] / w[2] * w[:2], u[:2] - u[2] / w[2] * w[:2]
+        x, y = (c[i] + a * right[i] + b * up[i] for i in range(2))
+        return np.stack(np.broadcast_arrays(x, y), axis=-1)
 
 
 def view_of(toward_camera, layout: RegionLayout, pixels_per_patch: int) -> OrthographicView:
@@ -213,7 +216,7 @@ def patch_weights(view: OrthographicView, layout: RegionLayout,
 
     Guards wider than a pixel keep any pixel from reaching two patches; ParameterError if not."""
     offsets = (np.arange(subsamples) + 0.5) / subsamples
-    rows, columns = np.mgrid[0:view.height, 0:view.width]
+    rows, columns = np.arange(view.height)[:, None], np.arange(view.width)[None, :]
     index = np.full((view.height, view.width), -1)
     count = np.zeros((view.height, view.width))
     for dy in offsets:

@@ -20,7 +20,9 @@ add a 0.05 % quantisation on top of nothing gained but disk space.
 from __future__ import annotations
 
 import hashlib
+import io
 import json
+import numbers
 import os
 import pathlib
 import secrets
@@ -61,6 +63,9 @@ LAYOUT_KEYS = {
 #: Metadata every table must carry (besides ``table`` and ``layout``) to be reproducible.
 REQUIRED_METADATA = ("code_version", "cache_key", "medium", "transport", "paths", "colour", "units")
 EXR_MAGIC = b"\x76\x2f\x31\x01"
+#: The most pixels a table may have: far above any bake's (an N_i·N_o ≈ 400 pixel square atlas), far
+#: below what would exhaust memory.  A header that claims more is refused before its pixels are read.
+MAX_TABLE_PIXELS = 1 << 24
 
 
 class TableError(ValueError):
@@ -88,10 +93,17 @@ def expected_shape(metadata: dict) -> tuple[int, int, int]:
     if kind not in KINDS:
         raise ValueError(f"table kind {kind!r} is not one of {sorted(KINDS)}")
     layout = metadata.get("layout", {})
+    if not isinstance(layout, dict):
+        raise ValueError(f"layout metadata {layout!r} is not a JSON object")
     try:
-        sizes = {key: int(layout[key]) for key in LAYOUT_KEYS[kind]}
-    except (KeyError, TypeError, ValueError) as exc:
+        sizes = {key: layout[key] for key in LAYOUT_KEYS[kind]}
+    except KeyError as exc:
         raise ValueError(f"layout metadata {layout!r} lacks {' / '.join(LAYOUT_KEYS[kind])} ({exc})") from None
+    not_integers = {key: value for key, value in sizes.items()
+                    if isinstance(value, bool) or not isinstance(value, numbers.Integral)}
+    if not_integers:
+        raise ValueError(f"layout entries {not_integers} of a {kind} table are not integers")
+    sizes = {key: int(value) for key, value in sizes.items()}
     too_small = {key: value for key, value in sizes.items() if value < 1}
     if too_small:
         raise ValueError(f"a {kind} table needs layout entries ≥ 1, not {too_small}")
@@ -143,36 +155,87 @@ def read_table(path: str | pathlib.Path, kind: str | None = None) -> Table:
     path = pathlib.Path(path)
     if not path.is_file():
         raise TableError(f"{path}: no such table file")
-    with open(path, "rb") as handle:
-        if handle.read(4) != EXR_MAGIC:
-            raise TableError(f"{path}: not an OpenEXR file")
     try:
-        with OpenEXR.File(str(path), separate_channels=True) as exr:
-            header = dict(exr.header())  # the File clears its own dicts on close
-            channels = {name: (channel.type(), np.array(channel.pixels)) for name, channel in exr.channels().items()}
-    except Exception as exc:  # noqa: BLE001 - OpenEXR raises plain exceptions for truncated or corrupt files
-        raise TableError(f"{path}: truncated or corrupt OpenEXR file ({exc})") from None
+        data = path.read_bytes()
+    except OSError as exc:
+        raise TableError(f"{path}: unreadable ({exc.strerror or exc})") from None
+    return table_from_bytes(data, path, kind)
+
+
+def table_from_bytes(data: bytes, path: str | pathlib.Path, kind: str | None = None) -> Table:
+    """:func:`read_table` of a file's content ``data`` (``path`` names it in errors).
+
+    The header is read and checked first, the pixels only once it describes a table of the size
+    its layout gives: a damaged header never makes the reader allocate what it claims.
+    """
+    if data[:4] != EXR_MAGIC:
+        raise TableError(f"{path}: not an OpenEXR file")
+    header = exr_header(data, path)
     schema = header.get(SCHEMA_KEY)
     if schema is None:
         raise TableError(f"{path}: an OpenEXR file but not a ClothLight table (no {SCHEMA_KEY!r} header attribute)")
+    if not isinstance(schema, str):
+        raise TableError(f"{path}: corrupt {SCHEMA_KEY!r} header attribute (not a string)")
     if schema != SCHEMA:
         raise TableError(f"{path}: table schema {schema!r}, this version reads {SCHEMA!r}: bake it again")
     try:
         metadata = json.loads(header[METADATA_KEY])
+        if not isinstance(metadata, dict):
+            raise ValueError("not a JSON object")
         shape = expected_shape(metadata)
     except (KeyError, TypeError, ValueError) as exc:
         raise TableError(f"{path}: unreadable {METADATA_KEY!r} header attribute ({exc})") from None
     if kind is not None and metadata["table"] != kind:
         raise TableError(f"{path}: a {metadata['table']!r} table, not the {kind!r} table asked for")
+    if shape[0] * shape[1] > MAX_TABLE_PIXELS:
+        raise TableError(f"{path}: its layout {metadata.get('layout')} says {shape}, more than the "
+                         f"{MAX_TABLE_PIXELS} pixels a table may have")
+    window = data_window_shape(header)
+    if window is None:
+        raise TableError(f"{path}: corrupt 'dataWindow' header attribute")
+    if window != shape[:2]:
+        raise TableError(f"{path}: {(*window, 3)} pixels, its layout {metadata.get('layout')} says {shape}")
+    try:
+        declared = {channel.name: (channel.xSampling, channel.ySampling) for channel in header["channels"]}
+    except (KeyError, TypeError, AttributeError, UnicodeDecodeError):
+        raise TableError(f"{path}: corrupt 'channels' header attribute") from None
+    if sorted(declared) != ["B", "G", "R"]:
+        raise TableError(f"{path}: channels {sorted(declared)}, a table has exactly R, G, B")
+    if set(declared.values()) != {(1, 1)}:
+        raise TableError(f"{path}: subsampled channels, a table has one value per pixel")
+    try:
+        with OpenEXR.File(io.BytesIO(data), separate_channels=True) as exr:
+            channels = {name: (channel.type(), np.array(channel.pixels)) for name, channel in exr.channels().items()}
+    except Exception as exc:  # noqa: BLE001 - OpenEXR raises plain exceptions for truncated or corrupt files
+        raise TableError(f"{path}: truncated or corrupt OpenEXR file ({exc})") from None
     if sorted(channels) != ["B", "G", "R"]:
         raise TableError(f"{path}: channels {sorted(channels)}, a table has exactly R, G, B")
     if any(pixel_type != OpenEXR.FLOAT for pixel_type, _ in channels.values()):
         raise TableError(f"{path}: channel types {[str(t) for t, _ in channels.values()]}, a table is float32")
+    if any(values.shape != shape[:2] for _, values in channels.values()):
+        raise TableError(f"{path}: channels of {[values.shape for _, values in channels.values()]} pixels, "
+                         f"its layout {metadata.get('layout')} says {shape}")
     pixels = np.stack([channels[name][1] for name in "RGB"], axis=-1).astype(np.float32)
-    if pixels.shape != shape:
-        raise TableError(f"{path}: {pixels.shape} pixels, its layout {metadata.get('layout')} says {shape}")
     if header.get(HASH_KEY) != content_hash(pixels):
-        raise TableError(f"{path}: pixels do not match the header's content hash (corrupted or edited)")
+        raise TableError(f"{path}: pixels do not match the header's content hash: truncated or corrupted, or edited")
     if not np.all(np.isfinite(pixels)) or np.any(pixels < 0):
         raise TableError(f"{path}: holds values that are not finite and ≥ 0")
     return Table(pixels, metadata)
+
+
+def exr_header(data: bytes, path) -> dict:
+    """The header of an OpenEXR file's content, without its pixels; :class:`TableError` if unreadable."""
+    try:
+        with OpenEXR.File(io.BytesIO(data), header_only=True) as exr:
+            return dict(exr.header())  # the File clears its own dicts on close
+    except Exception as exc:  # noqa: BLE001 - OpenEXR raises plain exceptions for truncated or corrupt files
+        raise TableError(f"{path}: truncated or corrupt OpenEXR file ({exc})") from None
+
+
+def data_window_shape(header: dict) -> tuple[int, int] | None:
+    """(rows, columns) of the header's data window, or None when it is not a window."""
+    try:
+        (x_min, y_min), (x_max, y_max) = (tuple(int(v) for v in corner) for corner in header["dataWindow"])
+    except (KeyError, TypeError, ValueError):
+        return None
+    return y_max - y_min + 1, x_max - x_min + 1

@@ -1,7 +1,8 @@
 """The baked table files a yarn material reads, checked before any render.
 
 Cycles renders a missing table magenta and a wrong one silently wrong, so the
-material builder takes a :class:`YarnTableFiles` that has been checked first.
+material builder takes a :class:`YarnTableFiles` whose folder has been checked
+first (:func:`yarn_tables_from_bake`).
 """
 
 from __future__ import annotations
@@ -53,32 +54,25 @@ class YarnTableFiles:
 
 
 def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:
-    """The table files of a bake folder (``python -m precompute bake --out`` or a cache entry).
+    """The table files of a bake folder (``python -m precompute bake --out``, a cache entry, pre-baked
+    tables), checked as a whole first.
 
-    Reads the bake's ``summary.json`` (plain JSON, so it works inside Blender without
-    OpenEXR bindings) and refuses a folder that is not a complete bake.
+    Every file of the folder is read and validated (``precompute.table_folder.check_yarn_table_folder``:
+    schema, kind, size against the summary's resolutions, content hash, finite values ≥ 0, one bake):
+    ``precompute.tables.TableError`` (a ValueError) names the file and the reason, so that a damaged,
+    incomplete or mixed folder is refused rather than rendered.  ``precompute.table_folder`` (and with
+    it OpenEXR) is imported here, when tables are used, not when the add-on is enabled.
     """
-    import json
-
-    folder = pathlib.Path(folder).resolve()
-    summary_path = folder / "summary.json"
-    if not summary_path.is_file():
-        raise FileNotFoundError(f"{folder} is not a ClothLight bake: no summary.json")
-    summary = json.loads(summary_path.read_text())
-    expected_schema = import_precompute("tables").SCHEMA
-    schema = str(summary.get("schema", ""))
-    if not schema.startswith("clothlight-table/"):
-        raise ValueError(f"{summary_path}: not a ClothLight bake summary (schema {schema!r})")
-    if schema != expected_schema:
-        raise ValueError(f"{summary_path}: tables of schema {schema!r}, this ClothLight reads "
-                         f"{expected_schema!r}: bake them again")
+    table_folder = import_precompute("table_folder")
+    checked = table_folder.check_yarn_table_folder(pathlib.Path(folder).resolve())
+    files, summary = table_folder.YARN_TABLE_FILES, checked.summary
     return YarnTableFiles(
-        brdf_path=folder / "brdf.exr",
-        lobe_path=folder / "lobes.exr",
-        unscattered_path=folder / "unscattered.exr",
-        incidence_resolution=int(summary["incidence_resolution"]),
-        exit_resolution=int(summary["exit_resolution"]),
+        brdf_path=checked.folder / files["brdf"],
+        lobe_path=checked.folder / files["closure_lobes"],
+        unscattered_path=checked.folder / files["unscattered"],
+        incidence_resolution=summary["incidence_resolution"],
+        exit_resolution=summary["exit_resolution"],
         lobe_shape={key: float(value) for key, value in summary["lobe_shape"].items()},
         host_index=float(summary["host_index"]),
-        unscattered_samples=int(summary["unscattered_samples"]),
+        unscattered_samples=summary["unscattered_samples"],
     )

@@ -43,7 +43,6 @@ import dataclasses
 import json
 import os
 import pathlib
-import secrets
 import shutil
 import time
 import tomllib
@@ -76,6 +75,15 @@ from .table_layout import (
     interpolate_rho,
     lobe_atlas,
 )
+from .table_folder import (
+    FILE_HASHES_KEY,
+    SUMMARY_FILE,
+    YARN_FOLDER_FILES,
+    YARN_TABLE_FILES,
+    check_yarn_table_folder,
+    file_hashes,
+    replace_folder,
+)
 from .tables import SCHEMA, write_table
 from .transport import TransportGrids, YarnGeometry, simulate_yarn
 from .transport.brdf import INCIDENCE_RESOLUTIONS, yarn_brdf_to_tolerance
@@ -103,16 +111,10 @@ PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[1]
 SPECTRAL_SOURCES = {"entries": ("precompute.medium", "precompute.optics", "precompute.transport"),
                     "files": ("precompute/bake.py",)}
 TABLE_SOURCES = {"entries": ("precompute.bake",)}
-#: The files of a bake folder, written in this order (summary.json last).
-TABLE_FILES = {
-    "brdf": "brdf.exr",
-    "brdf_stderr": "brdf_stderr.exr",
-    "albedo": "albedo.exr",
-    "closure_lobes": "lobes.exr",
-    "unscattered": "unscattered.exr",
-}
+#: The table files of a bake folder, written in this order (summary.json last; precompute/table_folder.py).
+TABLE_FILES = YARN_TABLE_FILES
+#: The spectral stage's file (named here, in the stage's code; precompute.table_folder checks it by this name).
 SPECTRAL_FILE = "spectral.npz"
-SUMMARY_FILE = "summary.json"
 UNITS = {
     "rho": "1/sr: exit radiance L_o per irradiance E_perp of a parallel beam (plane facing the beam)",
     "brdf_stderr": "1/sr: upper bound of the standard error of rho",
@@ -525,6 +527,8 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             "table1_ratios_paper_real_red_cotton": {"B/R": 0.08, "G/R": 0.011},
             "closure_fit_relative_error_median_rgb": np.median(fit_error, axis=0).tolist(),
             "seconds": {**spectral["seconds"], "tables": time.perf_counter() - start},
+            # every file's bytes, so that a reader finds a file changed or mixed in from another bake
+            FILE_HASHES_KEY: file_hashes(folder, [*TABLE_FILES.values(), SPECTRAL_FILE]),
         }
         (folder / SUMMARY_FILE).write_text(json.dumps(json.loads(canonical_json(summary)), indent=1))
 
@@ -613,16 +617,22 @@ def bake(
 
 
 def export_bake(result: BakeResult, out_dir: str | pathlib.Path) -> dict:
-    """Copy a bake's files into ``out_dir``, each atomically, summary.json last; the summary with the new paths."""
-    out_dir = pathlib.Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    for name in [*TABLE_FILES.values(), SPECTRAL_FILE, SUMMARY_FILE]:
-        temporary = out_dir / f".{name}.{os.getpid()}.{secrets.token_hex(4)}.partial"
-        try:
-            shutil.copy2(result.folder / name, temporary)
-            os.replace(temporary, out_dir / name)
-        finally:
-            temporary.unlink(missing_ok=True)
+    """Copy a bake's files into the folder ``out_dir`` as a whole; the summary with the new paths.
+
+    ``out_dir`` must be new, empty or an earlier bake's folder (:func:`precompute.table_folder.
+    check_output_folder`, ParameterError otherwise).  The copy is checked
+    (:func:`~precompute.table_folder.check_yarn_table_folder`) and then swapped in for the previous
+    folder in one step (:func:`~precompute.table_folder.replace_folder`): a reader, or a bake killed at
+    any moment, finds the complete previous folder or the complete new one, never a mixture.
+    """
+
+    def write(staging: pathlib.Path) -> None:
+        for name in YARN_FOLDER_FILES:
+            if (result.folder / name).is_file():
+                shutil.copy2(result.folder / name, staging / name)
+        check_yarn_table_folder(staging)
+
+    out_dir = replace_folder(out_dir, write, YARN_FOLDER_FILES)
     return {
         **result.summary,
         "folder": str(out_dir),

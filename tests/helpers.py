@@ -3,6 +3,7 @@ the render tests are built from.  Importable without bpy: the scene helpers impo
 
 from __future__ import annotations
 
+import json
 import math
 import pathlib
 import subprocess
@@ -33,6 +34,52 @@ def write_exr(path, image) -> None:
     image = np.ascontiguousarray(image, dtype=np.float32)
     with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION}, {"RGB": image}) as exr:
         exr.write(str(path))
+
+
+# -- table folders --------------------------------------------------------------------------------
+
+
+def table_metadata(kind: str, layout: dict, cache_key: str, **extra) -> dict:
+    """The metadata a ClothLight table must carry (precompute.tables.REQUIRED_METADATA), for test tables."""
+    return {"table": kind, "layout": layout, "code_version": "test", "cache_key": cache_key,
+            "medium": {"name": "test"}, "transport": {}, "paths": {}, "colour": {}, "units": {}, **extra}
+
+
+def write_yarn_table_folder(folder, brdf, lobes, unscattered, *, incidence_resolution: int, exit_resolution: int,
+                            cache_key: str = "c0" * 32, host_index: float = 1.557, listed: bool = True,
+                            optional: bool = True) -> pathlib.Path:
+    """A yarn bake folder as precompute/bake.py writes one, from given images (RGB; ``brdf`` (N_i·N_o)²,
+    ``lobes`` N_o × K·N_o, ``unscattered`` 1 × M): tables of this schema and of one cache key, with
+    ``optional`` also brdf_stderr.exr, albedo.exr and spectral.npz, and summary.json with what readers
+    use and, when ``listed``, every file's SHA-256 (folders baked before bakes listed them have none)."""
+    from precompute.closure_fit import LobeShape
+    from precompute.table_folder import FILE_HASHES_KEY, SPECTRAL_FILE, SUMMARY_FILE, YARN_TABLE_FILES, file_hashes
+    from precompute.tables import SCHEMA, write_table
+
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    n_i, n_o = incidence_resolution, exit_resolution
+    brdf, lobes, unscattered = (np.ascontiguousarray(image, dtype=np.float32) for image in (brdf, lobes, unscattered))
+    lobe_count, lobe_shape = lobes.shape[1] // n_o, LobeShape().to_dict()
+    grid = {"incidence_resolution": n_i, "exit_resolution": n_o}
+    images = {"brdf": (brdf, grid), "closure_lobes": (lobes, {**grid, "lobe_count": lobe_count}),
+              "unscattered": (unscattered, {"attenuation_samples": unscattered.shape[1]})}
+    if optional:
+        images.update(brdf_stderr=(0.1 * brdf, grid), albedo=(brdf[::n_o, ::n_o], grid))
+    for kind, (image, layout) in images.items():
+        extra = {"lobe_shape": lobe_shape} if kind == "closure_lobes" else {}
+        write_table(folder / YARN_TABLE_FILES[kind], image,
+                    table_metadata(kind, layout, cache_key, host_index=host_index, **extra))
+    spectral_key = "5" + cache_key[1:]
+    if optional:
+        np.savez(folder / SPECTRAL_FILE, metadata=np.array(json.dumps({"key": spectral_key})))
+    summary = {"schema": SCHEMA, "cache_key": cache_key, "spectral_key": spectral_key, "incidence_resolution": n_i,
+               "exit_resolution": n_o, "lobe_count": lobe_count, "lobe_shape": lobe_shape, "host_index": host_index,
+               "unscattered_samples": unscattered.shape[1]}
+    if listed:
+        summary[FILE_HASHES_KEY] = file_hashes(folder, [*YARN_TABLE_FILES.values(), SPECTRAL_FILE])
+    (folder / SUMMARY_FILE).write_text(json.dumps(summary, indent=1))
+    return folder
 
 
 # -- a reference BRDF -----------------------------------------------------------------------------

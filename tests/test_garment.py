@@ -28,6 +28,7 @@ from clothlight.garment.tables import (
 from precompute.closure_fit import LobeShape, lobe_responses
 from precompute.grids import AngularGrid
 from precompute.table_layout import brdf_atlas, interpolate_rho
+from precompute.tables import TableError
 from tests.helpers import add_sun_and_camera, cook_torrance_between, empty_render_scene, unit, write_exr
 
 bpy = pytest.importorskip("bpy")
@@ -220,7 +221,7 @@ def test_garment_material_refuses_meshes_without_uvs_and_incomplete_bakes(tmp_pa
     obj = bpy.data.objects.new("no uv", mesh)
     with pytest.raises(ValueError, match="UV"):
         apply_garment_material(obj, tables)
-    with pytest.raises(FileNotFoundError):
+    with pytest.raises(TableError, match="no summary.json"):
         cloth_tables_from_bake(tmp_path)
     older = tmp_path / "older"
     older.mkdir()
@@ -252,10 +253,18 @@ def test_cloth_bake_is_cached_and_self_describing(tmp_path, red_cotton_cloth):
     # A yarn bake whose lobes were refitted (another cache key, the same ρ) measures nothing again.
     import shutil
 
+    from precompute.table_folder import FILE_HASHES_KEY, file_hashes
+    from precompute.tables import write_table
+
     refitted = tmp_path / "refitted"
     shutil.copytree(YARN_BAKE, refitted)
+    for path in refitted.glob("*.exr"):  # every table of the folder is of the one bake
+        table = read_table(path)
+        write_table(path, table.pixels, {**table.metadata, "cache_key": "0" * 64})
     summary = json.loads((refitted / "summary.json").read_text())
     summary["cache_key"] = "0" * 64
+    if FILE_HASHES_KEY in summary:
+        summary[FILE_HASHES_KEY] = file_hashes(refitted, summary[FILE_HASHES_KEY])
     (refitted / "summary.json").write_text(json.dumps(summary))
     assert bake_cloth(refitted, settings, cache_dir=cache)[1] is False
     tables = cloth_tables_from_bake(folder)

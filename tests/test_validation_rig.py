@@ -22,10 +22,9 @@ from clothlight.validation.measure import measure_view
 from clothlight.weave import WeaveParameters
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.ballistic import ATTENUATION_SAMPLES
-from precompute.closure_fit import LOBES, LobeShape
+from precompute.closure_fit import LOBES
 from precompute.errors import ParameterError
-from precompute.tables import SCHEMA
-from tests.helpers import cook_torrance_between, write_exr
+from tests.helpers import cook_torrance_between, write_yarn_table_folder
 
 bpy = pytest.importorskip("bpy")
 
@@ -120,16 +119,11 @@ CONSTANT_RHO = np.array([0.2, 0.1, 0.05])
 @pytest.fixture(scope="module")
 def constant_bake(tmp_path_factory):
     """A bake folder whose yarn BRDF is the constant ρ = L/E⊥ = CONSTANT_RHO for every pair of directions."""
-    folder = tmp_path_factory.mktemp("bake")
     n_i, n_o, lobes = 5, 4, len(LOBES)
-    write_exr(folder / "brdf.exr", np.broadcast_to(CONSTANT_RHO, (n_i * n_o, n_i * n_o, 3)))
-    write_exr(folder / "lobes.exr", np.zeros((n_o, lobes * n_o, 3)))
-    write_exr(folder / "unscattered.exr", np.zeros((1, ATTENUATION_SAMPLES, 3)))  # an opaque yarn
-    (folder / "summary.json").write_text(json.dumps({
-        "schema": SCHEMA, "incidence_resolution": n_i, "exit_resolution": n_o,
-        "lobe_count": lobes, "lobe_shape": LobeShape().to_dict(), "host_index": 1.557,
-        "unscattered_samples": ATTENUATION_SAMPLES}))
-    return folder
+    return write_yarn_table_folder(
+        tmp_path_factory.mktemp("bake"), np.broadcast_to(CONSTANT_RHO, (n_i * n_o, n_i * n_o, 3)),
+        np.zeros((n_o, lobes * n_o, 3)), np.zeros((1, ATTENUATION_SAMPLES, 3)),  # an opaque yarn
+        incidence_resolution=n_i, exit_resolution=n_o, optional=False)
 
 
 @pytest.mark.blender

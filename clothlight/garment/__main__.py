@@ -7,7 +7,7 @@ Example::
     python -m clothlight.validate --tables out/bake --cloth-tables out/cloth \\
         --material yarn garment --out out/garment_validation       # flat patch vs yarn sample
 
-Exit codes: 0 done, 2 bad input (the message names it), 130 interrupted.
+Exit codes: 0 done, 2 bad input (the message names it), 130 interrupted, 1 a failure writing the output.
 """
 
 from __future__ import annotations
@@ -28,7 +28,8 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     bake = commands.add_parser("bake", help="measure the cloth BSDF and write its tables (cached)")
     bake.add_argument("--tables", required=True, help="yarn bake folder (python -m precompute bake --out DIR)")
-    bake.add_argument("--out", required=True, help="folder for the cloth tables and summary.json")
+    bake.add_argument("--out", required=True, help="folder for the cloth tables and summary.json, written as a "
+                      "whole (a new folder, or an earlier cloth bake's, which it replaces)")
     bake.add_argument("--incidence-resolution", type=int, default=defaults.incidence_resolution,
                       help=f"N_i, odd (default {defaults.incidence_resolution}: {defaults.incidence_resolution ** 2} "
                            "incidence cells over the sphere)")
@@ -49,8 +50,10 @@ def main(argv=None) -> int:
 
     from ..addon import import_precompute
     from .bake import bake_cloth, read_summary
+    from .tables import CLOTH_FOLDER_FILES, check_cloth_table_folder
 
     ParameterError = import_precompute("errors").ParameterError
+    table_folder = import_precompute("table_folder")
     bpy.ops.wm.read_homefile(use_empty=True)
     start = time.perf_counter()
 
@@ -60,6 +63,7 @@ def main(argv=None) -> int:
               end="", file=sys.stderr, flush=True)
 
     try:
+        table_folder.check_output_folder(args.out, CLOTH_FOLDER_FILES)  # before minutes of renders
         settings = GoniometerSettings(incidence_resolution=args.incidence_resolution,
                                       exit_resolution=args.exit_resolution,
                                       pixels_per_patch=args.pixels_per_patch, samples=args.samples)
@@ -70,12 +74,21 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("\ninterrupted", file=sys.stderr)
         return 130
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    for path in sorted(folder.iterdir()):
-        if path.suffix == ".exr":  # tables and the weave detail texture
-            shutil.copy2(path, out / path.name)
-    shutil.copy2(folder / "summary.json", out / "summary.json")  # last: a complete folder
+
+    def write(staging: pathlib.Path) -> None:
+        for name in CLOTH_FOLDER_FILES:
+            if (folder / name).is_file():
+                shutil.copy2(folder / name, staging / name)
+        check_cloth_table_folder(staging)
+
+    try:  # the folder as a whole: a reader, or a kill at any moment, finds the previous one or this one
+        out = table_folder.replace_folder(args.out, write, CLOTH_FOLDER_FILES)
+    except ParameterError as error:
+        print(f"\nerror: {error}", file=sys.stderr)
+        return 2
+    except (ValueError, OSError) as error:  # a damaged cache entry, a full disk
+        print(f"\nerror: {error}", file=sys.stderr)
+        return 1
     summary = read_summary(out)
     if args.json:
         sys.stdout.write(json.dumps(summary, indent=1) + "\n")

@@ -20,9 +20,9 @@ import numpy as np
 from ..addon import import_precompute
 from ..yarn_tables import yarn_tables_from_bake
 from .goniometry import SIDES
-from .detail import DETAIL_FILE, render_weave_detail
+from .detail import render_weave_detail
 from .measure import ClothMeasurement, GoniometerSettings, _sample_weave, measure_cloth
-from .tables import SUMMARY_FILE, write_cloth_tables
+from .tables import DETAIL_FILE, SUMMARY_FILE, write_cloth_summary, write_cloth_tables
 
 cache = import_precompute("cache")
 sources = import_precompute("sources")
@@ -101,7 +101,7 @@ def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(
                                          tables, cache_key=key, code_digest=tables_in["code_digest"])
             summary["weave_detail"] = {"file": DETAIL_FILE,
                                        **render_weave_detail(_sample_weave(settings), target / DETAIL_FILE)}
-            (target / SUMMARY_FILE).write_text(json.dumps(summary, indent=1))
+            write_cloth_summary(target, summary)
 
         folder, _ = cache.store(cache_dir, TABLES_NAMESPACE, key, tables_in, write)
     return folder, rendered

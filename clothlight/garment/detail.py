@@ -32,7 +32,6 @@ from ..measurement_render import (
 from ..sample_object import build_sample_object, weave_record
 from ..validation.rig import sample_bounds
 
-DETAIL_FILE = "weave_detail.exr"
 DEFAULT_RESOLUTION = 128
 #: Repeats of the weave along each side of the rendered sample (the middle one is framed).
 SAMPLE_REPEATS = 3

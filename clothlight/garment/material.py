@@ -15,7 +15,6 @@ normals face.  Tables are checked before any render (Cycles would render them ma
 
 from __future__ import annotations
 
-import json
 import pathlib
 from dataclasses import dataclass
 
@@ -30,9 +29,7 @@ from .tables import (
     LOBE_TILES,
     SPECULAR_KEYS,
     SPECULAR_VISIBILITY_FILES,
-    SUMMARY_FILE,
-    SUMMARY_SCHEMA,
-    precompute_tables,
+    check_cloth_table_folder,
 )
 
 SHADER = "cloth_garment"
@@ -58,38 +55,20 @@ class ClothTableFiles:
 
 
 def cloth_tables_from_bake(folder) -> ClothTableFiles:
-    """The tables of a cloth bake folder (``python -m clothlight.garment bake``); refuses a folder
-    that is not a complete cloth bake of this schema."""
-    folder = pathlib.Path(folder).resolve()
-    summary_path = folder / SUMMARY_FILE
-    if not summary_path.is_file():
-        raise FileNotFoundError(f"{folder} is not a ClothLight cloth bake: no {SUMMARY_FILE}")
-    summary = json.loads(summary_path.read_text())
-    if summary.get("schema") != SUMMARY_SCHEMA:
-        raise ValueError(f"{summary_path}: schema {summary.get('schema')!r}, this ClothLight reads "
-                         f"{SUMMARY_SCHEMA!r}: bake the cloth again")
-    if summary.get("table_schema") != precompute_tables.SCHEMA:
-        # measured from yarn tables of another schema: what their ρ held differs (docs/table-spec.md)
-        raise ValueError(f"{summary_path}: measured from tables of schema {summary.get('table_schema')!r}, "
-                         f"this ClothLight reads {precompute_tables.SCHEMA!r}: bake the cloth again")
-    if list(summary.get("lobe_tiles", [])) != list(LOBE_TILES):
-        raise ValueError(f"{summary_path}: lobe tiles {summary.get('lobe_tiles')}, this ClothLight reads "
-                         f"{list(LOBE_TILES)}: bake the cloth again")
-    brdf_paths = {side: folder / name for side, name in BRDF_FILES.items()}
-    visibility_paths = {side: folder / name for side, name in SPECULAR_VISIBILITY_FILES.items()}
-    missing = [str(path) for path in (*brdf_paths.values(), *visibility_paths.values(), folder / LOBE_FILE)
-               if not path.is_file()]
-    if missing:
-        raise FileNotFoundError(f"cloth bake {folder} lacks {missing}")
+    """The tables of a cloth bake folder (``python -m clothlight.garment bake``), checked as a whole
+    first (:func:`.tables.check_cloth_table_folder`: every file read and validated, one bake); a
+    ``precompute.tables.TableError`` (a ValueError) names the file and the reason otherwise."""
+    checked = check_cloth_table_folder(pathlib.Path(folder).resolve())
+    folder, summary = checked.folder, checked.summary
     detail = summary.get("weave_detail")
-    detail_path = folder / detail["file"] if detail else None
-    if detail_path is not None and not detail_path.is_file():
-        raise FileNotFoundError(f"cloth bake {folder} lacks its weave detail texture {detail_path}")
-    return ClothTableFiles(brdf_paths, visibility_paths, folder / LOBE_FILE, int(summary["incidence_resolution"]),
-                           int(summary["exit_resolution"]), int(summary["lobe_grid_resolution"]),
+    return ClothTableFiles({side: folder / name for side, name in BRDF_FILES.items()},
+                           {side: folder / name for side, name in SPECULAR_VISIBILITY_FILES.items()},
+                           folder / LOBE_FILE, summary["incidence_resolution"], summary["exit_resolution"],
+                           summary["lobe_grid_resolution"],
                            {key: float(value) for key, value in summary["lobe_shape"].items()},
                            {key: float(summary["specular"][key]) for key in SPECULAR_KEYS},
-                           detail_path, float(detail["mean_coverage"]) if detail else None)
+                           folder / detail["file"] if detail else None,
+                           float(detail["mean_coverage"]) if detail else None)
 
 
 def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garment", *, mode: str = GENERAL_MODE,

@@ -31,6 +31,7 @@ the energy balance per incidence cell and the fit errors.
 
 from __future__ import annotations
 
+import io
 import json
 import math
 import pathlib
@@ -70,6 +71,11 @@ SPECULAR_VISIBILITY_FILES = {side: f"{side}_specular_visibility.exr" for side in
 #: the Beckmann rms slope m and the host's refractive index.
 SPECULAR_KEYS = ("weight", "slope", "ior")
 LOBE_FILE = "lobes.exr"
+#: The weave detail texture (:mod:`.detail` renders it; RGBA, not a table).
+DETAIL_FILE = "weave_detail.exr"
+#: Every file of a cloth bake folder (``python -m clothlight.garment bake --out``).
+CLOTH_FOLDER_FILES = (*BRDF_FILES.values(), *SPECULAR_VISIBILITY_FILES.values(), LOBE_FILE, DETAIL_FILE,
+                      SUMMARY_FILE)
 UNITS = {"rho": "1/sr (ρ = f |cos θ_i|: radiance per irradiance on a plane facing the sun)",
          "coverage": "fraction of the cloth's area hidden by yarn along the view",
          "specular_visibility": "fraction of the cloth's area where the yarns' specular term shines",
@@ -216,5 +222,96 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
         },
         "seconds": {"renders": measurement.render_seconds, "tables": time.perf_counter() - start},
     }
-    (folder / SUMMARY_FILE).write_text(json.dumps(summary, indent=1))
+    write_cloth_summary(folder, summary)
     return summary
+
+
+def write_cloth_summary(folder, summary: dict) -> None:
+    """Write a cloth bake's ``summary.json`` with the SHA-256 of every file of the folder
+    (``precompute.table_folder.FILE_HASHES_KEY``), last."""
+    table_folder = import_precompute("table_folder")
+    hashes = table_folder.file_hashes(folder, [name for name in CLOTH_FOLDER_FILES if name != SUMMARY_FILE])
+    summary[table_folder.FILE_HASHES_KEY] = hashes
+    (pathlib.Path(folder) / SUMMARY_FILE).write_text(json.dumps(summary, indent=1))
+
+
+def check_cloth_table_folder(folder):
+    """Check a cloth bake folder as a whole, as ``precompute.table_folder`` checks a yarn's: its summary
+    (this schema, measured from yarn tables of this table schema, these lobe tiles), every table read
+    and validated against its kind, the summary's resolutions, side and quantity, and the bake's cache
+    key, the weave detail texture, and every file's bytes against the summary's list.  Returns the
+    ``CheckedFolder``; ``precompute.tables.TableError`` naming the file and the reason otherwise."""
+    table_folder = import_precompute("table_folder")
+    TableError = precompute_tables.TableError
+    folder = pathlib.Path(folder).absolute()
+    summary = table_folder.load_summary(folder, SUMMARY_SCHEMA, "bake the cloth again")
+    summary_path = folder / SUMMARY_FILE
+    if summary.get("table_schema") != precompute_tables.SCHEMA:
+        # measured from yarn tables of another schema: what their ρ held differs (docs/table-spec.md)
+        raise TableError(f"{summary_path}: measured from tables of schema {summary.get('table_schema')!r}, "
+                         f"this ClothLight reads {precompute_tables.SCHEMA!r}: bake the cloth again")
+    if summary.get("lobe_tiles") != list(LOBE_TILES):
+        raise TableError(f"{summary_path}: lobe tiles {summary.get('lobe_tiles')}, this ClothLight reads "
+                         f"{list(LOBE_TILES)}: bake the cloth again")
+    grid = {key: table_folder.summary_integer(summary, key, folder)
+            for key in ("incidence_resolution", "exit_resolution")}
+    lobe_resolution = table_folder.summary_integer(summary, "lobe_grid_resolution", folder)
+    lobe_shape = table_folder.summary_numbers(summary, "lobe_shape", folder)
+    specular = summary.get("specular")
+    if not isinstance(specular, dict):
+        raise TableError(f"{summary_path}: specular {specular!r} is not an object")
+    for key in SPECULAR_KEYS:
+        table_folder.summary_number(specular, key, folder)
+    Rule = table_folder.TableRule
+    rules = {}
+    for side in SIDES:
+        rules[BRDF_FILES[side]] = Rule("brdf", grid, metadata={"side": side, "quantity": None})
+        rules[SPECULAR_VISIBILITY_FILES[side]] = Rule("brdf", grid, metadata={"side": side,
+                                                                              "quantity": "specular visibility"})
+    rules[LOBE_FILE] = Rule("cloth_lobes", {"incidence_resolution": grid["incidence_resolution"],
+                                            "exit_resolution": lobe_resolution, "lobe_count": len(LOBE_TILES)},
+                            metadata={"tiles": list(LOBE_TILES), "lobe_shape": lobe_shape})
+    other = {}
+    detail = summary.get("weave_detail")
+    if detail is not None:
+        if not (isinstance(detail, dict) and detail.get("file") == DETAIL_FILE):
+            raise TableError(f"{summary_path}: weave_detail {detail!r} does not describe {DETAIL_FILE}")
+        other[DETAIL_FILE] = (True, lambda path, data: _check_weave_detail(path, data, detail))
+    return table_folder.check_files(folder, summary, rules, other)
+
+
+def _check_weave_detail(path: pathlib.Path, data: bytes, detail: dict) -> None:
+    """The weave detail texture (:mod:`.detail`) is the one ``detail`` (the summary's
+    ``weave_detail``) describes: RGBA float32 of its resolution, its header's description, values in
+    [0, 1]."""
+    TableError = precompute_tables.TableError
+    import OpenEXR
+
+    if data[:4] != precompute_tables.EXR_MAGIC:
+        raise TableError(f"{path}: not an OpenEXR file")
+    header = precompute_tables.exr_header(data, path)
+    described = {key: value for key, value in detail.items() if key != "file"}
+    try:
+        own = json.loads(header["clothlight_weave_detail"])
+    except (KeyError, TypeError, ValueError):
+        raise TableError(f"{path}: not a ClothLight weave detail texture (no readable "
+                         "'clothlight_weave_detail' header attribute)") from None
+    if own != described:
+        raise TableError(f"{path}: describes another weave detail than the folder's {SUMMARY_FILE}: not of this bake")
+    resolution, coverage = described.get("resolution"), described.get("mean_coverage")
+    if isinstance(resolution, bool) or not isinstance(resolution, int) or not 1 <= resolution <= 1 << 12:
+        raise TableError(f"{path}: resolution {resolution!r} is not an integer in [1, 4096]")
+    if isinstance(coverage, bool) or not isinstance(coverage, (int, float)) or not 0.0 <= coverage <= 1.0:
+        raise TableError(f"{path}: mean coverage {coverage!r} is not a number in [0, 1]")
+    if precompute_tables.data_window_shape(header) != (resolution, resolution):
+        raise TableError(f"{path}: {precompute_tables.data_window_shape(header)} pixels, not {resolution}²")
+    try:
+        with OpenEXR.File(io.BytesIO(data)) as exr:
+            channel = exr.channels()["RGBA"]
+            pixel_type, pixels = channel.type(), np.array(channel.pixels)
+    except Exception as exc:  # noqa: BLE001 - OpenEXR raises plain exceptions for truncated or corrupt files
+        raise TableError(f"{path}: truncated or corrupt OpenEXR file, or not RGBA ({exc})") from None
+    if pixel_type != OpenEXR.FLOAT or pixels.shape != (resolution, resolution, 4):
+        raise TableError(f"{path}: {pixels.shape} {pixel_type} pixels, not RGBA float32 of {resolution}²")
+    if not (np.all(np.isfinite(pixels)) and np.all((pixels >= -1e-6) & (pixels <= 1.0 + 1e-6))):
+        raise TableError(f"{path}: holds values outside [0, 1]")

@@ -13,6 +13,7 @@ import sys
 
 from ..bake import bake, export_bake
 from ..medium import DEFAULT_PRESET, preset_names
+from ..table_folder import YARN_FOLDER_FILES, check_output_folder
 
 
 def add_parser(subparsers) -> None:
@@ -30,7 +31,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="override a preset value (a TOML literal), e.g. dye.weight_percent=2, "
                         "transport.angular_resolution=8, bake.illuminant=A; repeatable")
-    parser.add_argument("--out", type=pathlib.Path, help="also copy the tables, spectral.npz and summary.json here")
+    parser.add_argument("--out", type=pathlib.Path,
+                        help="also copy the tables, spectral.npz and summary.json into this folder, as a whole "
+                        "(a new folder, or an earlier bake's, which it replaces)")
     parser.add_argument("--seed", type=int, help="random seed (default: the preset's [transport] seed, 0)")
     budget = parser.add_mutually_exclusive_group()
     budget.add_argument("--paths", type=int, help="paths per incidence cell")
@@ -45,6 +48,8 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
+    if args.out:
+        check_output_folder(args.out, YARN_FOLDER_FILES)  # before the bake, not after it
     bars = []  # opened at the first progress report, so input errors print no bar
 
     def progress(fraction: float) -> None:

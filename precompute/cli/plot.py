@@ -15,6 +15,7 @@ import sys
 from .. import plots
 from ..bake import SPECTRAL_FILE, TABLE_FILES, load_spectral
 from ..errors import ParameterError
+from ..table_folder import check_yarn_table_folder
 from ..tables import TableError, read_table
 
 
@@ -29,11 +30,16 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     path = args.table / TABLE_FILES["brdf"] if args.table.is_dir() else args.table
     try:
-        atlas, metadata = read_table(path, kind="brdf")
-        stderr_path = path.with_name(TABLE_FILES["brdf_stderr"])
-        stderr = read_table(stderr_path, kind="brdf_stderr").pixels if stderr_path.is_file() else None
+        if args.table.is_dir():  # a bake folder: checked as a whole
+            tables = check_yarn_table_folder(args.table).tables
+            atlas, metadata = tables[TABLE_FILES["brdf"]]
+            stderr = tables[TABLE_FILES["brdf_stderr"]].pixels if TABLE_FILES["brdf_stderr"] in tables else None
+        else:
+            atlas, metadata = read_table(path, kind="brdf")
+            stderr_path = path.with_name(TABLE_FILES["brdf_stderr"])
+            stderr = read_table(stderr_path, kind="brdf_stderr").pixels if stderr_path.is_file() else None
     except TableError as exc:
-        raise ParameterError("TABLE", str(args.table), f"a ClothLight brdf table: {exc}") from None
+        raise ParameterError("TABLE", str(args.table), f"a ClothLight brdf table or bake folder: {exc}") from None
     n_i = int(metadata["layout"]["incidence_resolution"])
     args.out.mkdir(parents=True, exist_ok=True)
     written = [

@@ -40,7 +40,6 @@ few cells of direct transmission, whose values are ~50× the rest.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -208,7 +207,8 @@ def fit_closure_weights(
         def fit(kept):
             w = np.zeros((len(lobes), channels))
             for channel in range(channels):
-                w[kept, channel], _ = nnls(design[:, kept] * scale[:, channel, None], target[:, channel] * scale[:, channel])
+                column = scale[:, channel]
+                w[kept, channel], _ = nnls(design[:, kept] * column[:, None], target[:, channel] * column)
             return w
 
         w = fit(np.arange(len(lobes)))

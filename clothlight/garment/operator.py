@@ -1,7 +1,8 @@
 """The garment material in the interface: put a cloth bake on the selected meshes.
 
 The cloth bake itself runs from the command line (``python -m clothlight.garment bake``, minutes
-of renders); the panel shows the command.
+of renders); the panel shows the command.  The material module (the cloth-table reader: OpenEXR,
+SciPy, numba's grids) is imported when the operator runs, not when the add-on is enabled.
 """
 
 from __future__ import annotations
@@ -9,7 +10,6 @@ from __future__ import annotations
 import bpy
 
 from ..materials import GENERAL_MODE
-from .material import apply_garment_material, cloth_tables_from_bake
 
 BAKE_COMMAND = "python -m clothlight.garment bake --tables YARN_BAKE --out DIR"
 
@@ -34,6 +34,8 @@ class CLOTHLIGHT_OT_apply_garment_material(bpy.types.Operator):
         return True
 
     def execute(self, context):
+        from .material import apply_garment_material, cloth_tables_from_bake
+
         settings = context.scene.clothlight
         folder = bpy.path.abspath(settings.cloth_tables_dir)
         try:

@@ -6,6 +6,9 @@ cancels (the rig is removed).  In background mode timers never fire and ``INVOKE
 ``execute()``, which runs the same steps synchronously.  Either way the results end in the
 output folder; the sweep plot is loaded as an image ("ClothLight Validation") for the Image
 Editor and its folder kept in ``window_manager["clothlight_validation_dir"]``.
+
+The sweep itself (:mod:`.run`: the garment material, the table reader, OpenEXR, numba's grids) is
+imported when a sweep starts, not when the add-on is enabled.
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from __future__ import annotations
 import pathlib
 import sys
 import tempfile
+from typing import TYPE_CHECKING
 
 import bpy
 
@@ -22,7 +26,9 @@ from ..weave import WeaveParameterError
 from .framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG
 from .measured_data import MeasurementFormatError
 from .rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES, RigSettings
-from .run import ValidationRun
+
+if TYPE_CHECKING:
+    from .run import ValidationRun
 
 ParameterError = import_precompute("errors").ParameterError
 #: Errors that are the user's input, reported without a traceback.
@@ -91,6 +97,8 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
         return pathlib.Path(bpy.path.abspath(self.out_dir))
 
     def _prepare(self, context) -> ValidationRun:
+        from .run import ValidationRun
+
         sample = sample_in_context(context)
         materials = tuple(kind for kind in ("yarn", "baseline") if kind.upper() in self.materials)
         tables = bpy.path.abspath(self.tables_dir) if self.tables_dir else None

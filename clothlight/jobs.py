@@ -177,14 +177,20 @@ class BakeJob:
     numba_cache_dir
         Where numba keeps compiled kernels: numba writes next to a module by default, and an
         extension must not write into its own folder.
+    bytecode_cache_dir
+        Where the child keeps Python bytecode (``PYTHONPYCACHEPREFIX``), for the same reason: the
+        child imports the add-on's modules from the extension's folder, and Python would write
+        their ``__pycache__`` there.  A prefix rather than no bytecode at all, so that the child's
+        imports of numba and SciPy stay quick from the second bake on.  None: Python's default.
     """
 
     def __init__(self, request: BakeRequest, *, cache_dir, threads: int | None = None,
-                 numba_cache_dir=None):
+                 numba_cache_dir=None, bytecode_cache_dir=None):
         self.request = request
         self.cache_dir = pathlib.Path(cache_dir)
         self.threads = threads
         self.numba_cache_dir = numba_cache_dir
+        self.bytecode_cache_dir = bytecode_cache_dir
         self.progress = 0.0
         self.outcome: BakeOutcome | None = None
         self.error: BakeFailed | BakeCancelled | None = None
@@ -204,7 +210,8 @@ class BakeJob:
         return command
 
     def environment(self) -> dict:
-        """The child's environment: Blender's import path (bundled wheels, numpy) and numba's cache."""
+        """The child's environment: Blender's import path (bundled wheels, numpy), numba's cache and
+        Python's bytecode folder."""
         env = dict(os.environ)
         paths = [str(PACKAGE_ROOT)] + [p for p in sys.path if p and os.path.isdir(p)]
         env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths))
@@ -212,6 +219,8 @@ class BakeJob:
         env["PYTHONIOENCODING"] = "utf-8"
         if self.numba_cache_dir is not None:
             env["NUMBA_CACHE_DIR"] = str(self.numba_cache_dir)
+        if self.bytecode_cache_dir is not None:
+            env["PYTHONPYCACHEPREFIX"] = str(self.bytecode_cache_dir)
         return env
 
     def start(self) -> "BakeJob":

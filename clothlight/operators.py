@@ -21,7 +21,6 @@ import bpy
 
 from . import preferences
 from .jobs import (
-    PACKAGE_ROOT,
     BakeCancelled,
     BakeFailed,
     BakeJob,
@@ -31,17 +30,13 @@ from .jobs import (
 )
 from .materials import GENERAL_MODE, SUN_MODE, build_yarn_material, shader_node, sync_sun
 from .mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
+from .prebaked import PREBAKED_DIR, REQUEST_FILE, prebaked_tables, user_copy  # noqa: F401 - the panel's names
 from .properties import ParameterError, millimetre_scale
 from .render_setup import use_cycles_osl_on_cpu
 from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
 from .sun_link import SUN_PROPERTY
 from .weave import WeaveParameterError
 from .yarn_tables import yarn_tables_from_bake
-
-#: Tables baked when the extension was built, one folder per shipped preset (scripts/build_extension.py).
-PREBAKED_DIR = PACKAGE_ROOT / "prebaked"
-#: File of a pre-baked folder holding the BakeRequest it was baked from.
-REQUEST_FILE = "request.json"
 
 
 def _unexpected(operator, error: Exception, what: str):
@@ -52,17 +47,6 @@ def _unexpected(operator, error: Exception, what: str):
 
 
 # -- tables -------------------------------------------------------------------------------------
-
-
-def prebaked_tables(request: BakeRequest) -> pathlib.Path | None:
-    """The shipped tables baked from exactly ``request``, or None."""
-    folder = PREBAKED_DIR / request.preset
-    try:
-        if BakeRequest.from_json((folder / REQUEST_FILE).read_text()) == request:
-            return folder
-    except (OSError, ValueError, TypeError):
-        pass
-    return None
 
 
 def bake_unavailable_reason() -> str | None:
@@ -78,7 +62,9 @@ def tables_for(medium) -> tuple[pathlib.Path, str | None]:
     """The table folder Apply Material uses for ``medium`` settings, and a warning (or None).
 
     The folder in ``medium.tables_dir`` (set by Bake Tables or by hand), else the pre-baked tables
-    of an unchanged shipped preset.  Raises LookupError when there are none.
+    of an unchanged shipped preset — their copy in the bake cache (:func:`.prebaked.user_copy`),
+    never the extension's own folder, which an update replaces.  Raises LookupError when there are
+    none.
     """
     request = medium.request()
     if medium.tables_dir:
@@ -88,7 +74,7 @@ def tables_for(medium) -> tuple[pathlib.Path, str | None]:
         return pathlib.Path(bpy.path.abspath(medium.tables_dir)), warning
     shipped = prebaked_tables(request)
     if shipped is not None:
-        return shipped, None
+        return user_copy(shipped, preferences.cache_directory()), None
     reason = bake_unavailable_reason()
     raise LookupError("No tables for these settings yet: " + (reason if reason else "press Bake Tables"))
 
@@ -286,7 +272,8 @@ def _job_for(context, request: BakeRequest) -> BakeJob:
     prefs = preferences.preferences(context)
     threads = prefs.threads if prefs is not None and prefs.threads > 0 else None
     return BakeJob(request, cache_dir=preferences.cache_directory(context), threads=threads,
-                   numba_cache_dir=preferences.numba_cache_directory())
+                   numba_cache_dir=preferences.numba_cache_directory(),
+                   bytecode_cache_dir=preferences.bytecode_cache_directory())
 
 
 def _ratios_text(outcome) -> str:

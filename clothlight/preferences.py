@@ -1,4 +1,11 @@
-"""Add-on preferences: cache folder and thread count for bakes."""
+"""Add-on preferences: cache folder and thread count for bakes; the user folders the add-on writes into.
+
+An extension must not write into its own folder (Blender may replace it on update, or install it
+read-only): whatever the add-on keeps goes under the extension's user folder
+(``bpy.utils.extension_path_user``) — the bake cache (:func:`cache_directory`, with the user copies
+of the pre-baked tables), numba's compiled kernels (:func:`numba_cache_directory`) and the bake
+child's Python bytecode (:func:`bytecode_cache_directory`).
+"""
 
 from __future__ import annotations
 
@@ -59,17 +66,79 @@ def cache_directory(context=None) -> str:
     return bpy.utils.extension_path_user(EXTENSION_PACKAGE, path="cache", create=True)
 
 
-def numba_cache_directory() -> str | None:
-    """Where bakes keep numba's compiled kernels: the extension's user folder, since an extension must
-    not write into its own folder.  None in development (numba's default, next to the sources)."""
+def _user_folder(name: str) -> str | None:
+    """The folder ``name`` of the extension's user folder (created), or None in development."""
     if not EXTENSION_PACKAGE:
         return None
-    return bpy.utils.extension_path_user(EXTENSION_PACKAGE, path="numba", create=True)
+    return bpy.utils.extension_path_user(EXTENSION_PACKAGE, path=name, create=True)
+
+
+def numba_cache_directory(in_blender: bool = False) -> str | None:
+    """Where numba keeps ClothLight's compiled kernels: the extension's user folder, since an extension
+    must not write into its own folder.  None in development (numba's default, next to the sources).
+
+    The bake child and Blender's own process (``in_blender``) each have their own folder: a cached
+    kernel records the name of the module it was compiled in, and the child imports the kernels as
+    ``precompute.…`` while Blender imports them as ``bl_ext.<repo>.clothlight.precompute.…`` — a
+    kernel cached by one fails to load in the other (``No module named 'precompute'``)."""
+    return _user_folder("numba_blender" if in_blender else "numba")
+
+
+def bytecode_cache_directory() -> str | None:
+    """Where the bake child keeps Python bytecode (its ``PYTHONPYCACHEPREFIX``): the extension's user
+    folder.  None in development (Python's default, ``__pycache__`` next to the sources)."""
+    return _user_folder("pycache")
+
+
+class _NumbaCache:
+    """The folder :func:`use_user_numba_cache` gave numba (None: it changed nothing)."""
+
+    folder: str | None = None
+
+
+def use_user_numba_cache() -> None:
+    """Point numba's cache at :func:`numba_cache_directory` in Blender's own process.
+
+    The add-on imports no numba when it is enabled, but a validation sweep or a garment job run in
+    Blender's process imports precompute's ``cache=True`` kernels, and numba would write its index
+    files — at the least an empty ``__pycache__`` — next to their sources, inside the extension.
+    numba reads ``NUMBA_CACHE_DIR`` when it is imported (and again before each compilation), and a
+    kernel picks its cache folder when it is defined, so the folder is set here, at enable time,
+    before anything of the add-on can import numba; where another add-on imported numba already,
+    its configuration is set too.  A folder the user (or another add-on) chose is kept.  In
+    development nothing changes (numba caches next to the sources, as in every other process).
+    """
+    import sys
+
+    folder = numba_cache_directory(in_blender=True)
+    numba = sys.modules.get("numba")
+    if folder is None or os.environ.get("NUMBA_CACHE_DIR") or (numba is not None and numba.config.CACHE_DIR):
+        return
+    os.environ["NUMBA_CACHE_DIR"] = folder
+    if numba is not None:
+        numba.config.CACHE_DIR = folder
+    _NumbaCache.folder = folder
+
+
+def restore_numba_cache() -> None:
+    """Undo :func:`use_user_numba_cache` (kernels defined meanwhile keep the folder they picked)."""
+    import sys
+
+    folder, _NumbaCache.folder = _NumbaCache.folder, None
+    if folder is None:
+        return
+    if os.environ.get("NUMBA_CACHE_DIR") == folder:
+        del os.environ["NUMBA_CACHE_DIR"]
+    numba = sys.modules.get("numba")
+    if numba is not None and numba.config.CACHE_DIR == folder:
+        numba.config.CACHE_DIR = ""
 
 
 def register() -> None:
     bpy.utils.register_class(ClothLightPreferences)
+    use_user_numba_cache()
 
 
 def unregister() -> None:
+    restore_numba_cache()
     bpy.utils.unregister_class(ClothLightPreferences)

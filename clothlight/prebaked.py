@@ -1,0 +1,76 @@
+"""The pre-baked tables shipped inside the extension, and the copies of them materials read.
+
+``scripts/build_extension.py`` ships the tables of each shipped preset in ``prebaked/<preset>/``
+with the request they were baked from.  A material never points into that folder: Blender replaces
+the extension's folder on every update and removes it with the extension, and a saved .blend would
+then render magenta.  Apply Material copies the folder, once and whole, into the bake cache
+(:func:`user_copy`), named by a digest of its content: an update that ships other tables makes
+another copy and leaves the one saved files use in place.
+
+No Blender here; ``precompute.table_folder`` (and OpenEXR with it) is imported only when a copy is
+made.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import pathlib
+import shutil
+
+from .addon import import_precompute
+from .jobs import PACKAGE_ROOT, BakeRequest
+
+#: Tables baked when the extension was built, one folder per shipped preset (scripts/build_extension.py).
+PREBAKED_DIR = PACKAGE_ROOT / "prebaked"
+#: File of a pre-baked folder holding the BakeRequest it was baked from.
+REQUEST_FILE = "request.json"
+#: Folder of the bake cache holding the copies.
+COPIES_FOLDER = "prebaked"
+
+
+def prebaked_tables(request: BakeRequest) -> pathlib.Path | None:
+    """The shipped tables baked from exactly ``request``, or None."""
+    folder = PREBAKED_DIR / request.preset
+    try:
+        if BakeRequest.from_json((folder / REQUEST_FILE).read_text()) == request:
+            return folder
+    except (OSError, ValueError, TypeError):
+        pass
+    return None
+
+
+def _file_hashes(folder: pathlib.Path) -> dict[str, str]:
+    """{name: SHA-256} of every file of ``folder`` (a pre-baked folder has no sub-folders)."""
+    return {path.name: hashlib.sha256(path.read_bytes()).hexdigest()
+            for path in sorted(folder.iterdir()) if path.is_file()}
+
+
+def content_key(hashes: dict[str, str]) -> str:
+    """A digest of a folder's file names and contents (:func:`_file_hashes`)."""
+    return hashlib.sha256(json.dumps(hashes, sort_keys=True).encode()).hexdigest()
+
+
+def user_copy(folder: str | pathlib.Path, cache_dir: str | pathlib.Path) -> pathlib.Path:
+    """The copy of the pre-baked ``folder`` in ``cache_dir``, made if it is missing or differs.
+
+    The copy is ``<cache_dir>/prebaked/<folder name>-<content digest>``: the same shipped tables always
+    map to the same copy, other tables (another version of the extension) to another.  An existing
+    copy is reused when its files are byte for byte the shipped ones; otherwise the shipped folder is
+    checked as a whole (``precompute.table_folder.check_yarn_table_folder``, a ``TableError`` naming
+    the shipped file) and written in one step (``replace_folder``: a reader, or a second Blender
+    copying at the same time, finds the complete folder or none).
+    """
+    folder = pathlib.Path(folder)
+    hashes = _file_hashes(folder)
+    copy = pathlib.Path(cache_dir) / COPIES_FOLDER / f"{folder.name}-{content_key(hashes)[:16]}"
+    if copy.is_dir() and _file_hashes(copy) == hashes:
+        return copy
+    table_folder = import_precompute("table_folder")
+    table_folder.check_yarn_table_folder(folder)
+
+    def write(staging: pathlib.Path) -> None:
+        for name in hashes:
+            shutil.copyfile(folder / name, staging / name)
+
+    return table_folder.replace_folder(copy, write, hashes, option="the bake cache folder")

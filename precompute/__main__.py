@@ -1,24 +1,33 @@
 """``python -m precompute <command>``: the precomputation command line.
 
-Exit codes: 0 success, 2 bad input (the message names the parameter), 1 any
-other failure.
+Exit codes (precompute/exit_codes.py, the same for every ClothLight command): 0 done, 2 bad input
+(the message names the parameter or file and what is allowed), 130 interrupted, 1 an internal
+error (one line; CLOTHLIGHT_TRACEBACK=1 shows the traceback).
 """
 
 from __future__ import annotations
 
-import argparse
-import importlib
-import sys
+try:  # a Ctrl-C before the handler below is in place still exits with 130, without a traceback
+    import sys
 
-from .errors import ParameterError
+    from .exit_codes import INTERRUPTED, run_cli
+except KeyboardInterrupt:
+    if __name__ != "__main__":
+        raise
+    print("interrupted", file=__import__("sys").stderr)
+    raise SystemExit(130) from None
 
 # Each module in precompute/cli defines add_parser(subparsers), whose parser sets
 # ``func(args) -> int``.  Listed by name so a missing optional command fails loudly.
 COMMAND_MODULES = ("optics", "slab", "bake", "plot")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m precompute", description=__doc__)
+def build_parser():
+    import argparse
+    import importlib
+
+    parser = argparse.ArgumentParser(prog="python -m precompute", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     subparsers = parser.add_subparsers(dest="command", required=True)
     for name in COMMAND_MODULES:
         try:
@@ -32,20 +41,18 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except ParameterError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 1
-    except Exception as exc:  # noqa: BLE001 - the CLI's last line of defence, exit code 1
-        print(f"error: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return 1
+    """Run a command; its exit code.  The command modules (numba, scipy) are imported in here, so a
+    Ctrl-C during those imports ends as one at any other moment: code 130, one line."""
+
+    def command() -> int:
+        args = build_parser().parse_args(argv)
+        return args.func(args)
+
+    return run_cli(command)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:  # between main's return and the exit
+        sys.exit(INTERRUPTED)

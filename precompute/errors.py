@@ -1,21 +1,34 @@
-"""Errors raised for bad input anywhere in ``precompute``.
+"""Errors raised for bad input anywhere in ClothLight.
 
-Every check on user input raises :class:`ParameterError`, whose message names
-the parameter, the value it got and the range it allows.  The command line maps
-it to exit code 2; nothing is ever clamped silently.
+One hierarchy: :class:`InputError` is bad input from the user (a parameter, a file), and every
+command line maps it to exit code 2 (:mod:`precompute.exit_codes`).  Its kinds:
+
+- :class:`ParameterError`: a parameter outside its allowed range or malformed; the message names
+  the parameter, the value it got and the range it allows (the ranges of numeric inputs are data:
+  :mod:`precompute.bounds`).  ``clothlight.weave.WeaveParameterError`` is one.
+- :class:`precompute.tables.TableError`: a file that is not a valid ClothLight table, named.
+- ``clothlight.validation.measured_data.MeasurementFormatError``: a measurement file breaking
+  its format, the file and the row named.
+
+Nothing is ever clamped silently.  No imports beyond the standard library: the add-on's panel
+and every command line import this before anything heavy.
 """
 
 from __future__ import annotations
 
 
-class ParameterError(ValueError):
+class InputError(ValueError):
+    """Bad input from the user: a parameter or a file.  Command lines exit with code 2 on it."""
+
+
+class ParameterError(InputError):
     """A parameter is outside its allowed range or malformed.
 
     Parameters
     ----------
     name
         Dotted name of the parameter, as the user would write it
-        (``"particles[0].diameter_nm"``).
+        (``"particles[0].diameter_nm"``), or the command-line option (``"--out"``).
     value
         The offending value.
     allowed

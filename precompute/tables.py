@@ -31,6 +31,8 @@ from typing import NamedTuple
 import numpy as np
 import OpenEXR
 
+from .errors import InputError
+
 #: Bump when the layout or the meaning of any header field changes (docs/table-spec.md).
 SCHEMA = "clothlight-table/4"
 SCHEMA_KEY = "clothlight_schema"
@@ -68,8 +70,10 @@ EXR_MAGIC = b"\x76\x2f\x31\x01"
 MAX_TABLE_PIXELS = 1 << 24
 
 
-class TableError(ValueError):
-    """A file is not a valid ClothLight table; the message names the file and the reason."""
+class TableError(InputError):
+    """A file is not a valid ClothLight table; the message names the file and the reason.
+
+    An :class:`~precompute.errors.InputError`: the command lines exit with code 2 on it."""
 
 
 class Table(NamedTuple):

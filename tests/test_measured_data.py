@@ -4,6 +4,7 @@ spectral → RGB conversion, and RMS / relative RMS / shape correlation on known
 import importlib.util
 import math
 import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from clothlight.validation.measured_data import (
     rms_error,
     shape_correlation,
 )
-from precompute.errors import ParameterError
+from precompute.errors import InputError, ParameterError
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 HEADER = ",".join(RGB_HEADER)
@@ -109,8 +110,17 @@ def test_spectral_pairs_must_share_wavelengths_and_cover_the_visible():
 def test_a_file_that_is_not_utf8_names_the_row(tmp_path):
     path = tmp_path / "bad.csv"
     path.write_bytes(f"{HEADER}\n0,0,0,0,1,1,1\n0,0,1\xff,0,1,1,1\n".encode("latin-1"))
-    with pytest.raises(MeasurementFormatError, match="^row 3: not UTF-8"):
+    with pytest.raises(MeasurementFormatError, match=f"^{re.escape(str(path))}, row 3: not UTF-8") as error:
         read_measurement(path)
+    assert error.value.path == str(path) and error.value.row == 3
+
+
+def test_a_file_with_a_bad_row_names_the_file_and_the_row(tmp_path):
+    path = tmp_path / "measured.csv"
+    path.write_text(f"{HEADER}\n0,0,0,0,1,1,1\n0,x,0,0,1,1,1\n")
+    with pytest.raises(MeasurementFormatError, match=f"^{re.escape(str(path))}, row 3: .*phi_i") as error:
+        read_measurement(path)
+    assert isinstance(error.value, InputError) and error.value.row == 3
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])

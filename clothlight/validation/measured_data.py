@@ -50,13 +50,16 @@ REQUIRED_BAND_NM = (400.0, 700.0)
 ANGLE_TOLERANCE_DEG = 0.5
 
 
-class MeasurementFormatError(ValueError):
-    """A measurement file breaks the format.  ``row`` is the offending line (1-based, as an editor counts)."""
+class MeasurementFormatError(import_precompute("errors").InputError):
+    """A measurement file breaks the format.  ``row`` is the offending line (1-based, as an editor
+    counts); ``path`` the file, when the text came from one (:func:`read_measurement`).  Bad input:
+    the command lines exit with code 2 on it."""
 
-    def __init__(self, row: int, reason: str):
+    def __init__(self, row: int, reason: str, path: str | pathlib.Path | None = None):
         self.row = row
         self.reason = reason
-        super().__init__(f"row {row}: {reason}")
+        self.path = None if path is None else str(path)
+        super().__init__(f"{'' if path is None else f'{path}, '}row {row}: {reason}")
 
 
 @dataclass(frozen=True)
@@ -114,14 +117,17 @@ class Measurement:
 def read_measurement(path: str | pathlib.Path) -> Measurement:
     """Read and validate a measurement file (module docstring).
 
-    Raises MeasurementFormatError naming the bad row, FileNotFoundError for a missing file.
+    Raises MeasurementFormatError naming the file and the bad row, FileNotFoundError for a missing file.
     """
     data = pathlib.Path(path).read_bytes()
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
-        raise MeasurementFormatError(data[: error.start].count(b"\n") + 1, "not UTF-8 text") from None
-    return parse_measurement(text)
+        raise MeasurementFormatError(data[: error.start].count(b"\n") + 1, "not UTF-8 text", path) from None
+    try:
+        return parse_measurement(text)
+    except MeasurementFormatError as error:  # the file named with its row
+        raise MeasurementFormatError(error.row, error.reason, path) from None
 
 
 def parse_measurement(text: str) -> Measurement:

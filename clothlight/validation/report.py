@@ -15,7 +15,15 @@ import struct
 import sys
 import zlib
 
-import numpy as np
+try:
+    import numpy as np
+
+    from ..addon import import_precompute
+except KeyboardInterrupt:  # Ctrl-C while ``python -m clothlight.validation.report`` starts: code 130, no traceback
+    if __name__ != "__main__":
+        raise
+    print("interrupted", file=__import__("sys").stderr)
+    raise SystemExit(130) from None
 
 CHANNELS = ("R", "G", "B")
 
@@ -226,18 +234,45 @@ def write_report(results: dict, out_dir) -> dict:
     return files
 
 
+USAGE = "usage: python -m clothlight.validation.report RESULTS_JSON"
+
+
 def main(argv=None) -> int:
-    """``python -m clothlight.validation.report results.json``: redraw the plots and the report."""
-    argv = sys.argv[1:] if argv is None else argv
+    """``python -m clothlight.validation.report results.json``: redraw the plots and the report beside
+    the results.  Exit codes as every ClothLight command (``precompute/exit_codes.py``)."""
+    return import_precompute("exit_codes").run_cli(lambda: _main(sys.argv[1:] if argv is None else argv))
+
+
+def _main(argv) -> int:
+    ParameterError = import_precompute("errors").ParameterError
+    if list(argv) in (["-h"], ["--help"]):
+        print(USAGE + "\n\n" + (main.__doc__ or "").split("\n\n")[0])
+        return 0
     if len(argv) != 1:
-        print("usage: python -m clothlight.validation.report RESULTS_JSON", file=sys.stderr)
-        return 2
+        print(USAGE, file=sys.stderr)
+        return import_precompute("exit_codes").BAD_INPUT
     path = pathlib.Path(argv[0])
-    results = json.loads(path.read_text(encoding="utf-8"))
-    files = write_report(results, path.parent)
+    if not path.is_file():
+        raise ParameterError("RESULTS_JSON", argv[0], "the results.json of a validation sweep (no such file)")
+    import_precompute("outputs").check_writable_folder(
+        path.parent, "RESULTS_JSON", what="a results.json in a folder this user can write (the plots go beside it)")
+    try:
+        results = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise ParameterError("RESULTS_JSON", str(path), f"the results.json of a validation sweep ({error})") from None
+    if not isinstance(results, dict) or not isinstance(results.get("materials"), dict):
+        raise ParameterError("RESULTS_JSON", str(path), "the results.json of a validation sweep (no 'materials')")
+    try:
+        files = write_report(results, path.parent)
+    except (KeyError, IndexError, TypeError, ValueError) as error:  # a results.json of another shape
+        raise ParameterError("RESULTS_JSON", str(path), "the results.json of a validation sweep, as the sweep "
+                                                        f"writes it ({type(error).__name__}: {error})") from None
     print(f"report: {path.parent / files['report']}")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:  # between main's return and the exit
+        sys.exit(130)

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from ..addon import import_precompute
 
-class WeaveParameterError(ValueError):
-    """A weave parameter is outside its allowed range or malformed (never silently fixed)."""
+ParameterError = import_precompute("errors").ParameterError
 
-    def __init__(self, name: str, value: object, allowed: str):
-        self.name = name
-        self.value = value
-        self.allowed = allowed
-        super().__init__(f"{name} = {value!r} is invalid: allowed {allowed}")
+
+class WeaveParameterError(ParameterError):
+    """A weave parameter is outside its allowed range or malformed (never silently fixed).
+
+    A :class:`precompute.errors.ParameterError` (one error hierarchy: every command line exits
+    with code 2 on it), kept as its own type so callers can tell weave input from the rest."""

@@ -1,0 +1,54 @@
+"""Output and cache folders checked before any work starts: a command refuses, naming the option,
+a folder it could not write into, instead of failing after minutes of work (issue 22).
+
+Standard library only.  Bake folders written as a whole have their own, stricter check
+(:func:`precompute.table_folder.check_output_folder`).
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+
+from .errors import ParameterError
+
+
+def existing_place(path: pathlib.Path) -> pathlib.Path:
+    """``path`` or its nearest ancestor that exists."""
+    place = path
+    while not place.exists() and place != place.parent:
+        place = place.parent
+    return place
+
+
+def check_writable_folder(path: str | os.PathLike, option: str, *, what: str = "an output folder") -> pathlib.Path:
+    """``path`` (absolute) if a command can write files into it: an existing, writable folder, or a
+    new one in a writable place (not created here).  ParameterError naming ``option`` otherwise."""
+    if isinstance(path, str) and not path.strip():
+        raise ParameterError(option, path, f"{what}: a folder path")
+    path = pathlib.Path(os.path.abspath(path))
+    if path.exists():
+        if not path.is_dir():
+            raise ParameterError(option, str(path), f"{what} (this is a file, not a folder)")
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise ParameterError(option, str(path), f"{what} this user can write into (this one is not writable)")
+        return path
+    place = existing_place(path.parent)
+    if not place.is_dir():
+        raise ParameterError(option, str(path), f"{what} (its parent {place} is a file, not a folder)")
+    if not os.access(place, os.W_OK | os.X_OK):
+        raise ParameterError(option, str(path), f"{what} in a writable place ({place} is not writable)")
+    return path
+
+
+def check_writable_file(path: str | os.PathLike, option: str, *, what: str = "an output file") -> pathlib.Path:
+    """``path`` (absolute) if a command can write it: not a folder, and its folder writable or creatable."""
+    if isinstance(path, str) and not path.strip():
+        raise ParameterError(option, path, f"{what}: a file path")
+    path = pathlib.Path(os.path.abspath(path))
+    if path.is_dir():
+        raise ParameterError(option, str(path), f"{what} (this is a folder)")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise ParameterError(option, str(path), f"{what} this user can write (this one is read-only)")
+    check_writable_folder(path.parent, option, what=f"{what} in a writable folder")
+    return path

@@ -25,6 +25,8 @@ from .weave import BUILT_IN, WeaveParameterError, WeaveParameters
 from .weave.params import CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
 
 _medium = import_precompute("medium")
+#: The allowed ranges, one definition shared with the bake's API and command line (precompute/bounds.py).
+_bounds = import_precompute("bounds")
 ParameterError = import_precompute("errors").ParameterError
 
 _WEAVE = WeaveParameters()
@@ -232,7 +234,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         description="Dye content as a percentage of the fibre's weight; the paper's range is 1–5 % (§6.2)")
     particle_diameter_nm: FloatProperty(
         name="Particle Diameter (nm)", default=_default(_particle_size_key(_DEFAULT_CONFIG) or "", 150.0),
-        min=1.0, max=100000.0, soft_min=10.0, soft_max=2000.0, precision=1, step=100,
+        **_bounds.PARTICLE_DIAMETER_NM.limits(), soft_min=10.0, soft_max=2000.0, precision=1, step=100,
         description="Diameter of the scattering particles in nanometres (the paper's 150 nm, §6.2); for a "
                     "log-normal size distribution, its number median")
     particle_volume_fraction: FloatProperty(
@@ -241,8 +243,8 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         description="Fraction of the yarn's volume the particles fill (the paper's 'concentration 0.14', §6.2); "
                     f"below {_medium.MAX_VOLUME_FRACTION}, the densest packing of spheres")
     yarn_radius_mm: FloatProperty(
-        name="Yarn Radius (mm)", default=_default("yarn.radius_mm", DEFAULT_YARN_RADIUS_MM), min=0.001, max=10.0,
-        soft_min=0.02, soft_max=1.0, precision=3, step=1,
+        name="Yarn Radius (mm)", default=_default("yarn.radius_mm", DEFAULT_YARN_RADIUS_MM),
+        **_bounds.YARN_RADIUS_MM.limits(), soft_min=0.02, soft_max=1.0, precision=3, step=1,
         description="Radius of the circular yarn the light is traced through, in millimetres (§3.2); "
                     "the sample's yarns should match it")
     budget: EnumProperty(
@@ -252,26 +254,28 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
                ("PATHS", "Fixed Paths", "Trace a fixed number of light paths per incidence cell")],
         description="How long the Monte-Carlo transport runs")
     target_error: FloatProperty(
-        name="Target Error", default=_REQUEST.target_rel_stderr, min=1e-4, max=0.5, soft_min=0.002, soft_max=0.1,
+        name="Target Error", default=_REQUEST.target_rel_stderr, **_bounds.TARGET_REL_STDERR.limits(),
+        soft_min=0.002, soft_max=0.1,
         precision=4, step=0.1, subtype="FACTOR",
         description="Relative standard error of every incidence cell's albedo to reach (0.01 = 1 %)")
     paths_per_cell: IntProperty(
-        name="Paths per Cell", default=20000, min=8, max=100_000_000, soft_min=100, soft_max=1_000_000,
+        name="Paths per Cell", default=20000, **_bounds.PATHS_PER_CELL.limits(), soft_min=100, soft_max=1_000_000,
         description="Light paths traced per incidence cell of the transport")
     seed: IntProperty(
-        name="Seed", default=_REQUEST.seed, min=0,
+        name="Seed", default=_REQUEST.seed, min=_bounds.SEED.low,  # the top: Blender's integers are 32-bit
         description="Seed of the transport's random streams: the same seed gives the same tables")
     n_around: IntProperty(
-        name="Cells Around", default=_REQUEST.n_around, min=2, max=256, soft_max=64,
+        name="Cells Around", default=_REQUEST.n_around, **_bounds.N_AROUND.limits(), soft_max=64,
         description="Spatial cells around the yarn's circumference in the BSSRDF (the paper: 16)")
     n_along: IntProperty(
-        name="Cells Along", default=_REQUEST.n_along, min=2, max=256, soft_max=64,
+        name="Cells Along", default=_REQUEST.n_along, **_bounds.N_ALONG.limits(), soft_max=64,
         description="Spatial cells along the yarn in the BSSRDF, even (the paper: 8)")
     angular_resolution: IntProperty(
-        name="Angular Resolution", default=_REQUEST.angular_resolution, min=2, max=64, soft_max=32,
+        name="Angular Resolution", default=_REQUEST.angular_resolution, **_bounds.ANGULAR_RESOLUTION.limits(),
+        soft_max=32,
         description="N of the N × N equal-solid-angle hemisphere grids of the BSSRDF (the paper: 12, 144 cells)")
     incidence_resolution: IntProperty(
-        name="Incidence Resolution", default=0, min=0, max=63, soft_max=33,
+        name="Incidence Resolution", default=0, min=0, max=_bounds.INCIDENCE_RESOLUTION.high, soft_max=33,
         description="N of the N × N sphere grid of incidence directions in the tables, odd; 0: automatic "
                     "(the coarsest grid that meets the bake's lookup and energy checks)")
     tables_dir: StringProperty(

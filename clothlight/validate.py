@@ -8,21 +8,44 @@ Examples::
     python -m clothlight.validate --out out/validation                        # the paper's baseline
     python -m clothlight.validate --tables out/bake --measured cloth.csv --out out/validation
 
-Exit codes: 0 done, 2 bad input (the message names it), 130 interrupted.
+Exit codes (``precompute/exit_codes.py``, the same for every ClothLight command): 0 done, 2 bad
+input (the message names the option or file and what is allowed), 130 interrupted, 1 an internal
+error.  The arguments are checked, the output folder and the input files included, before Blender
+is imported.
 """
 
 from __future__ import annotations
 
-import argparse
-import contextlib
-import os
-import pathlib
-import sys
+try:  # a Ctrl-C before the handler in main() is in place still exits with 130, without a traceback
+    import contextlib
+    import os
+    import pathlib
+    import sys
+
+    from .addon import import_precompute
+except KeyboardInterrupt:
+    if __name__ != "__main__":
+        raise
+    print("interrupted", file=__import__("sys").stderr)
+    raise SystemExit(130) from None
+
+#: How a .blend file starts: uncompressed, gzip- or zstd-compressed.
+BLEND_MAGIC = (b"BLENDER", b"\x1f\x8b", b"\x28\xb5\x2f\xfd")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    from .validation.rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES
-    from .validation.run import MATERIALS
+def build_parser():
+    """The arguments (shared with ``scripts/validate_blender.py``); no Blender needed."""
+    import argparse
+
+    from .render_bounds import (
+        DEFAULT_VALIDATION_RESOLUTION as DEFAULT_RESOLUTION,
+        DEFAULT_VALIDATION_SAMPLES as DEFAULT_SAMPLES,
+        VALIDATION_PATCH_MM,
+        VALIDATION_RESOLUTION,
+        VALIDATION_SAMPLES,
+        VALIDATION_SEED,
+    )
+    from .validation.framing import MATERIALS
 
     parser = argparse.ArgumentParser(prog="python -m clothlight.validate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -42,15 +65,51 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--incidences", type=float, nargs="+", metavar="DEG", help="θi, degrees (default 0 30 45 60)")
     parser.add_argument("--views", type=float, nargs="+", metavar="DEG",
                         help="θv, degrees, negative on the light's side (default -60 … 70 by 10)")
-    parser.add_argument("--resolution", type=int, default=DEFAULT_RESOLUTION,
-                        help=f"pixels along the patch side (default {DEFAULT_RESOLUTION})")
-    parser.add_argument("--samples", type=int, default=DEFAULT_SAMPLES,
-                        help=f"Cycles samples per pixel (default {DEFAULT_SAMPLES})")
-    parser.add_argument("--seed", type=int, default=0, help="Cycles seed (default 0)")
-    parser.add_argument("--patch-mm", type=float, help="side of the framed patch, mm (default: largest that fits)")
+    parser.add_argument("--resolution", type=VALIDATION_RESOLUTION.argument("--resolution"), default=DEFAULT_RESOLUTION,
+                        help=f"pixels along the patch side, {VALIDATION_RESOLUTION.allowed()} "
+                             f"(default {DEFAULT_RESOLUTION})")
+    parser.add_argument("--samples", type=VALIDATION_SAMPLES.argument("--samples"), default=DEFAULT_SAMPLES,
+                        help=f"Cycles samples per pixel, {VALIDATION_SAMPLES.allowed()} (default {DEFAULT_SAMPLES})")
+    parser.add_argument("--seed", type=VALIDATION_SEED.argument("--seed"), default=0, help="Cycles seed (default 0)")
+    parser.add_argument("--patch-mm", type=VALIDATION_PATCH_MM.argument("--patch-mm"),
+                        help=f"side of the framed patch, {VALIDATION_PATCH_MM.allowed()} (default: largest that fits)")
     parser.add_argument("--no-swatches", action="store_true", help="skip the front/back-lit colour swatches")
     parser.add_argument("--json", action="store_true", help="print the results as JSON on stdout")
     return parser
+
+
+def check_arguments(args) -> None:
+    """Every argument that can be checked without Blender, before Blender is imported and any work
+    starts: the output folder, the input files and folders, the angles (the numbers are checked as
+    they are parsed).  ParameterError (or MeasurementFormatError) naming the option otherwise."""
+    from .validation.framing import ParameterError, check_angles
+    from .validation.measured_data import read_measurement
+
+    outputs = import_precompute("outputs")
+    outputs.check_writable_folder(args.out, "--out", what="an output folder for the report and renders")
+    if args.blend is not None:
+        blend = pathlib.Path(args.blend)
+        if not blend.is_file():
+            raise ParameterError("--blend", args.blend, "an existing .blend file" + (" (this is a folder)"
+                                                                                   if blend.is_dir() else ""))
+        try:
+            with blend.open("rb") as file:
+                head = file.read(8)
+        except OSError as error:
+            raise ParameterError("--blend", args.blend,
+                                 f"a .blend file this user can read ({error.strerror})") from None
+        if not head.startswith(BLEND_MAGIC):
+            raise ParameterError("--blend", args.blend, "a .blend file (this one does not start as Blender's files do)")
+    for option, folder in (("--tables", args.tables), ("--cloth-tables", args.cloth_tables)):
+        if folder is not None and not pathlib.Path(folder).is_dir():
+            raise ParameterError(option, folder, "an existing bake folder")
+    if args.measured is not None:
+        if not pathlib.Path(args.measured).is_file():
+            raise ParameterError("--measured", args.measured, "an existing measurement file")
+        read_measurement(args.measured)  # MeasurementFormatError naming the file and the row
+    from .validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG
+
+    check_angles(tuple(args.incidences or DEFAULT_INCIDENCES_DEG), tuple(args.views or DEFAULT_VIEWS_DEG))
 
 
 @contextlib.contextmanager
@@ -68,48 +127,61 @@ def stdout_to_stderr():
         os.close(saved)
 
 
-def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+def _sweep(args, interrupt) -> dict:
     import bpy
 
-    from .addon import import_precompute
-    from .validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG
-    from .validation.measured_data import MeasurementFormatError
+    from .validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, ParameterError
     from .validation.rig import RigSettings
     from .validation.run import run_validation
-    from .weave import WeaveParameterError
 
-    ParameterError = import_precompute("errors").ParameterError
+    interrupt.check()
+    settings = RigSettings(incidences_deg=tuple(args.incidences or DEFAULT_INCIDENCES_DEG),
+                           views_deg=tuple(args.views or DEFAULT_VIEWS_DEG), resolution=args.resolution,
+                           samples=args.samples, seed=args.seed, patch_mm=args.patch_mm)
+    progress_shown = []
 
     def progress(done: int, total: int, what: str) -> None:
+        progress_shown.append(True)
         print(f"\r[{done}/{total}] {what:<48}", end="", file=sys.stderr, flush=True)
+        interrupt.check()  # after a render: the sweep removes its rig on the way out
 
     if args.blend:
-        bpy.ops.wm.open_mainfile(filepath=str(pathlib.Path(args.blend).resolve()))
+        try:
+            bpy.ops.wm.open_mainfile(filepath=str(pathlib.Path(args.blend).resolve()))
+        except RuntimeError as error:
+            reason = str(error).strip().splitlines()[-1] if str(error).strip() else "Blender cannot open it"
+            raise ParameterError("--blend", args.blend, f"a .blend file Blender can open ({reason})") from None
     elif not args.object:
         bpy.ops.wm.read_homefile(use_empty=True)
+    interrupt.check()
+    sample = None
+    if args.object:
+        sample = bpy.data.objects.get(args.object)
+        if sample is None:
+            raise ParameterError("--object", args.object,
+                                 f"an object of the open file: {sorted(bpy.data.objects.keys())}")
     try:
-        sample = None
-        if args.object:
-            sample = bpy.data.objects.get(args.object)
-            if sample is None:
-                raise ParameterError("object", args.object,
-                                     f"an object of the open file: {sorted(bpy.data.objects.keys())}")
-        settings = RigSettings(incidences_deg=tuple(args.incidences or DEFAULT_INCIDENCES_DEG),
-                               views_deg=tuple(args.views or DEFAULT_VIEWS_DEG), resolution=args.resolution,
-                               samples=args.samples, seed=args.seed, patch_mm=args.patch_mm)
         with stdout_to_stderr() if args.json else contextlib.nullcontext():
-            results = run_validation(sample, args.out, materials=args.material, tables_dir=args.tables,
-                                     cloth_dir=args.cloth_tables,
-                                     measured_csv=args.measured, settings=settings, swatches=not args.no_swatches,
-                                     progress=progress)
-    except (ParameterError, WeaveParameterError, MeasurementFormatError) as error:
-        print(f"\nerror: {error}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("\ninterrupted", file=sys.stderr)
-        return 130
-    print(file=sys.stderr)
+            return run_validation(sample, args.out, materials=args.material, tables_dir=args.tables,
+                                  cloth_dir=args.cloth_tables, measured_csv=args.measured, settings=settings,
+                                  swatches=not args.no_swatches, progress=progress)
+    finally:
+        if progress_shown:
+            print(file=sys.stderr)  # end the progress line: what follows starts on its own
+
+
+def main(argv=None) -> int:
+    """Run the sweep; the exit code (module docstring)."""
+    return import_precompute("exit_codes").run_cli(lambda: _main(argv))
+
+
+def _main(argv) -> int:
+    args = build_parser().parse_args(argv)
+    check_arguments(args)
+    # Blender prints and swallows an exception raised in its callbacks (Cycles' render engine): a
+    # Ctrl-C is held and raised between renders instead, so it always stops the sweep (code 130).
+    with import_precompute("exit_codes").DeferredInterrupt("interrupting after the current render…") as interrupt:
+        results = _sweep(args, interrupt)
     if args.json:
         # The file is the results with NaN written as null: standard JSON.
         sys.stdout.write((pathlib.Path(args.out) / "results.json").read_text(encoding="utf-8"))
@@ -134,4 +206,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:  # between main's return and the exit
+        sys.exit(130)

@@ -51,7 +51,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numba
 import numpy as np
 
-from . import __version__, ballistic
+from . import __version__, ballistic, bounds
 from .cache import canonical_json, cache_key, default_cache_dir, lookup, store
 from .closure_fit import LOBES, LobeShape, fit_closure_weights
 from .color import (
@@ -68,6 +68,7 @@ from .color import (
 from .errors import ParameterError
 from .medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from .optics import medium_optics
+from .outputs import check_writable_folder
 from .sources import stage_digest
 from .table_layout import (
     brdf_atlas,
@@ -267,28 +268,46 @@ def transport_settings(config: dict, *, seed=None, paths_per_cell=None, target_r
             "exactly one of them",
         )
     if settings["paths_per_cell"] is not None:
-        settings["paths_per_cell"] = _integer("transport.paths_per_cell", settings["paths_per_cell"], 2)
+        settings["paths_per_cell"] = bounds.PATHS_PER_CELL.check(settings["paths_per_cell"])
     else:
-        error = settings["target_rel_stderr"]
-        if isinstance(error, bool) or not isinstance(error, (int, float)) or not 0 < error < 1:
-            raise ParameterError("transport.target_rel_stderr", error, "a number in (0, 1)")
-        settings["target_rel_stderr"] = float(error)
-    settings["seed"] = _integer("transport.seed", settings["seed"], 0, 2**63 - 1)
-    for name in ("n_around", "n_along", "angular_resolution"):
-        settings[name] = _integer(f"transport.{name}", settings[name], 1)
+        settings["target_rel_stderr"] = bounds.TARGET_REL_STDERR.check(settings["target_rel_stderr"])
+    settings["seed"] = bounds.SEED.check(settings["seed"])
+    for bound in (bounds.N_AROUND, bounds.N_ALONG, bounds.ANGULAR_RESOLUTION):
+        settings[bound.name.split(".")[-1]] = bound.check(settings[bound.name.split(".")[-1]])
     if settings["incidence_resolution"] != "auto":
         n_i = settings["incidence_resolution"]
-        if isinstance(n_i, bool) or not isinstance(n_i, int) or n_i < 3 or n_i % 2 == 0:
+        if isinstance(n_i, str) or not _is_allowed(bounds.INCIDENCE_RESOLUTION, n_i):
             raise ParameterError(
                 "transport.incidence_resolution", n_i,
-                "\"auto\" or an odd integer ≥ 3 (with an even one the planes across and along the yarn "
-                "fall on the octahedral map's crease, docs/table-spec.md)",
+                f"\"auto\" or {bounds.INCIDENCE_RESOLUTION.allowed()} (with an even one the planes across and along "
+                "the yarn fall on the octahedral map's crease, docs/table-spec.md)",
             )
     try:
         TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
     except ParameterError as exc:  # name the parameter as the preset spells it
         raise ParameterError(f"transport.{exc.name.split('.')[-1]}", exc.value, exc.allowed) from None
     return settings
+
+
+def _is_allowed(bound: bounds.Bound, value) -> bool:
+    try:
+        bound.check(value)
+    except ParameterError:
+        return False
+    return True
+
+
+def check_transport_memory(settings: dict, wavelengths: int) -> int:
+    """The estimated peak memory of the simulation of ``settings`` (bytes, :func:`precompute.bounds.
+    transport_memory_bytes`); ParameterError naming the grid settings when it exceeds the limit."""
+    n_i = settings["incidence_resolution"]
+    n_i = max(INCIDENCE_RESOLUTIONS) if n_i == "auto" else n_i
+    keys = ("angular_resolution", "n_around", "n_along", "incidence_resolution")
+    estimate = bounds.transport_memory_bytes(settings["n_around"], settings["n_along"], settings["angular_resolution"],
+                                             n_i, wavelengths)
+    bounds.check_memory(estimate, "transport." + ", transport.".join(keys) + f" (with {wavelengths} wavelengths)",
+                        tuple(settings[key] for key in keys))
+    return estimate
 
 
 def bake_configuration(
@@ -320,6 +339,7 @@ def bake_configuration(
             "yarn.cross_section", medium.yarn.cross_section, "'circle' (the transport traces circular yarns)"
         )
     settings = transport_settings(config, seed=seed, paths_per_cell=paths_per_cell, target_rel_stderr=target_rel_stderr)
+    check_transport_memory(settings, len(medium.wavelengths.values))
     colour = _settings(config, "bake", BAKE_DEFAULTS)
     # Checks the illuminant, the observer and that the wavelengths lie where colour is defined,
     # before any simulation.
@@ -585,7 +605,8 @@ def bake(
     configuration = bake_configuration(
         preset_or_params, overrides, seed=seed, paths_per_cell=paths_per_cell, target_rel_stderr=target_rel_stderr
     )
-    cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    cache_dir = check_writable_folder(cache_dir if cache_dir is not None else default_cache_dir(), "cache_dir",
+                                      what="a cache folder")
     spectral_in = spectral_inputs(configuration)
     spectral_key = cache_key(spectral_in)
     tables_in = table_inputs(spectral_key, configuration)

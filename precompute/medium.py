@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import bounds
 from .errors import ParameterError
 from .phase import DEFAULT_PHASE_SAMPLES
 
@@ -115,6 +116,7 @@ class WavelengthGrid:
                     "wavelengths.values_nm", self.values_nm, "either values_nm or start_nm/stop_nm/step_nm, not both"
                 )
             values = _increasing("wavelengths.values_nm", self.values_nm)
+            bounds.WAVELENGTH_COUNT.check(len(values), "wavelengths.values_nm (count)")
             if values[0] <= 0:
                 raise ParameterError("wavelengths.values_nm", self.values_nm, "wavelengths > 0 nm")
             return
@@ -123,6 +125,11 @@ class WavelengthGrid:
         step = _positive("wavelengths.step_nm", 10.0 if self.step_nm is None else self.step_nm)
         if stop < start:
             raise ParameterError("wavelengths.stop_nm", self.stop_nm, f"≥ start_nm = {start:g}")
+        count = (stop - start) / step + 1
+        if count > bounds.WAVELENGTH_COUNT.high:  # before the grid is made
+            raise ParameterError("wavelengths.step_nm", self.step_nm,
+                                 f"a step giving at most {bounds.WAVELENGTH_COUNT.high} wavelengths from start_nm to "
+                                 f"stop_nm (this one gives {count:.4g})")
         if abs(round((stop - start) / step) * step - (stop - start)) > 1e-6 * step:
             raise ParameterError(
                 "wavelengths.step_nm", self.step_nm, f"a divisor of stop_nm − start_nm = {stop - start:g}"
@@ -235,11 +242,11 @@ class ParticleSpecies:
                     self.diameter_nm,
                     "either diameter_nm or median_diameter_nm with geometric_sigma, not both",
                 )
-            _positive(f"{label}.diameter_nm", self.diameter_nm)
+            bounds.PARTICLE_DIAMETER_NM.check(self.diameter_nm, f"{label}.diameter_nm")
             return
         if self.median_diameter_nm is None or self.geometric_sigma is None:
             raise ParameterError(f"{label}.diameter_nm", None, "a diameter, or median_diameter_nm with geometric_sigma")
-        _positive(f"{label}.median_diameter_nm", self.median_diameter_nm)
+        bounds.PARTICLE_DIAMETER_NM.check(self.median_diameter_nm, f"{label}.median_diameter_nm")
         sigma = _finite(f"{label}.geometric_sigma", self.geometric_sigma, "(1, 2.5]")
         if not 1.0 < sigma <= 2.5:
             raise ParameterError(
@@ -296,7 +303,7 @@ class Yarn:
     semi_axes_mm: tuple[float, float] | None = None
 
     def __post_init__(self):
-        _positive("yarn.radius_mm", self.radius_mm)
+        bounds.YARN_RADIUS_MM.check(self.radius_mm)
         if self.cross_section not in ("circle", "ellipse"):
             raise ParameterError("yarn.cross_section", self.cross_section, "'circle' or 'ellipse'")
         if self.cross_section == "circle":
@@ -408,7 +415,7 @@ def read_spectrum_csv(path: str | pathlib.Path, parameter: str) -> tuple[tuple[f
         raise ParameterError(parameter, str(path), "an existing CSV file")
     wavelengths, values = [], []
     header_allowed = True
-    for line_number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+    for line_number, line in enumerate(_read_text(path, parameter, "a UTF-8 CSV file").splitlines(), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         row = next(csv.reader([line]))
@@ -432,6 +439,21 @@ def read_spectrum_csv(path: str | pathlib.Path, parameter: str) -> tuple[tuple[f
         raise ParameterError(parameter, str(path), "a CSV with at least two data rows")
     _increasing(f"{parameter} ({path.name}) wavelengths", wavelengths)
     return tuple(wavelengths), tuple(values)
+
+
+def _read_text(path: pathlib.Path, parameter: str, what: str) -> str:
+    """A text file's content; ParameterError naming ``parameter`` and the file (and, for bytes that
+    are not UTF-8, the line) when it cannot be read as text."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ParameterError(parameter, str(path), f"{what} this user can read ({exc.strerror or exc})") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise ParameterError(parameter, str(path), f"{what} (line {line} holds bytes that are not UTF-8 text: "
+                                                   "is this a binary file?)") from None
 
 
 def _is_number(text: str) -> bool:
@@ -582,6 +604,10 @@ def preset_names() -> list[str]:
 def preset_path(name_or_path: str | pathlib.Path) -> pathlib.Path:
     """The TOML file of a shipped preset name, or the given path to a TOML file."""
     candidate = pathlib.Path(name_or_path)
+    if str(name_or_path).strip() and candidate.is_dir():
+        raise ParameterError("preset", str(name_or_path), "a preset name or a TOML file (this is a folder)")
+    if not str(name_or_path).strip():
+        raise ParameterError("preset", str(name_or_path), f"one of {preset_names()} or a path to a TOML file")
     if candidate.suffix == ".toml" or candidate.is_file():
         if not candidate.is_file():
             raise ParameterError("preset", str(name_or_path), "an existing TOML file")
@@ -596,7 +622,7 @@ def load_preset_config(name_or_path: str | pathlib.Path = DEFAULT_PRESET) -> tup
     """The raw TOML content of a preset and the folder its relative paths resolve in."""
     path = preset_path(name_or_path)
     try:
-        config = tomllib.loads(path.read_text(encoding="utf-8"))
+        config = tomllib.loads(_read_text(path, "preset", "a UTF-8 TOML file"))
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError("preset", str(path), f"valid TOML ({exc})") from None
     return config, path.parent

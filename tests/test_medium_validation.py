@@ -76,9 +76,9 @@ def test_host_must_not_have_a_complex_index():
     expect_error(set_in(["host", "refractive_index"], [1.557, 0.01]), "host.refractive_index.k", "absorption_per_mm")
 
 
-@pytest.mark.parametrize("value", [0.0, -150.0, math.nan, "150"])
+@pytest.mark.parametrize("value", [0.0, -150.0, math.nan, "150", 1e9, math.inf])
 def test_diameter_must_be_positive(value):
-    expect_error(set_in(["particles", 0, "diameter_nm"], value), "particles[scatterers].diameter_nm", "> 0")
+    expect_error(set_in(["particles", 0, "diameter_nm"], value), "particles[scatterers].diameter_nm", "[1, 100000] nm")
 
 
 @pytest.mark.parametrize("value", [0.0, -0.1, 0.74, 0.9, math.nan])
@@ -237,7 +237,10 @@ def test_transport_and_bake_tables_belong_to_the_bake():
 @pytest.mark.parametrize(
     "path, value, name, allowed",
     [
-        (["yarn", "radius_mm"], 0.0, "yarn.radius_mm", "> 0"),
+        (["yarn", "radius_mm"], 0.0, "yarn.radius_mm", "[0.001, 10] mm"),
+        (["yarn", "radius_mm"], 11.0, "yarn.radius_mm", "[0.001, 10] mm"),
+        (["wavelengths", "step_nm"], 1e-6, "wavelengths.step_nm", "at most 1001 wavelengths"),
+        (["particles", 0, "diameter_nm"], 2e5, "particles[scatterers].diameter_nm", "[1, 100000] nm"),
         (["yarn", "cross_section"], "square", "yarn.cross_section", "'circle' or 'ellipse'"),
         (["yarn", "semi_axes_mm"], [0.12, 0.08], "yarn.semi_axes_mm", "absent"),
         (["medium", "dependent_scattering"], "mie-dependent", "medium.dependent_scattering", "percus-yevick"),

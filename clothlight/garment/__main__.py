@@ -7,73 +7,120 @@ Example::
     python -m clothlight.validate --tables out/bake --cloth-tables out/cloth \\
         --material yarn garment --out out/garment_validation       # flat patch vs yarn sample
 
-Exit codes: 0 done, 2 bad input (the message names it), 130 interrupted, 1 a failure writing the output.
+Exit codes (``precompute/exit_codes.py``, the same for every ClothLight command): 0 done, 2 bad
+input (the message names the option or file and what is allowed), 130 interrupted, 1 an internal
+error (a full disk, a damaged cache entry).  The arguments, the output and cache folders included,
+are checked before Blender is imported.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
-import pathlib
-import shutil
-import sys
-import time
+try:  # a Ctrl-C before the handler in main() is in place still exits with 130, without a traceback
+    import json
+    import pathlib
+    import shutil
+    import sys
+    import time
 
-from .measure import GoniometerSettings
+    from ..addon import import_precompute
+except KeyboardInterrupt:
+    if __name__ != "__main__":
+        raise
+    print("interrupted", file=__import__("sys").stderr)
+    raise SystemExit(130) from None
 
 
-def build_parser() -> argparse.ArgumentParser:
-    defaults = GoniometerSettings()
+def build_parser():
+    import argparse
+
+    from ..render_bounds import (
+        DEFAULT_GONIO_EXIT_RESOLUTION as n_o,
+        DEFAULT_GONIO_INCIDENCE_RESOLUTION as n_i,
+        DEFAULT_GONIO_PIXELS_PER_PATCH as pixels,
+        DEFAULT_GONIO_SAMPLES as samples,
+        GONIO_EXIT_RESOLUTION,
+        GONIO_INCIDENCE_RESOLUTION,
+        GONIO_PIXELS_PER_PATCH,
+        GONIO_SAMPLES,
+    )
+
     parser = argparse.ArgumentParser(prog="python -m clothlight.garment", description=__doc__.split("\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)
     bake = commands.add_parser("bake", help="measure the cloth BSDF and write its tables (cached)")
     bake.add_argument("--tables", required=True, help="yarn bake folder (python -m precompute bake --out DIR)")
     bake.add_argument("--out", required=True, help="folder for the cloth tables and summary.json, written as a "
                       "whole (a new folder, or an earlier cloth bake's, which it replaces)")
-    bake.add_argument("--incidence-resolution", type=int, default=defaults.incidence_resolution,
-                      help=f"N_i, odd (default {defaults.incidence_resolution}: {defaults.incidence_resolution ** 2} "
-                           "incidence cells over the sphere)")
-    bake.add_argument("--exit-resolution", type=int, default=defaults.exit_resolution,
-                      help=f"N_o per side (default {defaults.exit_resolution}): 2·N_o² renders")
-    bake.add_argument("--pixels-per-patch", type=int, default=defaults.pixels_per_patch,
-                      help=f"pixels across a patch's foreshortened side (default {defaults.pixels_per_patch})")
-    bake.add_argument("--samples", type=int, default=defaults.samples,
-                      help=f"Cycles samples per pixel (default {defaults.samples})")
+    bake.add_argument("--incidence-resolution", type=GONIO_INCIDENCE_RESOLUTION.argument("--incidence-resolution"),
+                      default=n_i, help=f"N_i, {GONIO_INCIDENCE_RESOLUTION.allowed()} (default {n_i}: {n_i ** 2} "
+                                        "incidence cells over the sphere)")
+    bake.add_argument("--exit-resolution", type=GONIO_EXIT_RESOLUTION.argument("--exit-resolution"), default=n_o,
+                      help=f"N_o per side, {GONIO_EXIT_RESOLUTION.allowed()} (default {n_o}): 2·N_o² renders")
+    bake.add_argument("--pixels-per-patch", type=GONIO_PIXELS_PER_PATCH.argument("--pixels-per-patch"),
+                      default=pixels,
+                      help=f"pixels across a patch's foreshortened side, {GONIO_PIXELS_PER_PATCH.allowed()} "
+                           f"(default {pixels})")
+    bake.add_argument("--samples", type=GONIO_SAMPLES.argument("--samples"), default=samples,
+                      help=f"Cycles samples per pixel, {GONIO_SAMPLES.allowed()} (default {samples})")
     bake.add_argument("--cache-dir", help="cache folder (default: the user cache)")
     bake.add_argument("--json", action="store_true", help="print summary.json on stdout")
     return parser
 
 
-def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+def _measure(args, interrupt):
+    """The cloth bake's folder in the cache (measured now, or found), whether it was measured, and
+    the summary reader."""
     import bpy
 
-    from ..addon import import_precompute
     from .bake import bake_cloth, read_summary
-    from .tables import CLOTH_FOLDER_FILES, check_cloth_table_folder
+    from .measure import GoniometerSettings
 
-    ParameterError = import_precompute("errors").ParameterError
-    table_folder = import_precompute("table_folder")
+    interrupt.check()
+    settings = GoniometerSettings(incidence_resolution=args.incidence_resolution,
+                                  exit_resolution=args.exit_resolution,
+                                  pixels_per_patch=args.pixels_per_patch, samples=args.samples)
     bpy.ops.wm.read_homefile(use_empty=True)
+    interrupt.check()
     start = time.perf_counter()
+    progress_shown = []
 
     def progress(done: int, total: int, what: str) -> None:
+        progress_shown.append(True)
         elapsed = time.perf_counter() - start
         print(f"\r[{done}/{total}] {what:<32} {elapsed:6.0f} s, ~{elapsed / done * (total - done):.0f} s left",
               end="", file=sys.stderr, flush=True)
+        interrupt.check()  # after a render: the cache keeps nothing of an unfinished measurement
 
     try:
-        table_folder.check_output_folder(args.out, CLOTH_FOLDER_FILES)  # before minutes of renders
-        settings = GoniometerSettings(incidence_resolution=args.incidence_resolution,
-                                      exit_resolution=args.exit_resolution,
-                                      pixels_per_patch=args.pixels_per_patch, samples=args.samples)
         folder, measured = bake_cloth(args.tables, settings, cache_dir=args.cache_dir, progress=progress)
-    except (ParameterError, FileNotFoundError, ValueError) as error:
-        print(f"\nerror: {error}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("\ninterrupted", file=sys.stderr)
-        return 130
+    finally:
+        if progress_shown:
+            print(file=sys.stderr)  # end the progress line: what follows starts on its own
+    return folder, measured, read_summary
+
+
+def main(argv=None) -> int:
+    """Run a command; the exit code (module docstring)."""
+    return import_precompute("exit_codes").run_cli(lambda: _main(argv))
+
+
+def _main(argv) -> int:
+    args = build_parser().parse_args(argv)
+    ParameterError = import_precompute("errors").ParameterError
+    table_folder = import_precompute("table_folder")
+    outputs = import_precompute("outputs")
+    from .tables import CLOTH_FOLDER_FILES, check_cloth_table_folder
+
+    # Before Blender and minutes of renders: the output folder, the cache, the yarn bake.
+    table_folder.check_output_folder(args.out, CLOTH_FOLDER_FILES)
+    if args.cache_dir is not None:
+        outputs.check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
+    if not pathlib.Path(args.tables).is_dir():
+        raise ParameterError("--tables", args.tables, "an existing yarn bake folder (python -m precompute bake --out)")
+
+    # Blender prints and swallows an exception raised in its callbacks (Cycles' render engine): a
+    # Ctrl-C is held and raised between renders instead, so it always stops the bake (code 130).
+    with import_precompute("exit_codes").DeferredInterrupt("interrupting after the current render…") as interrupt:
+        folder, measured, summary_of = _measure(args, interrupt)
 
     def write(staging: pathlib.Path) -> None:
         for name in CLOTH_FOLDER_FILES:
@@ -81,19 +128,12 @@ def main(argv=None) -> int:
                 shutil.copy2(folder / name, staging / name)
         check_cloth_table_folder(staging)
 
-    try:  # the folder as a whole: a reader, or a kill at any moment, finds the previous one or this one
-        out = table_folder.replace_folder(args.out, write, CLOTH_FOLDER_FILES)
-    except ParameterError as error:
-        print(f"\nerror: {error}", file=sys.stderr)
-        return 2
-    except (ValueError, OSError) as error:  # a damaged cache entry, a full disk
-        print(f"\nerror: {error}", file=sys.stderr)
-        return 1
-    summary = read_summary(out)
+    # The folder as a whole: a reader, or a kill at any moment, finds the previous one or this one.
+    out = table_folder.replace_folder(args.out, write, CLOTH_FOLDER_FILES)
+    summary = summary_of(out)
     if args.json:
         sys.stdout.write(json.dumps(summary, indent=1) + "\n")
         return 0
-    print(file=sys.stderr)
     print(f"cloth tables: {out} ({'measured' if measured else 'from the cache'}, "
           f"{summary['seconds']['renders']:.0f} s of renders)")
     print(f"energy: reflected + transmitted + open ≤ {summary['energy']['max_total']:.3f} of the incident flux")
@@ -105,4 +145,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:  # between main's return and the exit
+        sys.exit(130)

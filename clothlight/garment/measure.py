@@ -28,6 +28,19 @@ from ..measurement_render import (
     remove_data_blocks,
     render_passes_to_arrays,
 )
+from ..render_bounds import (
+    DEFAULT_GONIO_EXIT_RESOLUTION,
+    DEFAULT_GONIO_INCIDENCE_RESOLUTION,
+    DEFAULT_GONIO_PIXELS_PER_PATCH,
+    DEFAULT_GONIO_SAMPLES,
+    GONIO_EXIT_RESOLUTION,
+    GONIO_INCIDENCE_RESOLUTION,
+    GONIO_PATCH_REPEATS,
+    GONIO_PIXELS_PER_PATCH,
+    GONIO_SAMPLES,
+    GONIO_SEED,
+    check_render_memory,
+)
 from ..sample_object import build_sample_object, weave_record
 from ..validation.rig import VALIDATION_WEAVE, sample_bounds
 from ..weave import WeaveParameters
@@ -72,25 +85,25 @@ class GoniometerSettings:
         validation weave.
     """
 
-    # Red cotton: the flat patch within 4.3 % of the yarn sample on the validation sweep, 40 min
-    # on 2 cores; N_i = 9, N_o = 8, 16 pixels (a 7-min draft) 9.3 % (docs/garment.md).
-    incidence_resolution: int = 11
-    exit_resolution: int = 12
-    pixels_per_patch: int = 12
-    samples: int = 4
+    # The defaults and their reasons: clothlight/render_bounds.py (the command line reads them there).
+    incidence_resolution: int = DEFAULT_GONIO_INCIDENCE_RESOLUTION
+    exit_resolution: int = DEFAULT_GONIO_EXIT_RESOLUTION
+    pixels_per_patch: int = DEFAULT_GONIO_PIXELS_PER_PATCH
+    samples: int = DEFAULT_GONIO_SAMPLES
     patch_repeats: int = 1
     seed: int = 0
     weave: WeaveParameters | None = None
 
     def __post_init__(self):
-        for name, low in (("incidence_resolution", 3), ("exit_resolution", 2), ("pixels_per_patch", 4),
-                          ("samples", 1), ("patch_repeats", 1), ("seed", 0)):
+        # Bounds as data (clothlight/render_bounds.py), shared with the command line.
+        for name, bound in (("incidence_resolution", GONIO_INCIDENCE_RESOLUTION),
+                            ("exit_resolution", GONIO_EXIT_RESOLUTION), ("pixels_per_patch", GONIO_PIXELS_PER_PATCH),
+                            ("samples", GONIO_SAMPLES), ("patch_repeats", GONIO_PATCH_REPEATS), ("seed", GONIO_SEED)):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-                raise ParameterError(name, value, f"an integer ≥ {low}")
-        if self.incidence_resolution % 2 == 0:
-            raise ParameterError("incidence_resolution", self.incidence_resolution,
-                                 "an odd number (an even grid puts cell centres in the cloth plane)")
+            if name == "incidence_resolution" and isinstance(value, int) and value % 2 == 0:
+                raise ParameterError(name, value, f"{bound.allowed()} (an even grid puts cell centres in the "
+                                                  "cloth plane)")
+            bound.check(value, name)
 
     def to_dict(self) -> dict:
         """JSON-ready; the weave as the sample records it (its yarn counts are set at measurement)."""
@@ -153,6 +166,11 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
     least_cos = min(abs(d[2]) for side in SIDES for d in exit_directions(n_o, side))
     pixel_mm = patch_mm * least_cos / settings.pixels_per_patch
     layout = plan_regions(n_i * n_i, patch_mm, half_thickness, view_tilt, margin_mm=2.0 * pixel_mm)
+    # The largest image of the sweep (the most grazing view is the widest), before any render.
+    largest = max(view.width * view.height for view in (view_of(d, layout, settings.pixels_per_patch)
+                                                        for side in SIDES for d in exit_directions(n_o, side)))
+    check_render_memory(largest, "exit_resolution, incidence_resolution, pixels_per_patch, patch_repeats",
+                        (n_o, n_i, settings.pixels_per_patch, settings.patch_repeats))
     half_size = required_sample_half_size_mm(layout, half_thickness, view_tilt, light_tilt, edge_band_mm=spacing)
     # Whole repeats keep the sample symmetric about its centre, where the layout is centred.
     yarns = int(math.ceil(2.0 * half_size / repeat)) * int(round(repeat / spacing))

@@ -42,6 +42,16 @@ MAX_VIEW_DEG = 85.0
 #: Incidences beyond this zenith are refused: the sun's irradiance on the cloth, E cos θi, vanishes.
 MAX_INCIDENCE_DEG = 85.0
 
+#: Materials a sweep can measure, in the order they are swept and plotted (:mod:`.run`; here, without
+#: Blender, so that the command line checks its arguments before importing bpy).
+MATERIALS = ("yarn", "yarn_general", "baseline", "garment", "garment_general")
+#: What a sweep measures when no materials are named and tables are given.
+DEFAULT_MATERIALS = ("yarn", "baseline")
+#: Materials that read the yarn tables.
+YARN_MATERIALS = ("yarn", "yarn_general")
+#: Materials that read a cloth bake, swept on a flat patch in place of the sample.
+GARMENT_MATERIALS = ("garment", "garment_general")
+
 
 def toward_sun(theta_i_deg: float) -> np.ndarray:
     """Unit vector toward a sun at incidence θi (degrees), on the −x side of the plane of incidence."""

@@ -29,6 +29,15 @@ from mathutils import Matrix, Vector
 from ..materials import shader_node, sync_sun
 from ..measurement_render import configure_measurement_render, remove_data_blocks, render_to_array
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
+from ..render_bounds import (
+    DEFAULT_VALIDATION_RESOLUTION,
+    DEFAULT_VALIDATION_SAMPLES,
+    VALIDATION_PATCH_MM,
+    VALIDATION_RESOLUTION,
+    VALIDATION_SAMPLES,
+    VALIDATION_SEED,
+    check_render_memory,
+)
 from ..sample_object import build_sample_object
 from ..weave import WeaveParameters
 from .framing import (
@@ -49,8 +58,8 @@ from .measure import ViewMeasurement, measure_view
 #: 2 mm patch (two repeats) keeps its edges out of every default view (see ``framing``).
 VALIDATION_WEAVE = WeaveParameters(warp_count=12, weft_count=12)
 #: Pixels along the patch side, and samples per pixel (benchmarks/bench_validation.py).
-DEFAULT_RESOLUTION = 128
-DEFAULT_SAMPLES = 16
+DEFAULT_RESOLUTION = DEFAULT_VALIDATION_RESOLUTION
+DEFAULT_SAMPLES = DEFAULT_VALIDATION_SAMPLES
 #: Sun irradiance on a plane facing it, W/m² (any value calibrates out; tests use others).
 DEFAULT_SUN_IRRADIANCE = 1.0
 
@@ -91,13 +100,12 @@ class RigSettings:
         incidences, views = check_angles(self.incidences_deg, self.views_deg)
         object.__setattr__(self, "incidences_deg", incidences)
         object.__setattr__(self, "views_deg", views)
-        for name, low in (("resolution", 4), ("samples", 1), ("seed", 0)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-                raise ParameterError(name, value, f"an integer ≥ {low}")
-        if self.patch_mm is not None and not (isinstance(self.patch_mm, (int, float)) and math.isfinite(self.patch_mm)
-                                              and self.patch_mm > 0):
-            raise ParameterError("patch_mm", self.patch_mm, "None or a length > 0 (mm)")
+        for name, bound in (("resolution", VALIDATION_RESOLUTION), ("samples", VALIDATION_SAMPLES),
+                            ("seed", VALIDATION_SEED)):
+            object.__setattr__(self, name, bound.check(getattr(self, name), name))
+        check_render_memory(self.resolution**2, "resolution", self.resolution)
+        if self.patch_mm is not None:
+            object.__setattr__(self, "patch_mm", VALIDATION_PATCH_MM.check(self.patch_mm))
         if not (isinstance(self.sun_irradiance, (int, float)) and math.isfinite(self.sun_irradiance)
                 and self.sun_irradiance > 0):
             raise ParameterError("sun_irradiance", self.sun_irradiance, "> 0 W/m²")

@@ -27,18 +27,12 @@ from ..garment.material import build_garment_material, cloth_tables_from_bake
 from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
 from ..mesh_attributes import YARN_TANGENT
 from ..yarn_tables import yarn_tables_from_bake
-from .framing import ParameterError
+from .framing import DEFAULT_MATERIALS, GARMENT_MATERIALS, MATERIALS, YARN_MATERIALS, ParameterError
 from .measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
 from .measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
 from .report import swatch_exposure, write_report, write_swatch_png
 from .rig import RigSettings, build_rig, calibration_plane
 
-#: Materials a sweep can measure, in the order they are swept and plotted.
-MATERIALS = ("yarn", "yarn_general", "baseline", "garment", "garment_general")
-#: What a sweep measures when no materials are named and tables are given.
-DEFAULT_MATERIALS = ("yarn", "baseline")
-#: Materials that read the yarn tables.
-YARN_MATERIALS = ("yarn", "yarn_general")
 MATERIAL_LABELS = {
     "yarn": "ClothLight yarn BRDF",
     "yarn_general": "ClothLight yarn BRDF, general-lighting closure mixture",
@@ -46,8 +40,6 @@ MATERIAL_LABELS = {
     "garment": "ClothLight cloth BSDF on a flat patch (garment material, sun mode)",
     "garment_general": "ClothLight cloth BSDF on a flat patch (garment material, general-lighting mixture)",
 }
-#: Materials that read a cloth bake, swept on a flat patch in place of the sample.
-GARMENT_MATERIALS = ("garment", "garment_general")
 #: The paper's Table 1 (§6.1): B/R and G/R at normal illumination and view.
 PAPER_TABLE1 = {
     "real red cotton": {"B/R": 0.08, "G/R": 0.011},

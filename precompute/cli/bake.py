@@ -1,8 +1,7 @@
 """``python -m precompute bake``: bake a yarn's tables (cached) and report B/R and G/R.
 
 Progress goes to stderr as a bar with the time left; the result to stdout, as
-text or with ``--json`` as the bake's summary.  Exit codes: 0 success, 2 bad
-input (the message names the parameter), 1 any other failure.
+text or with ``--json`` as the bake's summary.  Exit codes: precompute/exit_codes.py.
 """
 
 from __future__ import annotations
@@ -11,8 +10,10 @@ import json
 import pathlib
 import sys
 
+from .. import bounds
 from ..bake import bake, export_bake
 from ..medium import DEFAULT_PRESET, preset_names
+from ..outputs import check_writable_folder
 from ..table_folder import YARN_FOLDER_FILES, check_output_folder
 
 
@@ -34,11 +35,14 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--out", type=pathlib.Path,
                         help="also copy the tables, spectral.npz and summary.json into this folder, as a whole "
                         "(a new folder, or an earlier bake's, which it replaces)")
-    parser.add_argument("--seed", type=int, help="random seed (default: the preset's [transport] seed, 0)")
+    parser.add_argument("--seed", type=bounds.SEED.argument("--seed"),
+                        help="random seed (default: the preset's [transport] seed, 0)")
     budget = parser.add_mutually_exclusive_group()
-    budget.add_argument("--paths", type=int, help="paths per incidence cell")
-    budget.add_argument("--target-error", type=float,
-                        help="relative standard error of every incidence cell's albedo to reach (default 0.01)")
+    budget.add_argument("--paths", type=bounds.PATHS_PER_CELL.argument("--paths"),
+                        help=f"paths per incidence cell, {bounds.PATHS_PER_CELL.allowed()} (2e4 notation allowed)")
+    budget.add_argument("--target-error", type=bounds.TARGET_REL_STDERR.argument("--target-error"),
+                        help="relative standard error of every incidence cell's albedo to reach "
+                             f"(default 0.01), {bounds.TARGET_REL_STDERR.allowed()}")
     parser.add_argument("--threads", type=int, help="CPU threads (default: all); results do not depend on it")
     parser.add_argument("--cache-dir", type=pathlib.Path, help="cache folder (default: the user cache folder)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
@@ -50,6 +54,8 @@ def run(args) -> int:
 
     if args.out:
         check_output_folder(args.out, YARN_FOLDER_FILES)  # before the bake, not after it
+    if args.cache_dir is not None:
+        check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
     bars = []  # opened at the first progress report, so input errors print no bar
 
     def progress(fraction: float) -> None:

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..medium import DEFAULT_PRESET, MediumParameters, load_preset, preset_names
 from ..optics import MediumOptics, medium_optics
+from ..outputs import check_writable_file
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -104,7 +105,11 @@ def _print_table(report: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    params = load_preset(args.config if args.config else (args.preset or DEFAULT_PRESET))
+    if args.plot:  # before any work
+        check_writable_file(args.plot, "--plot", what="a PNG file")
+    # An empty --preset '' is refused by name, never taken for the default.
+    params = load_preset(args.config if args.config is not None else
+                         (args.preset if args.preset is not None else DEFAULT_PRESET))
     independent = medium_optics(_with_model(params, "none"))
     corrected = medium_optics(_with_model(params, "percus-yevick"))
     chosen_model = "percus-yevick" if args.percus_yevick else params.dependent_scattering

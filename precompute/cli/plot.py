@@ -15,6 +15,7 @@ import sys
 from .. import plots
 from ..bake import SPECTRAL_FILE, TABLE_FILES, load_spectral
 from ..errors import ParameterError
+from ..outputs import check_writable_folder
 from ..table_folder import check_yarn_table_folder
 from ..tables import TableError, read_table
 
@@ -28,6 +29,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    check_writable_folder(args.out, "--out", what="a folder for the PNG files")  # before any work
     path = args.table / TABLE_FILES["brdf"] if args.table.is_dir() else args.table
     try:
         if args.table.is_dir():  # a bake folder: checked as a whole

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from ..bounds import SLAB_ALBEDO, SLAB_G, SLAB_INDEX, SLAB_PATHS, SLAB_SEED, SLAB_TAU
 from ..transport import simulate_hg_slab
 
 KEYS = ("R_total", "R_total_stderr", "T_total", "T_total_stderr", "R_specular", "R_unscattered", "R_diffuse",
@@ -25,12 +26,17 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("--albedo", type=float, required=True, help="single-scattering albedo, [0, 1]")
-    parser.add_argument("--g", type=float, required=True, help="Henyey-Greenstein asymmetry, (-1, 1)")
-    parser.add_argument("--tau", type=float, required=True, help="optical thickness, > 0")
-    parser.add_argument("--n", type=float, default=1.0, help="refractive index of the slab, >= 1 (default 1)")
-    parser.add_argument("--paths", type=int, default=1_000_000, help="number of paths, >= 2 (default 1e6)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--albedo", type=SLAB_ALBEDO.argument("--albedo"), required=True,
+                        help=f"single-scattering albedo, {SLAB_ALBEDO.allowed()}")
+    parser.add_argument("--g", type=SLAB_G.argument("--g"), required=True,
+                        help=f"Henyey-Greenstein asymmetry, {SLAB_G.allowed()}")
+    parser.add_argument("--tau", type=SLAB_TAU.argument("--tau"), required=True,
+                        help=f"optical thickness, {SLAB_TAU.allowed()}")
+    parser.add_argument("--n", type=SLAB_INDEX.argument("--n"), default=1.0,
+                        help=f"refractive index of the slab, {SLAB_INDEX.allowed()} (default 1)")
+    parser.add_argument("--paths", type=SLAB_PATHS.argument("--paths"), default=1_000_000,
+                        help=f"number of paths, {SLAB_PATHS.allowed()} (default 1e6; 1e6 notation allowed)")
+    parser.add_argument("--seed", type=SLAB_SEED.argument("--seed"), default=0, help="random seed (default 0)")
     parser.add_argument("--threads", type=int, default=None, help="threads (default: all)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(func=run)

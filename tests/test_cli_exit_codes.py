@@ -508,3 +508,11 @@ def test_the_panel_reads_the_same_bounds():
                         ("yarn_radius_mm", bounds.YARN_RADIUS_MM)):
         assert limits(name) == (bound.low, bound.high), name
     assert limits("incidence_resolution") == (0, bounds.INCIDENCE_RESOLUTION.high)  # 0: automatic
+    from clothlight.validation.operator import CLOTHLIGHT_OT_validate
+
+    for name, bound in (("resolution", render_bounds.VALIDATION_RESOLUTION),
+                        ("samples", render_bounds.VALIDATION_SAMPLES)):
+        keywords = CLOTHLIGHT_OT_validate.__annotations__[name]
+        keywords = (eval(keywords, vars(sys.modules[CLOTHLIGHT_OT_validate.__module__]))
+                    if isinstance(keywords, str) else keywords).keywords
+        assert (keywords["min"], keywords["max"]) == (bound.low, bound.high), name

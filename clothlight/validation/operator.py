@@ -22,6 +22,7 @@ import bpy
 
 from ..addon import import_precompute
 from ..mesh_attributes import CLOTH_NORMAL
+from ..render_bounds import VALIDATION_RESOLUTION, VALIDATION_SAMPLES
 from ..weave import WeaveParameterError
 from .framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG
 from .measured_data import MeasurementFormatError
@@ -84,10 +85,12 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
     views: bpy.props.StringProperty(
         name="Views", default=_angle_text(DEFAULT_VIEWS_DEG),
         description="View zeniths θv, degrees; negative on the light's side")
-    resolution: bpy.props.IntProperty(name="Resolution", default=DEFAULT_RESOLUTION, min=4, soft_max=512,
+    # Limits from clothlight/render_bounds.py, as the command line and RigSettings check them.
+    resolution: bpy.props.IntProperty(name="Resolution", default=DEFAULT_RESOLUTION,
+                                      **VALIDATION_RESOLUTION.limits(), soft_max=512,
                                       description="Pixels along the framed patch's side")
-    samples: bpy.props.IntProperty(name="Samples", default=DEFAULT_SAMPLES, min=1, soft_max=256,
-                                   description="Cycles samples per pixel")
+    samples: bpy.props.IntProperty(name="Samples", default=DEFAULT_SAMPLES, **VALIDATION_SAMPLES.limits(),
+                                   soft_max=256, description="Cycles samples per pixel")
     swatches: bpy.props.BoolProperty(name="Colour Swatches", default=True,
                                      description="Also render the sample lit from the front and from behind")
 

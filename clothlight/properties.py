@@ -22,7 +22,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, Po
 from .addon import import_precompute
 from .jobs import BakeRequest, preset_request, typed_number
 from .weave import BUILT_IN, WeaveParameterError, WeaveParameters
-from .weave.params import CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
+from .weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
 
 _medium = import_precompute("medium")
 #: The allowed ranges, one definition shared with the bake's API and command line (precompute/bounds.py).
@@ -80,10 +80,10 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
         description="Weaving Information File whose drawdown (threading, tie-up and treadling, or lift plan) "
                     "gives the interlacing")
     warp_count: IntProperty(
-        name="Warp Ends", default=_WEAVE.warp_count, min=1, max=1000, soft_max=64,
+        name="Warp Ends", default=_WEAVE.warp_count, **COUNT_BOUNDS["warp_count"].limits(), soft_max=64,
         description="Number of warp yarns (ends) in the sample; they run along the sample's X axis")
     weft_count: IntProperty(
-        name="Weft Picks", default=_WEAVE.weft_count, min=1, max=1000, soft_max=64,
+        name="Weft Picks", default=_WEAVE.weft_count, **COUNT_BOUNDS["weft_count"].limits(), soft_max=64,
         description="Number of weft yarns (picks) in the sample; they run along the sample's Y axis")
     spacing_mm: FloatProperty(
         name="Spacing (mm)", default=_WEAVE.spacing_mm, min=0.001, max=100.0, soft_min=0.05, soft_max=5.0,
@@ -122,10 +122,11 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
         description="Height of a weft yarn's centreline above (below) the cloth's mid-plane where it passes over "
                     "(under) an end, in millimetres")
     segments_per_crossing: IntProperty(
-        name="Segments Along", default=_WEAVE.segments_per_crossing, min=2, max=256, soft_max=32,
+        name="Segments Along", default=_WEAVE.segments_per_crossing, soft_max=32,
+        **COUNT_BOUNDS["segments_per_crossing"].limits(),
         description="Mesh segments along a yarn per yarn spacing")
     segments_around: IntProperty(
-        name="Segments Around", default=_WEAVE.segments_around, min=3, max=256, soft_max=48,
+        name="Segments Around", default=_WEAVE.segments_around, **COUNT_BOUNDS["segments_around"].limits(), soft_max=48,
         description="Mesh segments around a yarn's cross-section")
     real_world_size: BoolProperty(
         name="Real-World Size", default=True,

@@ -5,7 +5,8 @@ precompute``: each option parses with :meth:`Bound.argument`, which also takes t
 its help prints) and the add-on's panel (``clothlight/properties.py``: ``min``/``max`` from
 :meth:`Bound.limits`) all read these, so they refuse the same values with the same message: the
 parameter, the value and the range (:class:`~precompute.errors.ParameterError`).  The add-on's own
-bounds (validation renders, the cloth gonioreflectometer) are in ``clothlight/bounds.py``.
+bounds (validation renders, the cloth gonioreflectometer) are in ``clothlight/render_bounds.py``,
+the weave's in ``clothlight/weave/params.py``.
 
 Upper limits keep a run within what a machine can do: the grids' tallies are estimated before they
 are allocated (:func:`transport_memory_bytes`) and refused above :func:`memory_limit_bytes` (half

@@ -508,6 +508,12 @@ def test_the_panel_reads_the_same_bounds():
                         ("yarn_radius_mm", bounds.YARN_RADIUS_MM)):
         assert limits(name) == (bound.low, bound.high), name
     assert limits("incidence_resolution") == (0, bounds.INCIDENCE_RESOLUTION.high)  # 0: automatic
+    from clothlight.weave.params import COUNT_BOUNDS
+
+    for name, bound in COUNT_BOUNDS.items():
+        annotation = properties.ClothLightWeaveSettings.__annotations__[name]
+        keywords = (eval(annotation, vars(properties)) if isinstance(annotation, str) else annotation).keywords
+        assert (keywords["min"], keywords["max"]) == (bound.low, bound.high), name
     from clothlight.validation.operator import CLOTHLIGHT_OT_validate
 
     for name, bound in (("resolution", render_bounds.VALIDATION_RESOLUTION),

@@ -542,6 +542,10 @@ def test_obj_export_carries_seam_correct_uvs(tmp_path):
         ({"crimp_amplitude_mm": -0.2}, "crimp_amplitude_mm"),
         ({"crimp_amplitude_mm": "high"}, "crimp_amplitude_mm"),
         ({"segments_around": 2}, "segments_around"),
+        ({"segments_around": 257}, r"segments_around.*\[3, 256\]"),
+        ({"warp_count": 1001}, r"warp_count.*\[1, 1000\]"),
+        ({"weft_count": 2.0}, "weft_count"),
+        ({"warp_count": 1000, "weft_count": 1000}, r"at most 2e\+07 vertices"),  # a 10⁸-vertex mesh
         ({"segments_per_crossing": 1}, "segments_per_crossing"),
         ({"segments_per_crossing": 4}, "segments_per_crossing"),  # chords would cut into crossing yarns
         ({"interlacing": np.zeros((0, 0))}, "interlacing"),

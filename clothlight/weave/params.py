@@ -23,6 +23,7 @@ import numpy as np
 
 from .centerline import crimp_percent, max_curvature
 from .clearance import crossing_gaps
+from ..addon import import_precompute
 from .errors import WeaveParameterError
 from .patterns import plain, validate_interlacing, weave_pattern
 
@@ -31,6 +32,18 @@ DEFAULT_YARN_RADIUS_MM = 0.1
 #: Derived crimp amplitude over the yarn's half-thickness: the 2 % keeps crossing yarns from
 #: sharing surface (coincident faces render as noise).
 CROSSING_CLEARANCE = 0.02
+
+_Bound = import_precompute("bounds").Bound
+ParameterError = import_precompute("errors").ParameterError
+#: The integer settings' ranges, read by the API (below) and the Weave panel (clothlight/properties.py).
+COUNT_BOUNDS = {
+    "warp_count": _Bound("warp_count", 1, 1000, integer=True),
+    "weft_count": _Bound("weft_count", 1, 1000, integer=True),
+    "segments_per_crossing": _Bound("segments_per_crossing", 2, 256, integer=True),
+    "segments_around": _Bound("segments_around", 3, 256, integer=True),
+}
+#: Vertices a sample may have: 2·10⁷ is a mesh of ~2 GB in Blender (and what Cycles builds from it).
+MAX_VERTICES = 20_000_000
 
 
 def _is_integer(value) -> bool:
@@ -86,14 +99,17 @@ class WeaveParameters:
         matrix = validate_interlacing(matrix)
         matrix.flags.writeable = False
         object.__setattr__(self, "interlacing", matrix)
-        for name in ("warp_count", "weft_count"):
+        for name, bound in COUNT_BOUNDS.items():
             value = getattr(self, name)
-            if not _is_integer(value) or value < 1:
-                raise WeaveParameterError(name, value, "an integer ≥ 1")
-        for name, low in (("segments_per_crossing", 2), ("segments_around", 3)):
-            value = getattr(self, name)
-            if not _is_integer(value) or value < low:
-                raise WeaveParameterError(name, value, f"an integer ≥ {low}")
+            try:
+                bound.check(value)
+            except ParameterError:
+                raise WeaveParameterError(name, value, bound.allowed()) from None
+        if self.vertex_estimate > MAX_VERTICES:
+            raise WeaveParameterError(
+                "warp_count, weft_count, segments_per_crossing, segments_around",
+                (self.warp_count, self.weft_count, self.segments_per_crossing, self.segments_around),
+                f"a mesh of at most {MAX_VERTICES:.0e} vertices (these make ~{self.vertex_estimate:.2g})")
         if not _is_length(self.spacing_mm):
             raise WeaveParameterError("spacing_mm", self.spacing_mm, "a finite length > 0 (mm)")
         self._check_cross_section()
@@ -101,6 +117,13 @@ class WeaveParameters:
         self._check_clearance()
 
     # -- derived quantities ---------------------------------------------------------------
+
+    @property
+    def vertex_estimate(self) -> int:
+        """Vertices of the sample's mesh, at most: every yarn's rings of ``segments_around``, one
+        run of ``segments_per_crossing`` per crossing and one more."""
+        crossings = self.warp_count * (self.weft_count + 1) + self.weft_count * (self.warp_count + 1)
+        return crossings * self.segments_per_crossing * self.segments_around
 
     @property
     def cross_section_mm(self) -> tuple[float, float]:

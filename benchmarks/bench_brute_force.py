@@ -45,6 +45,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 import numpy as np
 
+from precompute.bounds import GRID_SETTINGS
 from precompute.errors import ParameterError
 from precompute.reference import (
     CapLight,
@@ -86,8 +87,7 @@ def spectral_data(tables: pathlib.Path) -> pathlib.Path:
     transport = summary["transport"]
     budget = ({"paths_per_cell": transport["paths_per_cell"]} if transport.get("paths_per_cell")
               else {"target_rel_stderr": transport["target_rel_stderr"]})
-    grids = {f"transport.{k}": transport[k] for k in ("n_around", "n_along", "angular_resolution",
-                                                       "incidence_resolution")}
+    grids = {f"transport.{k}": transport[k] for k in GRID_SETTINGS}
     print(f"{tables} has no spectral.npz: re-simulating its spectral stage from summary.json "
           f"(medium {summary['medium']['name']!r}, transport {transport}) ...", flush=True)
     start = time.perf_counter()

@@ -113,8 +113,9 @@ class BakeRequest:
 
     def bake_arguments(self) -> dict:
         """Keyword arguments of :func:`precompute.bake.bake`."""
-        grids = {f"transport.{name}": getattr(self, name)
-                 for name in ("n_around", "n_along", "angular_resolution", "incidence_resolution")}
+        from .addon import import_precompute
+
+        grids = {f"transport.{name}": getattr(self, name) for name in import_precompute("bounds").GRID_SETTINGS}
         return {
             "preset_or_params": self.preset,
             "overrides": {**dict(self.overrides), **grids},
@@ -132,7 +133,7 @@ def preset_request(name: str) -> BakeRequest:
     given = config.get("transport", {})
     defaults = BakeRequest(preset=name)
     fields = {key: given.get(key, getattr(defaults, key))
-              for key in ("seed", "n_around", "n_along", "angular_resolution", "incidence_resolution")}
+              for key in ("seed", *import_precompute("bounds").GRID_SETTINGS)}
     if given.get("paths_per_cell") is not None and "target_rel_stderr" not in given:
         fields.update(paths_per_cell=int(given["paths_per_cell"]), target_rel_stderr=None)
     else:

@@ -302,7 +302,7 @@ def check_transport_memory(settings: dict, wavelengths: int) -> int:
     transport_memory_bytes`); ParameterError naming the grid settings when it exceeds the limit."""
     n_i = settings["incidence_resolution"]
     n_i = max(INCIDENCE_RESOLUTIONS) if n_i == "auto" else n_i
-    keys = ("angular_resolution", "n_around", "n_along", "incidence_resolution")
+    keys = bounds.GRID_SETTINGS
     estimate = bounds.transport_memory_bytes(settings["n_around"], settings["n_along"], settings["angular_resolution"],
                                              n_i, wavelengths)
     bounds.check_memory(estimate, "transport." + ", transport.".join(keys) + f" (with {wavelengths} wavelengths)",

@@ -155,6 +155,9 @@ N_ALONG = Bound("transport.n_along", 1, 256, integer=True)
 ANGULAR_RESOLUTION = Bound("transport.angular_resolution", 2, 64, integer=True)
 #: N_i of the tables' incidence grid (or "auto"): odd, up to 63 (a table's atlas side N_i · N_o).
 INCIDENCE_RESOLUTION = Bound("transport.incidence_resolution", 3, 63, integer=True, odd=True)
+#: The grid settings of ``[transport]``, by their key: what a bake request carries besides its path
+#: budget and seed (:class:`clothlight.jobs.BakeRequest`), and what sizes the transport's tallies.
+GRID_SETTINGS = ("n_around", "n_along", "angular_resolution", "incidence_resolution")
 SEED = Bound("transport.seed", 0, 2**63 - 1, integer=True)
 
 # ---- the medium (preset TOML, --set, the Yarn Medium panel) ----

@@ -85,11 +85,15 @@ def test_installed_extension_registers_its_classes_and_user_folders(addon, scene
 
 def test_bake_request_defaults_are_the_bakes_own():
     from precompute.bake import TRANSPORT_DEFAULTS
+    from precompute.bounds import GRID_SETTINGS
     from clothlight.jobs import BakeRequest
 
     request = BakeRequest()
     for key, value in TRANSPORT_DEFAULTS.items():
         assert getattr(request, key) == value, key
+    assert set(GRID_SETTINGS) <= set(TRANSPORT_DEFAULTS)
+    overrides = dict(BakeRequest(n_around=24).bake_arguments()["overrides"])
+    assert overrides == {f"transport.{key}": getattr(BakeRequest(n_around=24), key) for key in GRID_SETTINGS}
 
 
 # -- settings ------------------------------------------------------------------------------------

@@ -40,9 +40,9 @@ VALIDATION_SEED = RENDER_SEED
 
 # ---- the cloth gonioreflectometer (garment bake) ----
 
-#: Defaults of GoniometerSettings and the command line.  Red cotton: the flat patch within 4.3 % of
-#: the yarn sample on the validation sweep, 40 min on 2 cores; N_i = 9, N_o = 8, 16 pixels (a 7-min
-#: draft) 9.3 % (docs/garment.md).
+#: Defaults of GoniometerSettings and the command line.  Red cotton: the flat patch within 3.9 % of
+#: the yarn sample on the validation sweep, 40–65 min on 2 cores; N_i = 9, N_o = 8, 16 pixels (a
+#: 7-min draft) 9.3 % on the schema-3 tables (docs/garment.md).
 DEFAULT_GONIO_INCIDENCE_RESOLUTION = 11
 DEFAULT_GONIO_EXIT_RESOLUTION = 12
 DEFAULT_GONIO_PIXELS_PER_PATCH = 12

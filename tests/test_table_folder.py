@@ -217,10 +217,10 @@ def test_a_folder_of_the_tables_the_material_reads_passes(tmp_path):
     assert sorted(check_yarn_table_folder(folder).tables) == ["brdf.exr", "lobes.exr", "unscattered.exr"]
 
 
-@pytest.mark.parametrize("listed", [True, False])
-@pytest.mark.parametrize("case", sorted(BROKEN))
-def test_a_broken_folder_is_refused_naming_the_file_and_the_reason(bakes, tmp_path, case, listed):
-    break_it, name, reason = BROKEN[case]
+def assert_refused_naming_the_file(bakes, tmp_path, breakage, listed):
+    """Bake A's folder, broken by ``breakage`` = (break_it(folder, bake_b), file name, reason):
+    refused with a message that names the file and matches the reason."""
+    break_it, name, reason = breakage
     folder = copy_of(bakes["A", listed], tmp_path)
     break_it(folder, bakes["B", listed])
     with pytest.raises(TableError, match=reason) as refusal:
@@ -228,14 +228,15 @@ def test_a_broken_folder_is_refused_naming_the_file_and_the_reason(bakes, tmp_pa
     assert str(folder / name) in str(refusal.value)
 
 
+@pytest.mark.parametrize("listed", [True, False])
+@pytest.mark.parametrize("case", sorted(BROKEN))
+def test_a_broken_folder_is_refused_naming_the_file_and_the_reason(bakes, tmp_path, case, listed):
+    assert_refused_naming_the_file(bakes, tmp_path, BROKEN[case], listed)
+
+
 @pytest.mark.parametrize("case", sorted(BROKEN_LISTED))
 def test_the_summarys_list_ties_every_file_to_its_bake(bakes, tmp_path, case):
-    break_it, name, reason = BROKEN_LISTED[case]
-    folder = copy_of(bakes["A", True], tmp_path)
-    break_it(folder, bakes["B", True])
-    with pytest.raises(TableError, match=reason) as refusal:
-        check_yarn_table_folder(folder)
-    assert str(folder / name) in str(refusal.value)
+    assert_refused_naming_the_file(bakes, tmp_path, BROKEN_LISTED[case], listed=True)
 
 
 def test_a_folder_baked_before_the_list_is_still_read(bakes, tmp_path):

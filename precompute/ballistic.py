@@ -158,6 +158,16 @@ def cone_kernel(cos_angle, spread_rad: float) -> np.ndarray:
     return np.where(exponent < -CONE_CUTOFF, 0.0, cone)
 
 
+def unscattered_cone_weights(wi, wo, index: float, spread_rad: float, orders: int = ORDERS):
+    """Each unscattered path's weight toward (``wi``, ``wo``) and its length: ``(1 − F)² F^k`` times
+    :func:`cone_kernel` about its exact direction (…, K), 1/sr, and ℓ / R (…, K).  ρ_u is the sum
+    of weight × attenuation at that length (:func:`unscattered_rho`): linear in the attenuation."""
+    wi, wo = np.broadcast_arrays(np.asarray(wi, float), np.asarray(wo, float))
+    directions, fresnel_factor, length = unscattered_paths(wo, index, orders)
+    cos_angle = np.sum(directions * wi[..., None, :], axis=-1)
+    return fresnel_factor * cone_kernel(cos_angle, spread_rad), length
+
+
 def unscattered_rho(wi, wo, index: float, attenuation_of_length, spread_rad: float,
                     orders: int = ORDERS) -> np.ndarray:
     """ρ_u(ω_i, ω_o) (…, C) in 1/sr, each unscattered path's delta spread by :func:`cone_kernel`.
@@ -167,10 +177,7 @@ def unscattered_rho(wi, wo, index: float, attenuation_of_length, spread_rad: flo
     of a medium, or the RGB table as the shader reads it
     (:func:`precompute.table_layout.interpolate_attenuation`).
     """
-    wi, wo = np.broadcast_arrays(np.asarray(wi, float), np.asarray(wo, float))
-    directions, fresnel_factor, length = unscattered_paths(wo, index, orders)
-    cos_angle = np.sum(directions * wi[..., None, :], axis=-1)
-    weight = fresnel_factor * cone_kernel(cos_angle, spread_rad)
+    weight, length = unscattered_cone_weights(wi, wo, index, spread_rad, orders)
     return np.einsum("...k,...kc->...c", weight, attenuation_of_length(length))
 
 

@@ -80,9 +80,10 @@ def weights_from_lobe_atlas(atlas: np.ndarray, lobe_count: int) -> np.ndarray:
     return tiles.reshape(n_o * n_o, lobe_count, atlas.shape[2])
 
 
-def _bilinear_in_tile(atlas, tile_col, tile_row, tile_size, s, t):
-    """Bilinear filtering between pixel centres of one tile, with (s, t) held inside its
-    outermost pixel centres: what ``cl_tile_lookup`` gets from OSL ``texture()``."""
+def _tile_taps(tile_col, tile_row, tile_size, s, t):
+    """The four atlas pixels (rows, columns, (…, 4) int) and bilinear weights (…, 4) that
+    ``cl_tile_lookup`` blends in one tile through OSL ``texture()``: between pixel centres, with
+    (s, t) held inside the tile's outermost pixel centres."""
     half = 0.5 / tile_size
     x = np.clip(s, half, 1.0 - half) * tile_size - 0.5
     y = np.clip(t, half, 1.0 - half) * tile_size - 0.5
@@ -90,15 +91,19 @@ def _bilinear_in_tile(atlas, tile_col, tile_row, tile_size, s, t):
     y0 = np.clip(np.floor(y).astype(int), 0, tile_size - 1)
     x1 = np.minimum(x0 + 1, tile_size - 1)
     y1 = np.minimum(y0 + 1, tile_size - 1)
-    ax = (x - x0)[..., None]
-    ay = (y - y0)[..., None]
+    ax, ay = x - x0, y - y0
     row0 = tile_row * tile_size
     col0 = tile_col * tile_size
-    c00 = atlas[row0 + y0, col0 + x0]
-    c10 = atlas[row0 + y0, col0 + x1]
-    c01 = atlas[row0 + y1, col0 + x0]
-    c11 = atlas[row0 + y1, col0 + x1]
-    return (c00 * (1 - ax) + c10 * ax) * (1 - ay) + (c01 * (1 - ax) + c11 * ax) * ay
+    rows = np.stack([row0 + y0, row0 + y0, row0 + y1, row0 + y1], axis=-1)
+    columns = np.stack([col0 + x0, col0 + x1, col0 + x0, col0 + x1], axis=-1)
+    weights = np.stack([(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay], axis=-1)
+    return rows, columns, weights
+
+
+def _bilinear_in_tile(atlas, tile_col, tile_row, tile_size, s, t):
+    """One tile of ``atlas`` read at (s, t) as ``cl_tile_lookup`` reads it (:func:`_tile_taps`)."""
+    rows, columns, weights = _tile_taps(tile_col, tile_row, tile_size, s, t)
+    return np.einsum("...k,...kc->...c", weights, atlas[rows, columns])
 
 
 def interpolate_exit_tile(tile: np.ndarray, wo: np.ndarray) -> np.ndarray:
@@ -128,6 +133,20 @@ def incidence_corners(incidence_resolution: int, wi: np.ndarray):
     return columns, rows, weights
 
 
+def rho_taps(incidence_resolution: int, exit_resolution: int, wi: np.ndarray, wo: np.ndarray):
+    """The 16 atlas pixels that the shader blends for ρ(ω_i, ω_o) and their weights: flat pixel
+    indices ``row · (N_i·N_o) + column`` (…, 16) and weights (…, 16) summing to 1.  ρ is linear in
+    the atlas, so these taps are all a renderer's use of the table (:func:`interpolate_rho`)."""
+    n_i, n_o = incidence_resolution, exit_resolution
+    wi, wo = np.broadcast_arrays(np.asarray(wi, float), np.asarray(wo, float))
+    columns, rows, corner_weights = incidence_corners(n_i, wi)
+    st_o = AngularGrid("hemisphere", n_o).direction_to_square(wo)
+    taps = [_tile_taps(columns[..., k], rows[..., k], n_o, st_o[..., 0], st_o[..., 1]) for k in range(4)]
+    index = np.concatenate([r * (n_i * n_o) + c for r, c, _ in taps], axis=-1)
+    weights = np.concatenate([corner_weights[..., k, None] * w for k, (_, _, w) in enumerate(taps)], axis=-1)
+    return index, weights
+
+
 def interpolate_rho(atlas: np.ndarray, incidence_resolution: int, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     """ρ(ω_i, ω_o) from a BRDF atlas exactly as the shader interpolates it.
 
@@ -136,14 +155,16 @@ def interpolate_rho(atlas: np.ndarray, incidence_resolution: int, wi: np.ndarray
     (clamped at the square's border), bilinear between exit-cell centres.
     """
     atlas = np.asarray(atlas, float)
-    n_i = incidence_resolution
-    n_o = atlas.shape[0] // n_i
-    wi, wo = np.broadcast_arrays(np.asarray(wi, float), np.asarray(wo, float))
-    columns, rows, weights = incidence_corners(n_i, wi)
-    st_o = AngularGrid("hemisphere", n_o).direction_to_square(wo)
-    return sum(weights[..., k, None] * _bilinear_in_tile(atlas, columns[..., k], rows[..., k], n_o, st_o[..., 0],
-                                                           st_o[..., 1])
-               for k in range(4))
+    index, weights = rho_taps(incidence_resolution, atlas.shape[0] // incidence_resolution, wi, wo)
+    return np.einsum("...k,...kc->...c", weights, atlas.reshape(-1, atlas.shape[2])[index])
+
+
+def attenuation_taps(samples: int, length_over_radius):
+    """The two pixels of an attenuation table of ``samples`` pixels that the shader blends at path
+    lengths ``length_over_radius`` (…): lower pixel index (…) int and the upper one's weight (…)."""
+    x = np.clip(np.asarray(length_over_radius, float) / ballistic.MAX_LENGTH_OVER_RADIUS, 0.0, 1.0) * (samples - 1)
+    lower = np.minimum(np.floor(x).astype(int), samples - 2)
+    return lower, x - lower
 
 
 def interpolate_attenuation(table: np.ndarray, length_over_radius) -> np.ndarray:
@@ -151,10 +172,8 @@ def interpolate_attenuation(table: np.ndarray, length_over_radius) -> np.ndarray
     its table (1, M, C) (or (M, C)), as ``cl_unscattered_attenuation`` reads it: linear between
     pixel centres, held at the ends."""
     table = np.asarray(table, float).reshape(-1, np.shape(table)[-1])
-    samples = table.shape[0]
-    x = np.clip(np.asarray(length_over_radius, float) / ballistic.MAX_LENGTH_OVER_RADIUS, 0.0, 1.0) * (samples - 1)
-    lower = np.minimum(np.floor(x).astype(int), samples - 2)
-    fraction = (x - lower)[..., None]
+    lower, fraction = attenuation_taps(table.shape[0], length_over_radius)
+    fraction = fraction[..., None]
     return table[lower] * (1.0 - fraction) + table[lower + 1] * fraction
 
 

@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import bpy
 
+from .addon import import_precompute
 from .mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from .osl_shaders import add_script_node
+
+_ballistic = import_precompute("ballistic")
 
 SUN_MODE = "SUN"
 GENERAL_MODE = "GENERAL"
@@ -111,6 +114,7 @@ def build_yarn_material(
     shader.inputs["LobeTable"].default_value = str(tables.lobe_path)
     shader.inputs["UnscatteredTable"].default_value = str(tables.unscattered_path)
     shader.inputs["UnscatteredSamples"].default_value = tables.unscattered_samples
+    shader.inputs["UnscatteredSpread"].default_value = _ballistic.SUN_MODE_SPREAD_RAD
     for socket, key in LOBE_SHAPE_SOCKETS.items():
         shader.inputs[socket].default_value = tables.lobe_shape[key]
     shader.inputs["IOR"].default_value = tables.host_index

@@ -53,6 +53,10 @@ ORDERS = 4
 #: Samples of the attenuation table over ℓ / R ∈ [0, 2 · ORDERS] (a chord is at most 2 R).
 ATTENUATION_SAMPLES = 257
 MAX_LENGTH_OVER_RADIUS = 2.0 * ORDERS
+#: σ of :func:`cone_kernel` in the sun mode of the yarn material, radians: the cap of a real sun
+#: (0.27° radius) blurred to what a measurement's pixels resolve.  The material sets the shader's
+#: ``UnscatteredSpread`` to it.
+SUN_MODE_SPREAD_RAD = 0.05
 #: The cone of :func:`cone_kernel` is zero where κ (1 − cos γ) exceeds this: e^{−14} ≈ 8·10⁻⁷ of its
 #: peak.  The shader then skips the path's attenuation lookup, most of the sun mode's cost for it.
 CONE_CUTOFF = 14.0

@@ -1,0 +1,167 @@
+"""The fit's forward model: a medium → the cloth BRDF at the measured views, in seconds.
+
+A candidate runs the chain of a bake without what a sun-mode sweep does not read and without the
+cache: optics → transport (a path budget set by the accuracy asked for) → eq. (5) on one fixed
+incidence grid → RGB atlas and unscattered attenuation, clipped to the gamut as the tables are.
+The sweep itself is the cloth response (:mod:`clothlight.validation.response`), rendered once per
+weave, rig and view set and kept in the cache, then applied to each candidate's tables in
+milliseconds.  The validation weave is measured at sample azimuths 0° and 90° and averaged, as an
+instrument that measures cloth as an isotropic BRDF sees the warp and the weft alike
+(``../shared/data/real_fabrics/README.md``: MERL's samples were wrapped round a cylinder).
+
+Views are the measured-data CSV's ``(θi, φi, θo, φo)`` (``Measurement.angles_deg``): light at
+φi = 180°, φo = 180° on the light's side, 0° beyond the normal, 90° the perpendicular plane.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from .. import ballistic
+from ..bake import BAKE_DEFAULTS, transport_settings
+from ..cache import cache_key, default_cache_dir, lookup, store
+from ..color import clip_to_gamut, spectral_to_rgb
+from ..errors import ParameterError
+from ..medium import medium_from_dict
+from ..optics import medium_optics
+from ..sources import stage_digest
+from ..table_layout import brdf_atlas
+
+PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[2]
+#: Incidence grid of a candidate's eq. (5): the shipped tables' (an odd N_i puts the planes across
+#: and along the yarn through cell centres), fixed so that one linear map serves every candidate.
+FIT_INCIDENCE_RESOLUTION = 21
+#: Paths per incidence cell at a relative error of 5 %; the budget grows as 1 / error².
+PATHS_AT_FIVE_PERCENT = 1000
+#: Sample azimuths the response averages over, degrees (module docstring).
+SAMPLE_AZIMUTHS_DEG = (0.0, 90.0)
+#: The response's sweep resolution (pixels along the patch side) and camera samples per pixel
+#: along each axis: 16 samples per pixel, as a default validation sweep.
+RESPONSE_RESOLUTION = 64
+RESPONSE_SUPERSAMPLING = 4
+RESPONSE_FILE = "response.npz"
+
+
+def paths_per_cell(relative_error: float) -> int:
+    """The transport's paths per incidence cell for a cloth-level relative error (e.g. 0.05)."""
+    if not (isinstance(relative_error, (int, float)) and 0.0 < relative_error <= 0.5):
+        raise ParameterError("relative_error", relative_error, "a number in (0, 0.5]")
+    return max(64, int(round(PATHS_AT_FIVE_PERCENT * (0.05 / relative_error) ** 2)))
+
+
+def rig_views(measured_views: Sequence[tuple[float, float, float, float]]) -> list[tuple[float, float, float]]:
+    """The rig's (θi, θv, φv) of measured-data views (θi, φi, θo, φo): θv signed in the plane of
+    incidence (negative on the light's side), φv = 90° for the perpendicular plane."""
+    views = []
+    for theta_i, phi_i, theta_o, phi_o in measured_views:
+        if theta_i != 0.0 and not math.isclose(float(phi_i) % 360.0, 180.0):
+            raise ParameterError("view φi", phi_i, "180°: the rig's sun lies on the −x side")
+        phi = float(phi_o) % 360.0
+        if theta_o == 0.0 or math.isclose(phi, 0.0):
+            views.append((float(theta_i), float(theta_o), 0.0))
+        elif math.isclose(phi, 180.0):
+            views.append((float(theta_i), -float(theta_o), 0.0))
+        elif math.isclose(phi, 90.0) or math.isclose(phi, 270.0):
+            views.append((float(theta_i), float(theta_o), 90.0))
+        else:
+            raise ParameterError("view φo", phi_o, "0, 90, 180 or 270°: the plane of incidence or across it")
+    return views
+
+
+def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
+                   progress: Callable[[int, int], None] | None = None):
+    """The cloth response at ``measured_views`` and :data:`SAMPLE_AZIMUTHS_DEG`, from the cache or
+    rendered (Blender as the ``bpy`` module; a minute or two) with Cycles' ``seed``."""
+    from clothlight.validation.response import ClothResponse
+
+    views = [(*view, azimuth) for view in rig_views(measured_views) for azimuth in SAMPLE_AZIMUTHS_DEG]
+    inputs = {
+        "schema": "clothlight-response-entry/1",
+        "views": views,
+        "resolution": RESPONSE_RESOLUTION,
+        "supersampling": RESPONSE_SUPERSAMPLING,
+        "seed": int(seed),
+        "code_digest": stage_digest(PROJECT_ROOT, ["clothlight.validation.response_render"]),
+    }
+    cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    key = cache_key(inputs)
+    folder = lookup(cache_dir, "responses", key)
+    if folder is None:
+
+        def write(staging: pathlib.Path) -> None:
+            from clothlight.validation.response_render import measure_response
+            from clothlight.yarn_tables import yarn_tables_from_bake
+
+            # Any tables: the lookup directions do not depend on the medium.
+            tables = yarn_tables_from_bake(PROJECT_ROOT / "example_blends" / "tables" / "red_cotton")
+            measure_response(tables, views, resolution=RESPONSE_RESOLUTION, supersampling=RESPONSE_SUPERSAMPLING,
+                             seed=seed, progress=progress).save(staging / RESPONSE_FILE)
+
+        folder, _ = store(cache_dir, "responses", key, inputs, write)
+    return ClothResponse.load(folder / RESPONSE_FILE)
+
+
+class ForwardModel:
+    """``model(config, specular_weight=, specular_slope=, relative_error=, seed=)`` → the cloth BRDF
+    (n_views, 3), 1/sr, linear Rec.709, at the measured views given to :func:`build_forward_model`."""
+
+    def __init__(self, response, view_count: int, base_dir: pathlib.Path, threads: int | None = None):
+        self.response = response
+        self.view_count = view_count
+        self.base_dir = pathlib.Path(base_dir)
+        self.threads = threads
+
+    def tables(self, config: dict, *, relative_error: float, seed: int):
+        """A candidate's BRDF atlas (N_i·N_o, N_i·N_o, 3), attenuation table (M, 3) and their layout."""
+        from clothlight.validation.response import TableLayout
+
+        from ..transport import TransportGrids, YarnGeometry, simulate_yarn, yarn_brdf
+
+        medium = medium_from_dict(config, self.base_dir)
+        settings = transport_settings(config, seed=seed, paths_per_cell=paths_per_cell(relative_error))
+        colour = {**BAKE_DEFAULTS, **config.get("bake", {})}
+        optics = medium_optics(medium)
+        geometry = YarnGeometry(medium.yarn.radius_mm, optics.boundary_index)
+        grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
+        transport = simulate_yarn(optics, geometry, grids, paths_per_cell=settings["paths_per_cell"],
+                                  seed=settings["seed"], threads=self.threads)
+        brdf = yarn_brdf(transport, FIT_INCIDENCE_RESOLUTION)
+
+        def to_rgb(values):
+            return clip_to_gamut(spectral_to_rgb(values, brdf.wavelengths_nm, colour["illuminant"],
+                                                 colour["observer"]))[0]
+
+        atlas = brdf_atlas(to_rgb(brdf.rho))
+        attenuation = to_rgb(ballistic.attenuation(optics.mu_s + optics.mu_a, geometry.radius_mm,
+                                                   ballistic.attenuation_lengths()))
+        layout = TableLayout(FIT_INCIDENCE_RESOLUTION, brdf.exit_grid.resolution, ballistic.ATTENUATION_SAMPLES,
+                             optics.boundary_index, ballistic.SUN_MODE_SPREAD_RAD)
+        return atlas, attenuation, layout
+
+    def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float) -> np.ndarray:
+        """The cloth BRDF of given tables at the measured views, averaged over the sample azimuths."""
+        per_view = self.response.cloth_brdf(atlas, attenuation, layout, specular_weight=specular_weight,
+                                            specular_slope=specular_slope)
+        return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), -1).mean(axis=1)
+
+    def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
+                 seed: int) -> np.ndarray:
+        atlas, attenuation, layout = self.tables(config, relative_error=relative_error, seed=seed)
+        return self.cloth_brdf(atlas, attenuation, layout, specular_weight=specular_weight,
+                               specular_slope=specular_slope)
+
+
+def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: int = 0, cache_dir=None,
+                        threads: int | None = None, progress: Callable[[int, int], None] | None = None) -> ForwardModel:
+    """The forward model at ``measured_views`` ((θi, φi, θo, φo) in degrees, the CSV's convention)
+    for media written like ``preset_config`` (checked here, before any render; relative files
+    resolve against ``base_dir``).  ``progress(done, total)`` follows the response's renders when it
+    is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call)."""
+    medium_from_dict(preset_config, pathlib.Path(base_dir))
+    measured_views = [tuple(float(a) for a in view) for view in measured_views]
+    response = cloth_response(measured_views, seed=seed, cache_dir=cache_dir, progress=progress)
+    return ForwardModel(response, len(measured_views), base_dir, threads)

@@ -53,8 +53,8 @@ if os.environ.get("CLOTHLIGHT_TESTS_WITHOUT_BPY"):
     sys.meta_path.insert(0, _WithoutBlender())
 
 #: Test modules whose Blender tests render with Cycles.
-RENDER_MODULES = {"test_addon_operators", "test_cycles_closures", "test_example_blends", "test_garment",
-                  "test_grids", "test_osl_render", "test_validation_rig", "test_yarn_shader"}
+RENDER_MODULES = {"test_addon_operators", "test_cloth_response_render", "test_cycles_closures", "test_example_blends",
+                  "test_garment", "test_grids", "test_osl_render", "test_validation_rig", "test_yarn_shader"}
 #: Test modules that bake tables, build the extension zip or render for minutes.
 SLOW_MODULES = {"test_addon_operators", "test_bake_cli", "test_extension"}
 #: Fixtures that bake (yarn or cloth) or build the extension zip: a test that uses one is slow.

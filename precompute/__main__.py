@@ -19,7 +19,7 @@ except KeyboardInterrupt:
 
 # Each module in precompute/cli defines add_parser(subparsers), whose parser sets
 # ``func(args) -> int``.  Listed by name so a missing optional command fails loudly.
-COMMAND_MODULES = ("optics", "slab", "bake", "plot")
+COMMAND_MODULES = ("optics", "slab", "bake", "plot", "fit")
 
 
 def build_parser():

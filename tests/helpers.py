@@ -12,6 +12,8 @@ import sys
 import numpy as np
 import OpenEXR
 
+from precompute.cook_torrance import cook_torrance_between as _cook_torrance_between
+
 REPO = pathlib.Path(__file__).resolve().parents[1]
 
 # -- vectors and files ----------------------------------------------------------------------------
@@ -85,30 +87,8 @@ def write_yarn_table_folder(folder, brdf, lobes, unscattered, *, incidence_resol
 # -- a reference BRDF -----------------------------------------------------------------------------
 
 
-def cook_torrance_between(light, view, m=0.8, n=1.557) -> float:
-    """Cook–Torrance (1/sr) about +z between unit directions toward the light and the viewer, from
-    its definition: F D G / (4 (n·l)(n·v)), Beckmann D = exp(−tan²α/m²) / (π m² cos⁴α), Smith's
-    height-correlated G = 1 / (1 + Λ(v) + Λ(l)) of that surface with Λ = (erf(a) − 1)/2 +
-    exp(−a²)/(2a√π), a = cot θ / m, F Cook and Torrance's dielectric Fresnel with g² = n² − 1 + c²,
-    c = v·h; 0 unless both are above the plane."""
-    light, view = np.asarray(light, float), np.asarray(view, float)
-    nl, nv = light[2], view[2]
-    if nl <= 0.0 or nv <= 0.0:
-        return 0.0
-    half = (light + view) / np.linalg.norm(light + view)
-    nh, vh = half[2], view @ half
-    alpha = math.acos(min(nh, 1.0))
-    d = math.exp(-((math.tan(alpha) / m) ** 2)) / (math.pi * m**2 * nh**4)
-
-    def smith_lambda(cos_theta):
-        a = cos_theta / (m * math.sqrt(1.0 - cos_theta**2)) if cos_theta < 1.0 else math.inf
-        return 0.0 if math.isinf(a) else (math.erf(a) - 1) / 2 + math.exp(-a * a) / (2 * a * math.sqrt(math.pi))
-
-    g_att = 1.0 / (1.0 + smith_lambda(nv) + smith_lambda(nl))
-    c = vh
-    g = math.sqrt(n * n - 1 + c * c)
-    f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1 + (c * (g + c) - 1) ** 2 / (c * (g - c) + 1) ** 2)
-    return f * d * g_att / (4 * nl * nv)
+#: The Cook–Torrance twin lives in precompute/cook_torrance.py (the fit's baseline uses it too).
+cook_torrance_between = _cook_torrance_between
 
 
 # -- small scenes for renders (bpy) ---------------------------------------------------------------

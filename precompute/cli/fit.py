@@ -1,0 +1,134 @@
+"""``python -m precompute fit``: fit a yarn medium to a measured cloth BRDF (docs/fitting.md).
+
+Checks every input first (the measurement, the preset, the free parameters, the colour targets, the
+output folder), then builds the forward model (``precompute.fit.forward.build_forward_model``, a
+cached cloth response), runs CMA-ES with progress on stderr, and writes ``--out`` as a whole.
+Exit codes: precompute/exit_codes.py (0 done, 2 bad input, 130 interrupted: nothing written).
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+from .. import bounds
+from ..medium import DEFAULT_PRESET, preset_names
+
+
+def add_parser(subparsers) -> None:
+    from ..fit.parameters import PARAMETERS
+
+    parser = subparsers.add_parser(
+        "fit",
+        help="fit a yarn medium (particles, dye, yarn radius, specular) to a measured cloth BRDF",
+        description="CMA-ES over the free parameters of a medium against a measured-data CSV: fitted on the "
+        "plane of incidence, checked on the perpendicular plane (held out), compared with the paper's "
+        "Lambert + Cook-Torrance baseline fitted to the same views. Writes preset.toml, fit.json, report.md "
+        "and plots into --out. docs/fitting.md.",
+    )
+    parser.add_argument("--measured", type=pathlib.Path, required=True,
+                        help="measured-data CSV (theta_i,phi_i,theta_o,phi_o,R,G,B; docs/validation.md)")
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--preset", default=DEFAULT_PRESET,
+                        help=f"the starting medium: a shipped preset, {', '.join(preset_names())} "
+                        f"(default {DEFAULT_PRESET})")
+    source.add_argument("--config", type=pathlib.Path, help="the starting medium as a preset TOML file")
+    parser.add_argument("--free", required=True,
+                        help=f"comma-separated free parameters: {', '.join(PARAMETERS)}")
+    parser.add_argument("--target-ratios", metavar="B/R=0.08,G/R=0.011",
+                        help="colour ratios to meet at normal incidence and view (θi = 0, θo ≤ 10°)")
+    parser.add_argument("--seed", type=bounds.SEED.argument("--seed"), default=0,
+                        help="seed of the optimiser and of every forward evaluation (default 0)")
+    parser.add_argument("--budget-evaluations", type=int, default=150,
+                        help="forward-model evaluations at most, the final accurate one included (default 150)")
+    parser.add_argument("--budget-seconds", type=float,
+                        help="wall seconds at most for the search (default: no limit)")
+    parser.add_argument("--out", type=pathlib.Path, required=True,
+                        help="folder to write the fit into, as a whole (new, or an earlier fit's, which it replaces)")
+    parser.add_argument("--cache-dir", type=pathlib.Path, help="cache folder of the forward model's cloth response")
+    parser.add_argument("--json", action="store_true", help="print fit.json's summary on stdout")
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from tqdm import tqdm
+
+    from ..fit import Budget, check_fit_folder, fit_medium, load_measurement, parse_free, split_views
+    from ..fit.objective import Objective, parse_target_ratios
+    from ..fit.parameters import FIT_TABLE, initial_values, specular_from_config
+    from ..fit.report import fit_summary, write_fit_folder
+    from ..medium import load_preset_config, medium_from_dict
+    from ..outputs import check_writable_folder
+
+    # every input checked before any work
+    free = parse_free(args.free)
+    measurement = load_measurement(args.measured)
+    config, base_dir = load_preset_config(args.config or args.preset)
+    medium_config = {key: value for key, value in config.items() if key != FIT_TABLE}
+    medium_from_dict(medium_config, base_dir)
+    initial_values(free, config, specular_from_config(config))  # the species the free parameters need
+    ratios = parse_target_ratios(args.target_ratios)
+    views = split_views(measurement)
+    Objective(measurement, views, ratios)
+    budget = Budget(evaluations=args.budget_evaluations, seconds=args.budget_seconds)
+    check_fit_folder(args.out)
+    if args.cache_dir is not None:
+        check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
+
+    bars: dict = {}
+
+    def bar(name: str, total: int, unit: str):
+        if name not in bars:
+            bars[name] = tqdm(total=total, desc=name, unit=unit, file=sys.stderr, dynamic_ncols=True)
+        return bars[name]
+
+    def building(done: int, total: int) -> None:
+        b = bar("cloth response", total, "render")
+        b.update(max(0, done - b.n))
+
+    def searching(state) -> None:
+        b = bar("fit", state.total, "eval")
+        b.set_postfix_str(f"best {state.best_objective:.4g}, rel. error {state.relative_error or 0:.3g}")
+        b.update(max(0, state.evaluations - b.n))
+
+    try:
+        forward_model = _build_forward_model(views, medium_config, base_dir, args, building)
+        result = fit_medium(measurement, config, base_dir, free=[p.name for p in free], forward_model=forward_model,
+                            seed=args.seed, budget=budget, target_ratios=ratios, progress=searching)
+    finally:
+        for b in bars.values():
+            b.close()
+    out = write_fit_folder(result, args.out, measured_name=args.measured.name)
+    if args.json:
+        summary = fit_summary(result, args.measured.name)
+        summary.pop("views")
+        summary.pop("history")
+        print(json.dumps({"out": str(out), **summary}, indent=1))
+        return 0
+    model, base = result.metrics["model"], result.metrics["baseline"]
+    print(f"fit:      {out}")
+    print("fitted:   " + ", ".join(f"{p.name} = {result.parameters[p.name]:.4g}" + (f" {p.unit}" if p.unit else "")
+                                   for p in result.free))
+    print(f"error:    relative RMS {model['fit_views']['relative_rms']:.3g} on the plane of incidence, "
+          f"{_show(model['held_out_views']['relative_rms'])} held out "
+          f"(baseline {base['fit_views']['relative_rms']:.3g} / {_show(base['held_out_views']['relative_rms'])})")
+    print(f"search:   {result.forward_evaluations} evaluations, {result.seconds:.1f} s; "
+          f"stopped by {result.stop_reason}")
+    for hit in result.bound_hits:
+        print(f"note:     {hit}")
+    return 0
+
+
+def _build_forward_model(views, medium_config: dict, base_dir, args, progress):
+    """The real forward model (``precompute.fit.forward``), imported here so the rest of the fit runs
+    and is tested without it."""
+    from ..fit.forward import build_forward_model
+
+    kwargs = {"cache_dir": args.cache_dir} if args.cache_dir is not None else {}
+    return build_forward_model(views.forward_views, medium_config, base_dir, seed=args.seed, progress=progress,
+                               **kwargs)
+
+
+def _show(value) -> str:
+    return "–" if value is None else f"{value:.3g}"

@@ -1,0 +1,482 @@
+"""The medium fit: CMA-ES over the free parameters, noise-aware, cheap candidates and an accurate winner.
+
+Optimiser
+---------
+CMA-ES (the ``cma`` package, Hansen's pycma) on every free parameter mapped to [0, 1]
+(:meth:`~precompute.fit.parameters.FitParameter.to_unit`, log where the parameter says), with the
+box [0, 1]ⁿ as its bounds (pycma's BoundTransform: every candidate it asks for lies in the box),
+started at the preset's values with step size σ₀ = 0.2 and a population of max(6, 4 + ⌊3 ln n⌋)
+(8 for four parameters).  Its random numbers come from ``seed``: the same seed, measurement, preset
+and forward model give the same evaluations, the same history and the same fitted preset (unless a
+budget in seconds stops it at a different point).
+
+Noise
+-----
+The forward model is a Monte-Carlo estimate: its objective is noisy.  Three things keep the fit
+honest about it.
+
+* **Common random numbers**: every candidate of one generation is evaluated with the same forward
+  seed, so their ranking, which is all CMA-ES uses, is not scrambled by independent noise.
+* **Re-evaluation of the incumbent**: each generation the best point so far is evaluated again (at
+  the generation's seed and accuracy), and a point's estimate is the inverse-variance weighted mean
+  of all its evaluations (variance ∝ relative_error²).  A candidate that looked best by a lucky draw
+  is pulled back to its mean before it can be returned.
+* **Cheap candidates, accurate winner**: the accuracy asked of the forward model follows CMA-ES's
+  step size σ: ``relative_error = loose · (tight/loose)^t``, t = log₁₀(σ₀/σ) clipped to [0, 1], from
+  ``loose`` (0.08) while the search is wide to ``tight`` (0.02) once σ has shrunk tenfold; the
+  winner is evaluated once more at ``final`` (0.01), and that evaluation is what the report shows.
+  (A forward evaluation costs ∝ 1/relative_error².)
+
+Budget
+------
+``Budget(evaluations=80, seconds=None)``: forward-model calls (candidates, incumbent
+re-evaluations and the final one; a candidate the medium refuses costs none) and, optionally, wall
+seconds (a generation is not started when it and the final evaluation would not fit).  CMA-ES's own
+stopping rules (``tolx`` = 1e-3 of the range) end it earlier.
+
+Progress and cancel
+-------------------
+``progress(FitProgress)`` after every evaluation; ``cancel()`` (returns True to stop) is asked
+before each.  Cancelling raises :class:`FitCancelled`, a KeyboardInterrupt: the command line exits
+with 130 and writes nothing.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from ..errors import InputError, ParameterError
+from ..medium import MAX_VOLUME_FRACTION, medium_from_dict
+from .baseline import BaselineFit, fit_baseline
+from .objective import Objective, Views, load_measurement, parse_target_ratios, split_views
+from .parameters import (
+    FIT_TABLE,
+    FitParameter,
+    apply,
+    initial_values,
+    parse_free,
+    specular_from_config,
+    total_volume_fraction,
+)
+
+#: The objective of a candidate the medium refuses (volume fractions summing to 0.74 or more), plus
+#: 100 × how far over it is: far above any misfit (a zero model scores 1).
+INFEASIBLE_OBJECTIVE = 10.0
+#: CMA-ES's initial step size in the [0, 1] box.
+SIGMA0 = 0.2
+#: CMA-ES stops when its steps are below this (in the [0, 1] box).
+TOLX = 1e-3
+
+
+class ForwardModel(Protocol):
+    """A forward model: the cloth's (n_views, 3) BRDF, 1/sr, at the views it was built for."""
+
+    def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
+                 seed: int) -> np.ndarray: ...
+
+
+class FitCancelled(KeyboardInterrupt):
+    """``cancel()`` asked the fit to stop (a KeyboardInterrupt: exit code 130, nothing written)."""
+
+
+@dataclass(frozen=True)
+class Budget:
+    """What a fit may spend: forward-model calls, and optionally wall seconds."""
+
+    evaluations: int = 80
+    seconds: float | None = None
+
+    def __post_init__(self):
+        if isinstance(self.evaluations, bool) or not isinstance(self.evaluations, int) or self.evaluations < 3:
+            raise ParameterError("--budget-evaluations", self.evaluations, "an integer ≥ 3")
+        if self.seconds is not None and (not math.isfinite(self.seconds) or self.seconds <= 0):
+            raise ParameterError("--budget-seconds", self.seconds, "a number of seconds > 0")
+
+
+@dataclass(frozen=True)
+class AccuracySchedule:
+    """The relative error asked of the forward model as the search narrows (module docstring)."""
+
+    loose: float = 0.08
+    tight: float = 0.02
+    final: float = 0.01
+
+    def __post_init__(self):
+        if not 0 < self.final <= self.tight <= self.loose < 1:
+            raise ParameterError("schedule", (self.loose, self.tight, self.final), "0 < final ≤ tight ≤ loose < 1")
+
+    def relative_error(self, sigma: float, sigma0: float = SIGMA0) -> float:
+        t = min(max(math.log10(sigma0 / sigma) if sigma > 0 else 1.0, 0.0), 1.0)
+        return float(self.loose * (self.tight / self.loose) ** t)
+
+    def to_dict(self) -> dict:
+        return {"loose": self.loose, "tight": self.tight, "final": self.final}
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """One entry of a fit's history.  ``kind``: ``"candidate"`` (asked by CMA-ES), ``"incumbent"``
+    (the best so far, evaluated again), ``"final"`` (the winner at the final accuracy) or
+    ``"refused"`` (a medium the loader refuses: no forward call, :data:`INFEASIBLE_OBJECTIVE`)."""
+
+    index: int
+    generation: int
+    kind: str
+    parameters: dict
+    objective: float
+    relative_error: float | None
+    seed: int | None
+    seconds: float
+
+    def to_dict(self) -> dict:
+        return {"index": self.index, "generation": self.generation, "kind": self.kind,
+                "parameters": dict(self.parameters), "objective": self.objective,
+                "relative_error": self.relative_error, "seed": self.seed, "seconds": round(self.seconds, 6)}
+
+
+@dataclass(frozen=True)
+class FitProgress:
+    """What ``progress`` gets after every evaluation."""
+
+    evaluations: int
+    total: int
+    best_objective: float
+    best_parameters: dict
+    relative_error: float | None
+    sigma: float
+    generation: int
+
+
+@dataclass
+class FitResult:
+    """Everything a fit found; :mod:`precompute.fit.report` writes it out.
+
+    ``parameters`` holds the free parameters' fitted values, ``specular`` the forward model's
+    specular keywords (fitted where free), ``config`` the fitted preset's content (relative file
+    paths resolve in ``base_dir``), ``model_rgb`` and ``baseline_rgb`` the (M, 3) BRDFs at every
+    measured view (the model's from the final, accurate evaluation), ``metrics`` the objective's
+    terms for each, ``bound_hits`` a sentence per parameter that ends at a bound."""
+
+    free: tuple[FitParameter, ...]
+    parameters: dict
+    initial: dict
+    specular: dict
+    config: dict
+    base_dir: pathlib.Path
+    objective: float
+    estimate: float
+    history: list[Evaluation]
+    stop_reason: str
+    seed: int
+    budget: Budget
+    schedule: AccuracySchedule
+    measurement: object
+    views: Views
+    model_rgb: np.ndarray
+    baseline: BaselineFit
+    baseline_rgb: np.ndarray
+    metrics: dict
+    target_ratios: dict
+    bound_hits: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+    generations: int = 0
+
+    @property
+    def forward_evaluations(self) -> int:
+        return sum(1 for e in self.history if e.kind != "refused")
+
+    def to_dict(self) -> dict:
+        """Everything, JSON-ready (``fit.json``)."""
+        views = self.views
+        return {
+            "parameters": {p.name: {"value": self.parameters[p.name], "initial": self.initial[p.name],
+                                    "unit": p.unit, "sets": p.path, "bounds": [p.low, p.high],
+                                    "scale": "log" if p.log else "linear",
+                                    "at_bound": p.at_bound(self.parameters[p.name])}
+                           for p in self.free},
+            "specular": dict(self.specular),
+            "objective": self.objective,
+            "objective_estimate_during_search": self.estimate,
+            "metrics": self.metrics,
+            "bound_hits": list(self.bound_hits),
+            "target_ratios": dict(self.target_ratios),
+            "baseline": self.baseline.to_dict(),
+            "stop_reason": self.stop_reason,
+            "seed": self.seed,
+            "budget": {"evaluations": self.budget.evaluations, "seconds": self.budget.seconds},
+            "schedule": self.schedule.to_dict(),
+            "forward_evaluations": self.forward_evaluations,
+            "generations": self.generations,
+            "seconds": round(self.seconds, 3),
+            "views": [{"theta_i": float(a[0]), "phi_i": float(a[1]), "theta_o": float(a[2]), "phi_o": float(a[3]),
+                       "set": "fit" if fit else ("held_out" if held else "other"),
+                       "measured": [float(v) for v in measured], "model": [float(v) for v in model],
+                       "baseline": [float(v) for v in base]}
+                      for a, fit, held, measured, model, base in zip(views.angles_deg, views.fit, views.held_out,
+                                                                      self.measurement.rgb, self.model_rgb,
+                                                                      self.baseline_rgb)],
+            "history": [e.to_dict() for e in self.history],
+        }
+
+
+# ---- CMA-ES -------------------------------------------------------------------------------------
+
+
+def _derived_seed(*words: int) -> int:
+    return int(np.random.SeedSequence([int(w) % 2**63 for w in words]).generate_state(1, np.uint64)[0] % 2**63)
+
+
+_FINAL_TAG, _CMA_TAG = 0xF17A1, 0xC3A
+
+
+@dataclass
+class _Point:
+    unit: tuple
+    parameters: dict
+    evaluations: list = field(default_factory=list)  # (objective, relative_error)
+
+    @property
+    def estimate(self) -> float:
+        if not self.evaluations:
+            return math.inf
+        values = np.array([o for o, _ in self.evaluations])
+        weights = np.array([1.0 / (e * e) if e else 1.0 for _, e in self.evaluations])
+        return float(np.sum(values * weights) / np.sum(weights))
+
+
+@dataclass(frozen=True)
+class Refused:
+    """What ``evaluate`` returns for a candidate the medium refuses: no forward call, and the objective
+    :data:`INFEASIBLE_OBJECTIVE` plus 100 × ``excess`` (how far the volume fractions' sum is over
+    0.74), a slope that leads CMA-ES back to media that exist."""
+
+    reason: str
+    excess: float = 0.0
+
+    @property
+    def objective(self) -> float:
+        return INFEASIBLE_OBJECTIVE + 100.0 * max(0.0, self.excess)
+
+
+def population_size(n: int) -> int:
+    """CMA-ES's population for ``n`` free parameters: max(6, 4 + ⌊3 ln n⌋)."""
+    return max(6, 4 + int(3 * math.log(n)))
+
+
+def minimise(evaluate: Callable[[dict, float, int], float | Refused], free: Sequence[FitParameter], start: Mapping,
+             *, seed: int = 0, budget: Budget = Budget(), schedule: AccuracySchedule = AccuracySchedule(),
+             popsize: int | None = None, progress: Callable[[FitProgress], None] | None = None,
+             cancel: Callable[[], bool] | None = None) -> dict:
+    """Minimise ``evaluate(parameters, relative_error, seed)`` over ``free`` from ``start`` (module
+    docstring).  ``evaluate`` returns the objective, or :class:`Refused` for a medium the loader
+    refuses (CMA-ES gets its penalty; no forward evaluation is counted).
+
+    Returns ``{"best": parameters, "estimate": objective, "history": [Evaluation], "stop_reason",
+    "generations", "seconds", "sigma"}``; the final, accurate evaluation is left to the caller (it
+    reserves one evaluation of the budget for it)."""
+    import cma
+
+    n = len(free)
+    x0 = [min(max(p.to_unit(start[p.name]), 0.02), 0.98) for p in free]
+    population = popsize or population_size(n)
+    options = {"bounds": [[0.0] * n, [1.0] * n], "seed": _derived_seed(seed, _CMA_TAG) % (2**31 - 2) + 1,
+               "popsize": population, "tolx": TOLX, "tolfun": 0.0, "tolfunhist": 0.0, "tolflatfitness": 10,
+               "verbose": -9, "verb_disp": 0, "verb_log": 0, "verb_time": False, "maxiter": 10**6}
+    es = cma.CMAEvolutionStrategy(x0, SIGMA0, options)
+    began = time.perf_counter()
+    history: list[Evaluation] = []
+    points: dict[tuple, _Point] = {}
+    spent = 0  # forward evaluations
+    reserve = 1  # the final evaluation
+    generation = 0
+    incumbent: _Point | None = None
+    stop_reason = ""
+    generation_seconds = 0.0
+
+    def to_parameters(u) -> tuple[tuple, dict]:
+        key = tuple(round(float(v), 12) for v in u)
+        return key, {p.name: p.from_unit(v) for p, v in zip(free, key)}
+
+    def run(point: _Point, kind: str, accuracy: float, forward_seed: int) -> float:
+        nonlocal spent
+        if cancel is not None and cancel():
+            raise FitCancelled("fit cancelled")
+        t0 = time.perf_counter()
+        value = evaluate(dict(point.parameters), accuracy, forward_seed)
+        seconds = time.perf_counter() - t0
+        if isinstance(value, Refused):
+            history.append(Evaluation(len(history), generation, "refused", dict(point.parameters), value.objective,
+                                      None, None, seconds))
+            return value.objective
+        spent += 1
+        point.evaluations.append((float(value), accuracy))
+        history.append(Evaluation(len(history), generation, kind, dict(point.parameters), float(value), accuracy,
+                                  forward_seed, seconds))
+        if progress is not None:
+            best = min((p for p in points.values() if p.evaluations), key=lambda p: p.estimate)
+            progress(FitProgress(spent, budget.evaluations, best.estimate, dict(best.parameters), accuracy,
+                                 float(es.sigma), generation))
+        return float(value)
+
+    while True:
+        accuracy = schedule.relative_error(float(es.sigma))
+        needed = population + (1 if incumbent is not None else 0)
+        if spent + needed + reserve > budget.evaluations:
+            stop_reason = f"budget: {budget.evaluations} forward evaluations"
+            break
+        if budget.seconds is not None and history:
+            per_evaluation = generation_seconds / max(needed, 1)
+            final_cost = per_evaluation * (accuracy / schedule.final) ** 2
+            if time.perf_counter() - began + generation_seconds + final_cost > budget.seconds:
+                stop_reason = f"budget: {budget.seconds:g} s"
+                break
+        if es.stop():
+            stop_reason = "converged: " + ", ".join(f"{k} = {v}" for k, v in es.stop().items())
+            break
+        if generation > 100 * budget.evaluations:  # every candidate refused: no progress is possible
+            stop_reason = "every candidate was refused by the medium"
+            break
+        t_generation = time.perf_counter()
+        forward_seed = _derived_seed(seed, generation)
+        solutions = es.ask()
+        values = []
+        for u in solutions:
+            key, parameters = to_parameters(u)
+            point = points.setdefault(key, _Point(key, parameters))
+            values.append(run(point, "candidate", accuracy, forward_seed))
+        if incumbent is not None and spent + reserve < budget.evaluations:
+            run(incumbent, "incumbent", accuracy, forward_seed)
+        es.tell(solutions, values)
+        evaluated = [p for p in points.values() if p.evaluations]
+        if evaluated:
+            incumbent = min(evaluated, key=lambda p: (p.estimate, p.unit))
+        generation += 1
+        generation_seconds = time.perf_counter() - t_generation
+    if incumbent is None:
+        raise InputError("the fit evaluated no medium the loader accepts (every candidate was refused); "
+                         "check the preset's volume fractions")
+    return {"best": dict(incumbent.parameters), "estimate": incumbent.estimate, "history": history,
+            "stop_reason": stop_reason, "generations": generation, "seconds": time.perf_counter() - began,
+            "sigma": float(es.sigma), "spent": spent}
+
+
+# ---- the fit ------------------------------------------------------------------------------------
+
+
+def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path, *, free: str | Sequence[str],
+               forward_model: ForwardModel, seed: int = 0, budget: Budget | int = 80,
+               target_ratios: str | Mapping[str, float] | None = None,
+               progress: Callable[[FitProgress], None] | None = None, cancel: Callable[[], bool] | None = None,
+               specular: Mapping[str, float] | None = None, schedule: AccuracySchedule | None = None,
+               popsize: int | None = None) -> FitResult:
+    """Fit the free parameters of a medium to a measurement (module docstring).
+
+    Parameters
+    ----------
+    measurement
+        A ``clothlight.validation.measured_data.Measurement``, or the path of a measured-data CSV.
+    preset_config, base_dir
+        The preset's content and the folder its relative paths resolve in
+        (:func:`precompute.medium.load_preset_config`); the values of the parameters that are not
+        free stay as they are.
+    free
+        Names of :data:`precompute.fit.parameters.PARAMETERS` (a sequence or ``"a,b,c"``).
+    forward_model
+        :class:`ForwardModel`, built for the measurement's views in the order of ``measurement.rgb``
+        (``split_views(measurement).forward_views``).
+    seed
+        Seeds CMA-ES and every forward evaluation: the same seed gives the same result.
+    budget
+        :class:`Budget`, or a number of forward evaluations.
+    target_ratios
+        Colour targets at normal incidence and view (``"B/R=0.08,G/R=0.011"`` or a mapping).
+    progress, cancel
+        After every evaluation / before each (module docstring).
+    specular
+        The specular keywords where not free (default: the preset's ``[fit]`` table, else the
+        shader's defaults, weight 1 and m = 0.8).
+    """
+    began = time.perf_counter()
+    if isinstance(measurement, (str, pathlib.Path)):
+        measurement = load_measurement(measurement)
+    budget = budget if isinstance(budget, Budget) else Budget(evaluations=budget)
+    schedule = schedule or AccuracySchedule()
+    free = parse_free(free)
+    base_dir = pathlib.Path(base_dir)
+    # the medium and the forward model get the preset without its [fit] table (the specular term)
+    config = {key: value for key, value in preset_config.items() if key != FIT_TABLE}
+    medium_from_dict(config, base_dir)  # the preset itself must be valid: bad input, before any work
+    specular = {**specular_from_config(preset_config), **dict(specular or {})}
+    start = initial_values(free, config, specular)
+    views = split_views(measurement)
+    objective = Objective(measurement, views, parse_target_ratios(target_ratios))
+
+    population = popsize or population_size(len(free))
+    if budget.evaluations < population + 1:
+        raise ParameterError("--budget-evaluations", budget.evaluations,
+                             f"at least {population + 1} for {len(free)} free parameters (one generation of "
+                             f"{population} candidates and the final evaluation)")
+
+    def evaluate(parameters: dict, relative_error: float, forward_seed: int) -> float | Refused:
+        candidate, keywords = apply(config, specular, parameters)
+        total = total_volume_fraction(candidate)
+        if total >= MAX_VOLUME_FRACTION:
+            return Refused(f"particle volume fractions sum to {total:.3g} (≥ {MAX_VOLUME_FRACTION})",
+                           total - MAX_VOLUME_FRACTION)
+        try:
+            medium_from_dict(candidate, base_dir)
+        except ParameterError as error:
+            return Refused(str(error))
+        rgb = forward_model(candidate, **keywords, relative_error=relative_error, seed=forward_seed)
+        return objective(rgb)
+
+    search = minimise(evaluate, free, start, seed=seed, budget=budget, schedule=schedule, popsize=population,
+                      progress=progress, cancel=cancel)
+    best = search["best"]
+    history = search["history"]
+    fitted_config, keywords = apply(config, specular, best)
+    if cancel is not None and cancel():
+        raise FitCancelled("fit cancelled")
+    final_seed = _derived_seed(seed, _FINAL_TAG)
+    t0 = time.perf_counter()
+    model_rgb = objective.check(forward_model(fitted_config, **keywords, relative_error=schedule.final,
+                                              seed=final_seed))
+    final_objective = objective(model_rgb)
+    history.append(Evaluation(len(history), search["generations"], "final", dict(best), final_objective,
+                              schedule.final, final_seed, time.perf_counter() - t0))
+    if progress is not None:
+        progress(FitProgress(search["spent"] + 1, budget.evaluations, final_objective, dict(best), schedule.final,
+                             search["sigma"], search["generations"]))
+    baseline = fit_baseline(objective)
+    baseline_rgb = baseline.brdf(views.angles_deg)
+    metrics = {"model": objective.terms(model_rgb), "baseline": objective.terms(baseline_rgb)}
+    return FitResult(
+        free=free, parameters=best, initial=start, specular=keywords, config=fitted_config, base_dir=base_dir,
+        objective=final_objective, estimate=search["estimate"], history=history, stop_reason=search["stop_reason"],
+        seed=seed, budget=budget, schedule=schedule, measurement=measurement, views=views, model_rgb=model_rgb,
+        baseline=baseline, baseline_rgb=baseline_rgb, metrics=metrics, target_ratios=objective.target_ratios,
+        bound_hits=bound_hits(free, best), seconds=time.perf_counter() - began, generations=search["generations"])
+
+
+def bound_hits(free: Sequence[FitParameter], values: Mapping[str, float]) -> list[str]:
+    """A sentence for each parameter whose value ends at (within 1 % of the range of) a bound."""
+    hits = []
+    for p in free:
+        side = p.at_bound(values[p.name])
+        if side:
+            bound = p.low if side == "lower" else p.high
+            unit = f" {p.unit}" if p.unit else ""
+            hits.append(f"ends at the {side} bound of {p.name} ({bound:g}{unit}): the best medium may lie beyond "
+                        "the fit range, or the parameter compensates for something the model lacks")
+    return hits
+
+
+__all__ = ["INFEASIBLE_OBJECTIVE", "AccuracySchedule", "Budget", "Evaluation", "FitCancelled", "FitProgress",
+           "FitResult", "ForwardModel", "Refused", "bound_hits", "fit_medium", "minimise", "population_size"]

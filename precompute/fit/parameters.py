@@ -1,0 +1,273 @@
+"""The free parameters of a medium fit: what each sets, its unit, its fit range and its scale.
+
+Each :class:`FitParameter` either sets one value of a preset's content (the dict a preset TOML
+reads as, :func:`precompute.medium.load_preset_config`) or is a keyword of the forward model (the
+cloth's specular term, which is not part of the medium).  The optimiser works on every parameter
+mapped to [0, 1] (:meth:`FitParameter.to_unit`): linearly, or linearly in log(value) where the
+parameter spans decades (sizes and amounts).
+
+The fit ranges lie inside what the medium accepts (``precompute.medium``: volume fractions in
+(0, 0.74) and < 0.74 in total, diameters within :data:`precompute.bounds.PARTICLE_DIAMETER_NM`,
+dye in [0, 100) %, yarn radius within :data:`precompute.bounds.YARN_RADIUS_MM`), narrowed to what a
+woven cloth's yarn can physically be, so the optimiser spends no evaluations on media no fabric is
+made of.  docs/fitting.md lists them with their reasons.  A candidate whose volume fractions sum to
+0.74 or more is refused by the medium; the optimiser scores it with a penalty instead of a forward
+evaluation (:mod:`precompute.fit.optimise`).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+from .. import bounds
+from ..cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT
+from ..errors import ParameterError
+from ..medium import MAX_VOLUME_FRACTION
+
+#: The preset table holding the fitted specular term (``[fit]``, keys ``specular_weight`` and
+#: ``specular_slope``).  The medium's loader accepts it only once it is one of its foreign tables
+#: (``precompute.medium._FOREIGN_TABLES``); until then :mod:`precompute.fit.report` writes it as
+#: comments.
+FIT_TABLE = "fit"
+#: The particle species the void and scatterer parameters act on, by their preset ``name``.
+VOIDS = "voids"
+SCATTERERS = "scatterers"
+
+#: What to add to a preset that has no species of a name a free parameter needs.
+_SPECIES_TEMPLATES = {
+    VOIDS: '[[particles]]\nname = "voids"\nrefractive_index = 1.0\ndiameter_nm = 1000.0\nvolume_fraction = 0.02',
+    SCATTERERS: '[[particles]]\nname = "scatterers"\nrefractive_index = 1.61\ndiameter_nm = 150.0\n'
+                'volume_fraction = 0.14',
+}
+
+
+#: Values the medium takes where a preset leaves them out (precompute.medium.Yarn).
+_MEDIUM_DEFAULTS = {"yarn.radius_mm": 0.1}
+
+
+class UnknownFitParameterError(ParameterError):
+    """A free parameter that is not in :data:`PARAMETERS` (bad input: exit code 2)."""
+
+
+class MissingSpeciesError(ParameterError):
+    """The preset lacks what a free parameter sets (a particle species, the dye)."""
+
+
+@dataclass(frozen=True)
+class FitParameter:
+    """One free parameter of a fit.
+
+    Attributes
+    ----------
+    name
+        Its name on the command line (``--free``) and in the API.
+    path
+        What it sets: a preset path (``particles[voids].volume_fraction``) or, for the specular
+        term, the forward model's keyword (``forward_model(..., specular_slope=)``).
+    unit
+        The unit of its values ("" for a fraction).
+    low, high
+        The fit range (both ends allowed).
+    log
+        Mapped to [0, 1] linearly in log(value) (sizes and amounts) rather than in value.
+    scale
+        The preset value is the parameter's value times ``scale`` (µm → nm: 1000).
+    note
+        Why the range is what it is (docs/fitting.md repeats it).
+    """
+
+    name: str
+    path: str
+    unit: str
+    low: float
+    high: float
+    log: bool
+    scale: float = 1.0
+    note: str = ""
+
+    @property
+    def is_specular(self) -> bool:
+        """Whether it is a forward-model keyword rather than a medium value."""
+        return self.path.startswith("specular_")
+
+    def check(self, value: float) -> float:
+        """``value`` as a float if it lies in the fit range; ParameterError naming it otherwise."""
+        unit = f" {self.unit}" if self.unit else ""
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ParameterError(self.name, value, f"a number in [{self.low:g}, {self.high:g}]{unit}")
+        if not self.low <= value <= self.high:
+            raise ParameterError(self.name, value, f"a number in [{self.low:g}, {self.high:g}]{unit} (the fit range)")
+        return float(value)
+
+    def to_unit(self, value: float) -> float:
+        """``value`` mapped to [0, 1] (clipped to the range first)."""
+        value = min(max(float(value), self.low), self.high)
+        if self.log:
+            return (math.log(value) - math.log(self.low)) / (math.log(self.high) - math.log(self.low))
+        return (value - self.low) / (self.high - self.low)
+
+    def from_unit(self, u: float) -> float:
+        """The value at ``u`` in [0, 1] (clipped to [0, 1] first)."""
+        u = min(max(float(u), 0.0), 1.0)
+        if self.log:
+            return math.exp(math.log(self.low) + u * (math.log(self.high) - math.log(self.low)))
+        return self.low + u * (self.high - self.low)
+
+    def at_bound(self, value: float, tolerance: float = 0.01) -> str | None:
+        """``"lower"`` or ``"upper"`` when ``value`` lies within ``tolerance`` (of the [0, 1] range)
+        of that end of the range, else None."""
+        u = self.to_unit(value)
+        if u <= tolerance:
+            return "lower"
+        if u >= 1.0 - tolerance:
+            return "upper"
+        return None
+
+    # ---- the preset's content ----
+
+    def get(self, config: Mapping, specular: Mapping | None = None) -> float:
+        """The parameter's value in ``config`` (a preset's content) or, for the specular term, in
+        ``specular`` (``{"specular_weight": …, "specular_slope": …}``); the medium's default where the
+        preset leaves it out (the yarn radius)."""
+        if self.is_specular:
+            return float((specular or {}).get(self.path, _SPECULAR_DEFAULTS[self.path]))
+        table, key = self._place(config)
+        if key not in table:
+            if self.path in _MEDIUM_DEFAULTS:
+                return _MEDIUM_DEFAULTS[self.path] / self.scale
+            raise MissingSpeciesError(self.path, None, f"a value in the preset for the free parameter {self.name}")
+        return float(table[key]) / self.scale
+
+    def set(self, config: dict, value: float) -> None:
+        """Write ``value`` into ``config`` (in place).  Not for the specular parameters."""
+        if self.is_specular:
+            raise ValueError(f"{self.name} is a forward-model keyword, not a preset value")
+        table, key = self._place(config, create=True)
+        table[key] = float(value) * self.scale
+
+    def _place(self, config: Mapping, create: bool = False) -> tuple[dict, str]:
+        section, _, key = self.path.rpartition(".")
+        if section.startswith("particles["):
+            return species_table(config, section[len("particles["):-1], self.name), key
+        table = config.get(section)
+        if isinstance(table, dict):
+            return table, key
+        if self.path in _MEDIUM_DEFAULTS:  # a table the medium fills with defaults
+            if create:
+                config[section] = table = {}
+                return table, key
+            return {}, key
+        if section == "dye":
+            raise MissingSpeciesError("dye", None, f"a [dye] table in the preset for the free parameter {self.name} "
+                                                   "(weight_percent, fiber_density_g_per_cm3, spectrum_csv)")
+        raise MissingSpeciesError(section, None, f"a [{section}] table in the preset for {self.name}")
+
+
+def species_table(config: Mapping, species: str, parameter: str) -> dict:
+    """The ``[[particles]]`` table of ``config`` named ``species``; MissingSpeciesError saying what to
+    add when there is none."""
+    for table in config.get("particles", []) or []:
+        if isinstance(table, dict) and str(table.get("name")) == species:
+            if "diameter_nm" not in table:
+                raise MissingSpeciesError(f"particles[{species}].diameter_nm", None,
+                                          f"a monodisperse species (diameter_nm) for the free parameter {parameter}; "
+                                          "a log-normal one (median_diameter_nm) cannot be fitted yet")
+            return table
+    names = [str(t.get("name")) for t in config.get("particles", []) or [] if isinstance(t, dict)]
+    template = _SPECIES_TEMPLATES.get(species, f'[[particles]]\nname = "{species}"\n…')
+    raise MissingSpeciesError(f"particles[{species}]", None,
+                              f"a particle species named {species!r} in the preset for the free parameter "
+                              f"{parameter} (the preset has {names or 'none'}); add one to the preset TOML, e.g.\n"
+                              f"{template}")
+
+
+_SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE}
+
+#: Every parameter a fit may free, by name.  The ranges (docs/fitting.md, "Parameters"):
+PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
+    FitParameter("void_fraction", f"particles[{VOIDS}].volume_fraction", "", 0.001, 0.35, log=True,
+                 note="air voids (lumens, inter-fibre pores) in a yarn: a few tenths of a percent to a third of "
+                      f"its volume; the medium allows (0, {MAX_VOLUME_FRACTION}) for all species together"),
+    FitParameter("void_diameter_um", f"particles[{VOIDS}].diameter_nm", "µm", 0.2, 20.0, log=True, scale=1000.0,
+                 note="pores from sub-micron gaps to a cotton fibre's lumen (~10–20 µm); the medium allows "
+                      f"{bounds.PARTICLE_DIAMETER_NM.low:g}–{bounds.PARTICLE_DIAMETER_NM.high:g} nm, and Mie "
+                      "series grow with the size"),
+    FitParameter("scatterer_fraction", f"particles[{SCATTERERS}].volume_fraction", "", 0.005, 0.4, log=True,
+                 note="crystallites, wax and delustrant: the paper's 0.14 sits mid-range"),
+    FitParameter("scatterer_diameter_nm", f"particles[{SCATTERERS}].diameter_nm", "nm", 30.0, 3000.0, log=True,
+                 note="from Rayleigh-sized inclusions to a few µm; the paper's 150 nm sits low in it"),
+    FitParameter("dye_weight_percent", "dye.weight_percent", "%", 0.1, 10.0, log=True,
+                 note="the paper's 1–5 % (§6.2) widened by a factor of ten below and two above; the medium "
+                      "allows [0, 100)"),
+    FitParameter("yarn_radius_mm", "yarn.radius_mm", "mm", 0.03, 0.5, log=True,
+                 note="fine (Ne 100) to coarse (Ne 2) yarns after Peirce's d = 1/(28 √Ne) inch; the medium "
+                      f"allows {bounds.YARN_RADIUS_MM.low:g}–{bounds.YARN_RADIUS_MM.high:g} mm"),
+    FitParameter("specular_weight", "specular_weight", "", 0.0, 3.0, log=False,
+                 note="the Cook–Torrance term's weight (shader default 1): 0 is no sheen"),
+    FitParameter("specular_slope", "specular_slope", "", 0.05, 1.2, log=True,
+                 note="the Beckmann rms slope m (the paper's 0.8): below 0.05 the lobe falls between the "
+                      "measured views, above 1.2 it is flat"),
+)}
+
+
+def parse_free(names: str | Iterable[str]) -> tuple[FitParameter, ...]:
+    """The parameters named in ``names`` (a comma-separated string or a sequence), in that order;
+    UnknownFitParameterError naming the allowed ones for any other name, ParameterError for none or
+    a repeated one."""
+    if isinstance(names, str):
+        names = [name.strip() for name in names.split(",") if name.strip()]
+    names = list(names)
+    allowed = ", ".join(PARAMETERS)
+    if not names:
+        raise ParameterError("--free", "", f"one or more of {allowed}, comma-separated")
+    chosen = []
+    for name in names:
+        if name not in PARAMETERS:
+            raise UnknownFitParameterError("--free", name, f"one or more of {allowed}, comma-separated")
+        if PARAMETERS[name] in chosen:
+            raise ParameterError("--free", name, "each parameter once")
+        chosen.append(PARAMETERS[name])
+    return tuple(chosen)
+
+
+def initial_values(free: Sequence[FitParameter], config: Mapping, specular: Mapping | None = None) -> dict[str, float]:
+    """Each free parameter's value in ``config`` (and ``specular``), clipped to its fit range: where the
+    optimiser starts.  MissingSpeciesError when the preset lacks what one sets."""
+    return {p.name: min(max(p.get(config, specular), p.low), p.high) for p in free}
+
+
+def apply(config: Mapping, specular: Mapping | None, values: Mapping[str, float]) -> tuple[dict, dict]:
+    """A deep copy of ``config`` with the medium parameters of ``values`` set, and the specular
+    keywords ``{"specular_weight", "specular_slope"}`` (those of ``specular`` or the shader's defaults,
+    overridden by ``values``)."""
+    new = copy.deepcopy(dict(config))
+    keywords = {key: float((specular or {}).get(key, default)) for key, default in _SPECULAR_DEFAULTS.items()}
+    for name, value in values.items():
+        parameter = PARAMETERS[name]
+        if parameter.is_specular:
+            keywords[parameter.path] = float(value)
+        else:
+            parameter.set(new, value)
+    return new, keywords
+
+
+def total_volume_fraction(config: Mapping) -> float:
+    """The volume fractions of every particle species of ``config``, summed."""
+    return float(sum(float(t.get("volume_fraction", 0.0)) for t in config.get("particles", []) or []
+                     if isinstance(t, dict)))
+
+
+def specular_from_config(config: Mapping) -> dict[str, float]:
+    """The specular keywords a preset records in its ``[fit]`` table (a fitted preset), else the
+    shader's defaults."""
+    table = config.get(FIT_TABLE, {})
+    table = table if isinstance(table, dict) else {}
+    return {key: float(table.get(key, default)) for key, default in _SPECULAR_DEFAULTS.items()}
+
+
+__all__ = ["FIT_TABLE", "PARAMETERS", "SCATTERERS", "VOIDS", "FitParameter", "MissingSpeciesError",
+           "UnknownFitParameterError", "apply", "initial_values", "parse_free", "species_table",
+           "specular_from_config", "total_volume_fraction"]

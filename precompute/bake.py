@@ -67,7 +67,7 @@ from .color import (
 )
 from .errors import ParameterError
 from .medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
-from .optics import medium_optics
+from .optics import medium_optics, planned_phase_grid
 from .outputs import check_writable_folder
 from .sources import stage_digest
 from .table_layout import (
@@ -357,6 +357,8 @@ def spectral_inputs(configuration: BakeConfiguration) -> dict:
         "code_version": __version__,
         "code_digest": stage_digest(PROJECT_ROOT, **SPECTRAL_SOURCES),
         "medium": configuration.medium.to_dict(),
+        # the cos θ grid the optics start from ("auto" in the medium record resolved, no Mie needed)
+        "planned_phase_grid": dict(zip(("kind", "samples"), planned_phase_grid(configuration.medium))),
         "transport": configuration.transport,
     }
 
@@ -399,6 +401,7 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
             **inputs,
             "key": key,
             "host_index": optics.boundary_index,
+            "phase_grid": {"kind": optics.phase_grid, "samples": optics.phase_samples},
             "incidence_resolution": brdf.incidence_grid.resolution,
             "exit_resolution": brdf.exit_grid.resolution,
             "incidence_grid_checks": [check.to_dict() for check in checks],
@@ -489,6 +492,7 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             "cache_key": key,
             "spectral_key": spectral["key"],
             "medium": spectral["medium"],
+            "phase_grid": spectral.get("phase_grid"),
             "transport": spectral["transport"],
             "paths": spectral["paths"],
             "colour": {

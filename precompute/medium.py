@@ -32,7 +32,6 @@ import numpy as np
 
 from . import bounds
 from .errors import ParameterError
-from .phase import DEFAULT_PHASE_SAMPLES
 
 PRESET_DIR = pathlib.Path(__file__).resolve().parent / "presets"
 DATA_DIR = pathlib.Path(__file__).resolve().parent / "data"
@@ -40,6 +39,8 @@ DEFAULT_PRESET = "red_cotton"
 #: Densest packing of equal spheres (Kepler, π/√18 ≈ 0.7405): no dispersion of spheres fills more.
 MAX_VOLUME_FRACTION = 0.74
 DEPENDENT_SCATTERING_MODELS = ("none", "percus-yevick")
+#: ``medium.phase_samples`` value that lets the optics choose the cos θ grid (the default).
+AUTO_PHASE_SAMPLES = "auto"
 _FOREIGN_TABLES = ("transport", "bake")
 
 
@@ -348,8 +349,10 @@ class MediumParameters:
 
     ``dependent_scattering`` is ``"none"`` (independent scattering, as in the
     paper) or ``"percus-yevick"`` (hard-sphere structure-factor correction, see
-    :mod:`precompute.mie`); ``phase_samples`` is the size of the cos θ grid of
-    the phase tables.
+    :mod:`precompute.mie`); ``phase_samples`` is ``"auto"`` (the default: the
+    optics choose a cos θ grid fine enough for every species at every
+    wavelength, :func:`precompute.mie.auto_phase_grid`) or the size of a grid
+    uniform in cos θ, refused by the optics if too coarse for the particles.
     """
 
     name: str
@@ -359,7 +362,7 @@ class MediumParameters:
     yarn: Yarn = field(default_factory=Yarn)
     wavelengths: WavelengthGrid = field(default_factory=WavelengthGrid)
     dependent_scattering: str = "none"
-    phase_samples: int = DEFAULT_PHASE_SAMPLES
+    phase_samples: int | str = AUTO_PHASE_SAMPLES
     description: str = ""
 
     def __post_init__(self):
@@ -367,12 +370,14 @@ class MediumParameters:
             raise ParameterError(
                 "medium.dependent_scattering", self.dependent_scattering, f"one of {DEPENDENT_SCATTERING_MODELS}"
             )
-        if (
+        if self.phase_samples != AUTO_PHASE_SAMPLES and (
             isinstance(self.phase_samples, bool)
             or not isinstance(self.phase_samples, int)
             or not 201 <= self.phase_samples <= 200001
         ):
-            raise ParameterError("medium.phase_samples", self.phase_samples, "an integer in [201, 200001]")
+            raise ParameterError(
+                "medium.phase_samples", self.phase_samples, f"{AUTO_PHASE_SAMPLES!r} or an integer in [201, 200001]"
+            )
         if not all(isinstance(p, ParticleSpecies) for p in self.particles):
             raise ParameterError("particles", self.particles, "a sequence of ParticleSpecies")
         total = self.total_volume_fraction
@@ -592,7 +597,7 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
             ),
         ),
         dependent_scattering=medium.get("dependent_scattering", "none"),
-        phase_samples=medium.get("phase_samples", DEFAULT_PHASE_SAMPLES),
+        phase_samples=medium.get("phase_samples", AUTO_PHASE_SAMPLES),
     )
 
 

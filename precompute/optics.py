@@ -8,6 +8,15 @@ theory").  Species combine by adding their coefficients, and their phase
 functions are weighted by their scattering coefficients:
 ``p = Σ μs_i p_i / Σ μs_i``.  Absorption adds the host's own, the particles'
 (Mie ``Q_abs``) and the dye's (:mod:`precompute.dye`).
+
+The cos θ grid of the phase tables: with ``medium.phase_samples = "auto"`` (the
+default) it is :func:`precompute.mie.auto_phase_grid` — the default grid
+uniform in μ for small particles, a grid uniform in θ with ~35 samples per unit
+of the largest size parameter for large ones (air voids, fibre-scale
+structure) — checked against the Mie cross-section of every species at every
+wavelength and refined (:func:`precompute.mie.refined_phase_grid`) until it is
+within :data:`precompute.mie.PHASE_TABLE_TOLERANCE`.  An integer is a grid
+uniform in μ of that many samples, taken as given and refused when too coarse.
 """
 
 from __future__ import annotations
@@ -17,11 +26,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dye import dye_absorption_coefficient
-from .medium import MediumParameters, load_preset
-from .mie import species_scattering
-from .phase import DEFAULT_ICDF_SIZE, asymmetry_parameter, cos_theta_grid, phase_inverse_cdf
+from .medium import AUTO_PHASE_SAMPLES, MediumParameters, load_preset
+from .mie import (
+    MAX_AUTO_PHASE_SAMPLES,
+    PhaseGridTooCoarse,
+    auto_phase_grid,
+    refined_phase_grid,
+    species_scattering,
+)
+from .phase import DEFAULT_ICDF_SIZE, asymmetry_parameter, phase_grid, phase_inverse_cdf
 
-__all__ = ["MediumOptics", "medium_optics", "load_preset"]
+__all__ = ["MediumOptics", "medium_optics", "load_preset", "planned_phase_grid"]
 
 
 @dataclass(frozen=True)
@@ -35,10 +50,12 @@ class MediumOptics:
     albedo : (L,) single-scattering albedo μs/μt (0 where μt = 0)
     g : (L,) asymmetry parameter ⟨cos θ⟩ of the phase table
     host_index : (L,) real refractive index of the host
-    cos_theta : (M,) uniform grid of the phase table over [−1, 1]
+    cos_theta : (M,) increasing grid of the phase table over [−1, 1], of kind ``phase_grid``
     phase : (L, M) phase function, 1/sr, 2π∫p dμ = 1
     phase_icdf : (L, K) μ at cumulative probability k/(K−1); sample by linear interpolation in u
     dependent_scattering : "none" or "percus-yevick", the model the coefficients were computed with
+    phase_grid : the kind of ``cos_theta`` (:data:`precompute.phase.PHASE_GRID_KINDS`):
+        "uniform-cos" (uniform in μ) or "uniform-angle" (uniform in θ)
     """
 
     wavelengths_nm: np.ndarray
@@ -52,6 +69,12 @@ class MediumOptics:
     phase: np.ndarray
     phase_icdf: np.ndarray
     dependent_scattering: str = "none"
+    phase_grid: str = "uniform-cos"
+
+    @property
+    def phase_samples(self) -> int:
+        """M, the number of cos θ samples of the phase table (the chosen count when ``"auto"``)."""
+        return len(self.cos_theta)
 
     @property
     def boundary_index(self) -> float:
@@ -63,23 +86,40 @@ class MediumOptics:
         return float(np.mean(self.host_index))
 
 
+def planned_phase_grid(params: MediumParameters) -> tuple[str, int]:
+    """The cos θ grid (kind, samples) ``medium_optics`` starts from, without any Mie computation.
+
+    ``params.phase_samples`` itself when an integer (uniform in μ), else
+    :func:`precompute.mie.auto_phase_grid`.  ``medium_optics`` refines an automatic
+    grid that falls short of the tolerance; the result is deterministic given the
+    parameters and the code.
+    """
+    if params.phase_samples != AUTO_PHASE_SAMPLES:
+        return "uniform-cos", int(params.phase_samples)
+    wavelengths = params.wavelengths.values
+    return auto_phase_grid(params.particles, wavelengths, params.host.refractive_index.at(wavelengths).real)
+
+
 def medium_optics(params: MediumParameters, *, icdf_size: int = DEFAULT_ICDF_SIZE) -> MediumOptics:
     """Optical properties of ``params`` on its wavelength grid (see the module docstring).
 
     ``icdf_size`` is the number K of entries of each inverse-CDF sampling table.
+    Raises :class:`precompute.mie.PhaseGridTooCoarse` when an explicit
+    ``phase_samples`` is too coarse for the particles.
     """
     wavelengths = params.wavelengths.values
     host_index = params.host.refractive_index.at(wavelengths).real
-    cos_theta = cos_theta_grid(params.phase_samples)
-    structure_fraction = params.total_volume_fraction if params.dependent_scattering == "percus-yevick" else None
-    mu_s = np.zeros(len(wavelengths))
-    mu_a = np.full(len(wavelengths), float(params.host.absorption_per_mm))
-    weighted_phase = np.zeros((len(wavelengths), len(cos_theta)))
-    for species in params.particles:
-        contribution = species_scattering(species, wavelengths, host_index, cos_theta, structure_fraction)
-        mu_s += contribution.mu_s
-        mu_a += contribution.mu_a
-        weighted_phase += contribution.mu_s[:, None] * contribution.phase
+    kind, samples = planned_phase_grid(params)
+    while True:
+        cos_theta = phase_grid(kind, samples)
+        try:
+            mu_s, mu_a, weighted_phase = _scattering(params, wavelengths, host_index, cos_theta)
+            break
+        except PhaseGridTooCoarse as error:
+            if params.phase_samples != AUTO_PHASE_SAMPLES or samples >= MAX_AUTO_PHASE_SAMPLES:
+                raise
+            kind, samples = "uniform-angle", min(MAX_AUTO_PHASE_SAMPLES,
+                                                 refined_phase_grid(samples, error.relative_error))
     if params.dye is not None:
         mu_a += dye_absorption_coefficient(params.dye, wavelengths)
     scattering = mu_s > 0
@@ -100,4 +140,19 @@ def medium_optics(params: MediumParameters, *, icdf_size: int = DEFAULT_ICDF_SIZ
         phase=phase,
         phase_icdf=phase_inverse_cdf(cos_theta, phase, icdf_size),
         dependent_scattering=params.dependent_scattering,
+        phase_grid=kind,
     )
+
+
+def _scattering(params: MediumParameters, wavelengths: np.ndarray, host_index: np.ndarray, cos_theta: np.ndarray):
+    """μs (L,), μa of the host and the particles (L,), and Σ μs_i p_i (L, M) on ``cos_theta``."""
+    structure_fraction = params.total_volume_fraction if params.dependent_scattering == "percus-yevick" else None
+    mu_s = np.zeros(len(wavelengths))
+    mu_a = np.full(len(wavelengths), float(params.host.absorption_per_mm))
+    weighted_phase = np.zeros((len(wavelengths), len(cos_theta)))
+    for species in params.particles:
+        contribution = species_scattering(species, wavelengths, host_index, cos_theta, structure_fraction)
+        mu_s += contribution.mu_s
+        mu_a += contribution.mu_a
+        weighted_phase += contribution.mu_s[:, None] * contribution.phase
+    return mu_s, mu_a, weighted_phase

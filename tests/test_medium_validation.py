@@ -2,6 +2,7 @@
 
 import copy
 import math
+import re
 
 import numpy as np
 import pytest
@@ -246,6 +247,7 @@ def test_transport_and_bake_tables_belong_to_the_bake():
         (["medium", "dependent_scattering"], "mie-dependent", "medium.dependent_scattering", "percus-yevick"),
         (["medium", "phase_samples"], 10, "medium.phase_samples", "[201, 200001]"),
         (["medium", "phase_samples"], 2001.5, "medium.phase_samples", "integer"),
+        (["medium", "phase_samples"], "automatic", "medium.phase_samples", "'auto'"),
     ],
 )
 def test_yarn_and_medium_settings_are_checked(path, value, name, allowed):
@@ -261,21 +263,37 @@ def test_elliptical_yarn_needs_its_semi_axes():
     assert build(ellipse).yarn.semi_axes_mm == (0.12, 0.08)
 
 
-def test_coarse_phase_grid_is_an_error_not_a_silent_loss():
+def test_coarse_explicit_phase_grid_is_an_error_not_a_silent_loss():
     def big_particles(config):
         config["wavelengths"] = {"values_nm": [550.0]}
         config["particles"][0]["diameter_nm"] = 3000.0
+        config["medium"]["phase_samples"] = 2001
 
     error = expect_error(big_particles, "medium.phase_samples", "forward-peaked")
-    assert error.value == 2001
-    needed = int(error.allowed.split(":")[0].lstrip("≥ "))
+    assert error.value == 2001 and '"auto"' in error.allowed
+    needed = int(re.match(r"≥ (\d+)", error.allowed).group(1))
 
     def finer(config):
         big_particles(config)
         config["medium"]["phase_samples"] = needed
 
     optics = medium_optics(build(finer))
-    assert optics.cos_theta.size == needed and optics.mu_s[0] > 0
+    assert optics.cos_theta.size == needed and optics.mu_s[0] > 0 and optics.phase_grid == "uniform-cos"
+
+
+def test_phase_samples_default_to_auto_which_fits_the_particles():
+    def big_particles(config):
+        config["wavelengths"] = {"values_nm": [550.0]}
+        config["particles"][0]["diameter_nm"] = 3000.0
+
+    params = build(big_particles)
+    assert params.phase_samples == "auto" and params.to_dict()["phase_samples"] == "auto"
+    optics = medium_optics(params)
+    assert optics.phase_grid == "uniform-angle" and optics.mu_s[0] > 0
+    assert build(set_in(["medium", "phase_samples"], "auto")).phase_samples == "auto"
+    # the paper's medium keeps the default grid, uniform in cos θ
+    red = medium_optics(load_preset("red_cotton"))
+    assert (red.phase_grid, red.phase_samples) == ("uniform-cos", 2001)
 
 
 def test_shipped_presets_all_load():

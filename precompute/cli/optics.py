@@ -1,6 +1,7 @@
 """``python -m precompute optics``: print a medium's per-wavelength optics (and optionally plot them).
 
 Prints μs, μa, μt (1/mm), albedo and g per wavelength, as a table or as JSON,
+with the cos θ grid of the phase tables (chosen when ``phase_samples`` is "auto"),
 together with the Percus–Yevick change factors ``μs_PY / μs`` and
 ``g_PY / g`` (dependent vs independent scattering), which are always computed
 so that the size of the dense-medium correction is in view.
@@ -59,6 +60,8 @@ def _report(params: MediumParameters, optics: MediumOptics, independent: MediumO
         "albedo": optics.albedo.tolist(),
         "g": optics.g.tolist(),
         "host_index": optics.host_index.tolist(),
+        "phase_samples": params.phase_samples,
+        "phase_grid": {"kind": optics.phase_grid, "samples": optics.phase_samples},
         "percus_yevick_factor": {
             "mu_s": _ratio(corrected.mu_s, independent.mu_s),
             "g": _ratio(corrected.g, independent.g),
@@ -76,6 +79,9 @@ def _print_table(report: dict) -> None:
     print(f"medium {report['preset']}: {report['description']}")
     print(f"scattering model: {'independent (as in the paper)' if model == 'none' else model}")
     print(f"boundary index {report['boundary_index']:.4f}, yarn radius {report['yarn_radius_mm']:g} mm")
+    grid = report["phase_grid"]
+    print(f"phase tables: {grid['samples']} cos θ samples, {grid['kind']} "
+          f"(phase_samples = {report['phase_samples']!r})")
     header = (
         f"{'λ nm':>7} {'μs 1/mm':>11} {'μa 1/mm':>11} {'μt 1/mm':>11} {'albedo':>8} {'g':>7} {'PY μs×':>7} {'PY g×':>7}"
     )

@@ -292,11 +292,15 @@ def bake_wavelength(spectral_path, wavelength_nm: float) -> BakeWavelength:
     """The bake's data at its simulated wavelength nearest ``wavelength_nm``.
 
     μs and μa come from ``spectral.npz``; the phase table is not stored there, so it is recomputed
-    from the medium record (:func:`precompute.optics.medium_optics`, deterministic) and the μs, μa it
-    gives are checked against the stored ones.  R and the boundary index are the bake's.
+    from the medium record (:func:`precompute.optics.medium_optics`, deterministic, its cos θ grid
+    chosen again when ``phase_samples`` is ``"auto"``) and the μs, μa it gives are checked against the
+    stored ones, the grid against the bake's ``phase_grid`` where recorded.  The phase table is the
+    transport's (:func:`precompute.transport.media.medium_from_optics`), on the uniform cos θ grid.
+    R and the boundary index are the bake's.
     """
     from ..bake import load_spectral
     from ..optics import medium_optics
+    from ..transport.media import medium_from_optics
 
     spectral_path = pathlib.Path(spectral_path)
     arrays, metadata = load_spectral(spectral_path)
@@ -304,15 +308,19 @@ def bake_wavelength(spectral_path, wavelength_nm: float) -> BakeWavelength:
     k = int(np.argmin(np.abs(wavelengths - float(wavelength_nm))))
     params = medium_from_record(metadata["medium"])
     optics = medium_optics(params)
+    recorded = metadata.get("phase_grid")
+    if recorded is not None and recorded != {"kind": optics.phase_grid, "samples": optics.phase_samples}:
+        raise RuntimeError(f"{spectral_path}: the bake's phase grid {recorded} is not the one the medium record "
+                           f"gives now ({optics.phase_grid}, {optics.phase_samples}): the optics code changed")
     for name in ("mu_s", "mu_a"):
         stored, again = float(arrays[name][k]), float(getattr(optics, name)[k])
         if not math.isclose(stored, again, rel_tol=1e-9, abs_tol=1e-12):
             raise RuntimeError(f"{spectral_path}: {name} at {wavelengths[k]:g} nm is {stored}, the medium record "
                                f"gives {again}: the optics code changed since this bake")
-    if not np.allclose(optics.cos_theta, np.linspace(-1.0, 1.0, len(optics.cos_theta)), atol=1e-12):
-        raise RuntimeError("the phase table is not on a uniform cos θ grid")
+    # The transport's own table (uniform in cos θ, as tabphase wants): resampled from a grid uniform in θ.
+    phase = medium_from_optics(optics).phase_table[k]
     medium = ReferenceMedium(float(params.yarn.radius_mm), float(metadata["host_index"]), float(arrays["mu_s"][k]),
-                             float(arrays["mu_a"][k]), optics.phase[k])
+                             float(arrays["mu_a"][k]), phase)
     n_i = int(metadata["incidence_resolution"])
     return BakeWavelength(float(wavelengths[k]), k, medium, table_rho(arrays["rho"][:, :, k], n_i),
                           table_rho(arrays["rho_stderr"][:, :, k], n_i), spectral_path, metadata)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase
+from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
 from ._interactions import PHASE_HG, PHASE_TABLE
 from ._paths import KernelMedium
 
@@ -125,14 +125,13 @@ def phase_sampling_tables(phase: np.ndarray):
 def medium_from_optics(optics) -> TransportMedium:
     """The transport medium of :class:`precompute.optics.MediumOptics` (tabulated phase functions).
 
-    A phase table on a non-uniform cos θ grid is resampled linearly onto the uniform grid
-    of as many points.
+    A phase table on another cos θ grid (the grid uniform in θ that
+    :func:`precompute.mie.auto_phase_grid` chooses for large particles) goes onto the
+    uniform grid of as many points by :func:`precompute.phase.resample_uniform_cos`, which
+    keeps each cell's probability: a diffraction peak narrower than the uniform spacing keeps
+    its weight, and g moves by less than half that spacing times the peak's probability.
     """
-    grid = np.asarray(optics.cos_theta, float)
-    phase = np.asarray(optics.phase, float)
-    uniform = np.linspace(-1.0, 1.0, len(grid))
-    if not np.allclose(grid, uniform, rtol=0.0, atol=1e-12):
-        phase = np.array([np.interp(uniform, grid, row) for row in phase])
+    phase = resample_uniform_cos(optics.cos_theta, optics.phase, len(optics.cos_theta))
     return TransportMedium(optics.wavelengths_nm, optics.mu_s, optics.mu_a, phase_table=phase)
 
 

@@ -56,6 +56,7 @@ def run(args) -> int:
 
     from ..fit import Budget, check_fit_folder, fit_medium, load_measurement, parse_free, split_views
     from ..fit.objective import Objective, parse_target_ratios
+    from ..fit.optimise import check_budget
     from ..fit.parameters import FIT_TABLE, initial_values, specular_from_config
     from ..fit.report import fit_summary, write_fit_folder
     from ..medium import load_preset_config, medium_from_dict
@@ -72,6 +73,7 @@ def run(args) -> int:
     views = split_views(measurement)
     Objective(measurement, views, ratios)
     budget = Budget(evaluations=args.budget_evaluations, seconds=args.budget_seconds)
+    check_budget(budget, len(free))
     check_fit_folder(args.out)
     if args.cache_dir is not None:
         check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")

@@ -270,6 +270,17 @@ def population_size(n: int) -> int:
     return max(6, 4 + int(3 * math.log(n)))
 
 
+def check_budget(budget: Budget, n_free: int, popsize: int | None = None) -> int:
+    """The population size; ParameterError naming ``--budget-evaluations`` when the budget does not
+    hold one generation and the final evaluation."""
+    population = popsize or population_size(n_free)
+    if budget.evaluations < population + 1:
+        raise ParameterError("--budget-evaluations", budget.evaluations,
+                             f"at least {population + 1} for {n_free} free parameters (one generation of "
+                             f"{population} candidates and the final evaluation)")
+    return population
+
+
 def minimise(evaluate: Callable[[dict, float, int], float | Refused], free: Sequence[FitParameter], start: Mapping,
              *, seed: int = 0, budget: Budget = Budget(), schedule: AccuracySchedule = AccuracySchedule(),
              popsize: int | None = None, progress: Callable[[FitProgress], None] | None = None,
@@ -418,11 +429,7 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
     views = split_views(measurement)
     objective = Objective(measurement, views, parse_target_ratios(target_ratios))
 
-    population = popsize or population_size(len(free))
-    if budget.evaluations < population + 1:
-        raise ParameterError("--budget-evaluations", budget.evaluations,
-                             f"at least {population + 1} for {len(free)} free parameters (one generation of "
-                             f"{population} candidates and the final evaluation)")
+    population = check_budget(budget, len(free), popsize)
 
     def evaluate(parameters: dict, relative_error: float, forward_seed: int) -> float | Refused:
         candidate, keywords = apply(config, specular, parameters)
@@ -466,7 +473,7 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
 
 
 def bound_hits(free: Sequence[FitParameter], values: Mapping[str, float]) -> list[str]:
-    """A sentence for each parameter whose value ends at (within 1 % of the range of) a bound."""
+    """A sentence for each parameter whose value ends at a bound (within 5 % of its [0, 1] range)."""
     hits = []
     for p in free:
         side = p.at_bound(values[p.name])
@@ -479,4 +486,5 @@ def bound_hits(free: Sequence[FitParameter], values: Mapping[str, float]) -> lis
 
 
 __all__ = ["INFEASIBLE_OBJECTIVE", "AccuracySchedule", "Budget", "Evaluation", "FitCancelled", "FitProgress",
-           "FitResult", "ForwardModel", "Refused", "bound_hits", "fit_medium", "minimise", "population_size"]
+           "FitResult", "ForwardModel", "Refused", "bound_hits", "check_budget", "fit_medium", "minimise",
+           "population_size"]

@@ -116,9 +116,9 @@ class FitParameter:
             return math.exp(math.log(self.low) + u * (math.log(self.high) - math.log(self.low)))
         return self.low + u * (self.high - self.low)
 
-    def at_bound(self, value: float, tolerance: float = 0.01) -> str | None:
-        """``"lower"`` or ``"upper"`` when ``value`` lies within ``tolerance`` (of the [0, 1] range)
-        of that end of the range, else None."""
+    def at_bound(self, value: float, tolerance: float = 0.05) -> str | None:
+        """``"lower"`` or ``"upper"`` when ``value`` lies within ``tolerance`` (of the [0, 1] range,
+        where a noisy optimum settles short of a bound) of that end of the range, else None."""
         u = self.to_unit(value)
         if u <= tolerance:
             return "lower"

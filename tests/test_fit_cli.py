@@ -1,0 +1,148 @@
+"""``python -m precompute fit``: exit codes (0 done, 2 bad input, 130 interrupted, 1 internal) and an
+--out folder written as a whole.  In-process, with the synthetic forward model standing in for
+``precompute.fit.forward`` (put in sys.modules, where the command's lazy import finds it)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import types
+
+import pytest
+
+import precompute.__main__ as precompute_cli
+from precompute.fit import report as fit_report
+from precompute.fit.report import FIT_FOLDER_FILES
+from precompute.medium import load_preset
+from tests.test_fit_optimise import SyntheticForward, preset_with_voids, write_measurement
+
+
+@pytest.fixture
+def fake_forward(monkeypatch):
+    """A ``precompute.fit.forward`` module whose build_forward_model returns the synthetic model;
+    records its calls."""
+    module = types.ModuleType("precompute.fit.forward")
+    module.calls = []
+
+    def build_forward_model(measured_views, preset_config, base_dir, *, seed=0, progress=None, **kwargs):
+        module.calls.append({"views": list(measured_views), "config": preset_config, "base_dir": base_dir,
+                             "seed": seed, "kwargs": kwargs})
+        if progress is not None:
+            progress(1, 1)
+        return SyntheticForward(measured_views)
+
+    module.build_forward_model = build_forward_model
+    monkeypatch.setitem(sys.modules, "precompute.fit.forward", module)
+    return module
+
+
+@pytest.fixture
+def inputs(tmp_path):
+    config, _ = preset_with_voids(specular_weight=0.6)
+    preset = tmp_path / "with_voids.toml"
+    preset.write_text(fit_report.to_toml(config))
+    return {"measured": write_measurement(tmp_path / "synthetic.csv"), "config": preset}
+
+
+def fit(inputs, out, *extra):
+    return precompute_cli.main(["fit", "--measured", str(inputs["measured"]), "--config", str(inputs["config"]),
+                                "--free", "void_fraction,dye_weight_percent", "--budget-evaluations", "30",
+                                "--out", str(out), *extra])
+
+
+def test_a_fit_writes_its_folder_and_a_preset_the_bake_accepts(inputs, tmp_path, fake_forward, capsys):
+    out = tmp_path / "fit"
+    assert fit(inputs, out, "--json", "--target-ratios", "B/R=0.2") == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(FIT_FOLDER_FILES)
+    summary = json.loads(capsys.readouterr().out)
+    assert set(summary["parameters"]) == {"void_fraction", "dye_weight_percent"}
+    assert summary["target_ratios"] == {"B/R": 0.2}
+    medium = load_preset(out / "preset.toml")
+    fitted = json.loads((out / "fit.json").read_text())
+    assert medium.dye.weight_percent == pytest.approx(fitted["parameters"]["dye_weight_percent"]["value"])
+    assert medium.dye.source == "red_dye_band_model.csv"  # the shipped spectrum still resolves
+    assert len(fitted["history"]) >= 10 and len(fitted["views"]) == 84
+    report = (out / "report.md").read_text()
+    assert "held out" in report and "fit.png" in report
+    # the forward model was built once, for every view, in the light-at-180° frame, without [fit]
+    (call,) = fake_forward.calls
+    assert len(call["views"]) == 84 and all(view[1] == 180.0 for view in call["views"])
+    assert "fit" not in call["config"]
+
+
+def test_unknown_parameter_is_bad_input(inputs, tmp_path, fake_forward, capsys):
+    code = precompute_cli.main(["fit", "--measured", str(inputs["measured"]), "--free", "void_fraction,sheen",
+                                "--out", str(tmp_path / "fit")])
+    assert code == 2
+    error = capsys.readouterr().err
+    assert "sheen" in error and "dye_weight_percent" in error
+    assert not fake_forward.calls and not (tmp_path / "fit").exists()
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--measured", "{tmp}/missing.csv"], ["--measured", "missing.csv"]),
+    (["--config", "{tmp}/missing.toml"], ["preset", "missing.toml"]),
+    (["--preset", "red_cotton"], ["voids", "[[particles]]"]),  # no voids species in the shipped preset
+    (["--target-ratios", "B/R=-1"], ["--target-ratios"]),
+    (["--budget-evaluations", "4"], ["--budget-evaluations"]),
+    (["--out", "{tmp}/synthetic.csv"], ["--out", "is a file"]),
+])
+def test_bad_inputs_exit_with_2_before_any_work(inputs, tmp_path, fake_forward, capsys, args, words):
+    argv = {"--measured": str(inputs["measured"]), "--config": str(inputs["config"]), "--out": str(tmp_path / "fit")}
+    given = dict(zip(args[::2], (a.replace("{tmp}", str(tmp_path)) for a in args[1::2])))
+    if "--preset" in given:
+        argv.pop("--config")
+    argv.update(given)
+    flat = ["fit", "--free", "void_fraction,dye_weight_percent"] + [x for kv in argv.items() for x in kv]
+    assert precompute_cli.main(flat) == 2
+    error = capsys.readouterr().err
+    for word in words:
+        assert word in error
+    assert not fake_forward.calls
+    assert not (tmp_path / "fit").exists()
+
+
+def test_a_failure_while_writing_leaves_no_partial_folder(inputs, tmp_path, fake_forward, monkeypatch, capsys):
+    out = tmp_path / "fit"
+
+    def broken(result, folder):
+        (folder / "fit.png").write_bytes(b"half a plot")
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(fit_report, "write_plots", broken)
+    assert fit(inputs, out) == 1
+    assert "disk full" in capsys.readouterr().err
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["synthetic.csv", "with_voids.toml"]  # no staging left
+
+
+def test_a_failed_fit_keeps_the_previous_one(inputs, tmp_path, fake_forward, monkeypatch):
+    out = tmp_path / "fit"
+    assert fit(inputs, out) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    monkeypatch.setattr(fit_report, "write_plots", lambda result, folder: (_ for _ in ()).throw(OSError("no")))
+    assert fit(inputs, out, "--seed", "5") == 1
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_interrupt_exits_130_and_writes_nothing(inputs, tmp_path, fake_forward, monkeypatch, capsys):
+    out = tmp_path / "fit"
+    calls = []
+
+    def interrupting(self, config, **kwargs):
+        calls.append(1)
+        if len(calls) == 12:
+            raise KeyboardInterrupt
+        return original(self, config, **kwargs)
+
+    original = SyntheticForward.__call__
+    monkeypatch.setattr(SyntheticForward, "__call__", interrupting)
+    assert fit(inputs, out) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_without_the_forward_model_module_it_is_an_internal_error(inputs, tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "precompute.fit.forward", None)  # import fails as if the file were absent
+    assert fit(inputs, tmp_path / "fit") == 1
+    assert not (tmp_path / "fit").exists()

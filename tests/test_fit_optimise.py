@@ -1,0 +1,191 @@
+"""The medium fit end to end with a synthetic forward model (no bake, no render): CMA-ES recovers known
+parameters from a measurement the test writes, the same seed gives the same preset, a fit that ends
+at a bound says so, and the baseline fit recovers a known Lambert + Cook–Torrance.
+
+The synthetic model stands in for ``precompute.fit.forward``: a Lambert-like cloth whose albedo
+rises with the void fraction and whose colour follows the dye amount (Beer–Lambert per channel),
+plus the shader's Cook–Torrance, with multiplicative Gaussian noise of the relative error asked
+for, seeded by the call's seed (as a Monte-Carlo estimate would be)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from precompute.cook_torrance import cloth_specular
+from precompute.fit import Budget, fit_medium, load_measurement, split_views
+from precompute.fit.baseline import baseline_brdf, fit_baseline
+from precompute.fit.objective import Objective
+from precompute.fit.optimise import FitCancelled
+from precompute.fit.parameters import VOIDS, species_table
+from precompute.fit.report import preset_toml
+from precompute.medium import load_preset_config
+
+#: Per-channel dye absorption of the synthetic model, per weight-%: red passes, green least.
+DYE_ABSORPTION = np.array([0.05, 1.2, 0.8])
+TRUTH = {"void_fraction": 0.05, "dye_weight_percent": 2.0, "specular_weight": 0.6, "specular_slope": 0.35}
+
+
+def synthetic_brdf(angles_deg, void_fraction, dye_weight_percent, specular_weight, specular_slope) -> np.ndarray:
+    """(M, 3) BRDF, 1/sr, of the synthetic cloth at direction pairs (M, 4)."""
+    a = np.asarray(angles_deg, float)
+    albedo = void_fraction / (void_fraction + 0.03) * np.exp(-DYE_ABSORPTION * dye_weight_percent)
+    shape = 1.0 + 0.3 * (1.0 - np.cos(np.radians(a[:, 2])))  # brighter toward grazing views
+    return albedo[None, :] / math.pi * shape[:, None] + cloth_specular(a, specular_weight, specular_slope)[:, None]
+
+
+class SyntheticForward:
+    """A forward model over ``views`` ((θi, φi, θo, φo), as the fit hands them to build_forward_model)."""
+
+    def __init__(self, views, noisy: bool = True):
+        self.angles = np.array(views, float)
+        self.noisy = noisy
+        self.calls: list[dict] = []
+
+    def __call__(self, config, *, specular_weight, specular_slope, relative_error, seed):
+        self.calls.append({"relative_error": relative_error, "seed": seed})
+        void = species_table(config, VOIDS, "test")["volume_fraction"]
+        rgb = synthetic_brdf(self.angles, void, config["dye"]["weight_percent"], specular_weight, specular_slope)
+        if self.noisy:
+            rgb = rgb * (1.0 + relative_error * np.random.default_rng(seed).standard_normal(rgb.shape))
+        return rgb
+
+
+def real_fabric_views() -> list[tuple]:
+    """The views of shared/data/real_fabrics: θi 0/30/45/60, in-plane −60…70, perpendicular 10…70."""
+    views = []
+    for theta_i in (0, 30, 45, 60):
+        views += [(theta_i, 180, theta_o, 180) for theta_o in range(60, 0, -10)]
+        views.append((theta_i, 180, 0, 0))
+        views += [(theta_i, 180, theta_o, 0) for theta_o in range(10, 80, 10)]
+        views += [(theta_i, 180, theta_o, 90) for theta_o in range(10, 80, 10)]
+    return views
+
+
+def write_measurement(path, truth=TRUTH):
+    views = real_fabric_views()
+    rgb = synthetic_brdf(views, **truth)
+    rows = [",".join(f"{v:g}" for v in view) + "," + ",".join(f"{c:.8g}" for c in values)
+            for view, values in zip(views, rgb)]
+    path.write_text("# synthetic cloth for the fit tests\ntheta_i,phi_i,theta_o,phi_o,R,G,B\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def preset_with_voids(specular_weight: float | None = None):
+    """red_cotton's content with a voids species (0.02 of 1 µm air) and, if given, a [fit] table."""
+    config, base_dir = load_preset_config("red_cotton")
+    config["particles"].append({"name": "voids", "refractive_index": 1.0, "diameter_nm": 1000.0,
+                                "volume_fraction": 0.02})
+    if specular_weight is not None:
+        config["fit"] = {"specular_weight": specular_weight}
+    return config, base_dir
+
+
+@pytest.fixture
+def measured(tmp_path):
+    return write_measurement(tmp_path / "synthetic.csv")
+
+
+def run_fit(measured_path, *, free="void_fraction,dye_weight_percent,specular_slope", seed=3, budget=400,
+            specular_weight=TRUTH["specular_weight"], **kwargs):
+    measurement = load_measurement(measured_path)
+    model = SyntheticForward(split_views(measurement).forward_views)
+    config, base_dir = preset_with_voids(specular_weight)
+    result = fit_medium(measurement, config, base_dir, free=free, forward_model=model, seed=seed, budget=budget,
+                        **kwargs)
+    return result, model
+
+
+def test_cma_fit_recovers_the_parameters_of_a_synthetic_measurement(measured):
+    result, model = run_fit(measured)
+    for name in ("void_fraction", "dye_weight_percent", "specular_slope"):
+        assert result.parameters[name] == pytest.approx(TRUTH[name], rel=0.08), name
+    assert result.objective < 0.05  # the final evaluation's noise is 1 %
+    assert result.bound_hits == []
+    # cheap candidates, an accurate winner: the accuracy tightens, and the last call is the final one
+    errors = [call["relative_error"] for call in model.calls]
+    assert errors[0] == pytest.approx(0.08)
+    assert min(errors[:-1]) < errors[0]
+    assert errors[-1] == pytest.approx(0.01)
+    assert len(model.calls) <= 400 and result.forward_evaluations == len(model.calls)
+    kinds = {e.kind for e in result.history}
+    assert {"candidate", "incumbent", "final"} <= kinds
+    # the held-out (perpendicular) views are reported, and the medium beats nothing it should not
+    assert result.metrics["model"]["held_out_views"]["relative_rms"] < 0.1
+    assert int(result.views.held_out.sum()) == 28 and int(result.views.fit.sum()) == 56
+
+
+def test_the_same_seed_gives_the_same_preset(measured):
+    first, _ = run_fit(measured, budget=40, seed=7)
+    second, _ = run_fit(measured, budget=40, seed=7)
+    other, _ = run_fit(measured, budget=40, seed=8)
+    assert first.parameters == second.parameters
+    assert preset_toml(first, "synthetic.csv") == preset_toml(second, "synthetic.csv")
+    assert [e.objective for e in first.history] == [e.objective for e in second.history]
+    assert other.parameters != first.parameters
+
+
+def test_a_fit_that_ends_at_a_bound_says_so(tmp_path):
+    # a cloth dyed with 0.02 %: below the fit range's 0.1 %
+    path = write_measurement(tmp_path / "pale.csv", {**TRUTH, "dye_weight_percent": 0.02})
+    result, _ = run_fit(path, free="void_fraction,dye_weight_percent", budget=150)
+    assert result.parameters["dye_weight_percent"] == pytest.approx(0.1, rel=0.25)
+    assert any("lower bound of dye_weight_percent" in hit for hit in result.bound_hits)
+    assert result.to_dict()["parameters"]["dye_weight_percent"]["at_bound"] == "lower"
+
+
+def test_progress_reports_and_cancel_stops(measured):
+    seen = []
+    result, _ = run_fit(measured, budget=30, progress=seen.append)
+    assert [s.evaluations for s in seen] == sorted(s.evaluations for s in seen)
+    assert seen[-1].evaluations == result.forward_evaluations and seen[-1].total == 30
+    assert all(s.best_objective > 0 for s in seen)
+    calls = []
+
+    def cancel():
+        calls.append(1)
+        return len(calls) > 5
+
+    with pytest.raises(FitCancelled):
+        run_fit(measured, budget=30, cancel=cancel)
+    assert issubclass(FitCancelled, KeyboardInterrupt)  # exit code 130 on the command line
+
+
+def test_media_the_loader_refuses_are_penalised_not_evaluated(measured):
+    # scatterers at 0.4 and voids up to 0.35 can sum past 0.74: those candidates never reach the model
+    result, model = run_fit(measured, free="void_fraction,scatterer_fraction", budget=60)
+    refused = [e for e in result.history if e.kind == "refused"]
+    evaluated = [e for e in result.history if e.kind != "refused"]
+    assert len(evaluated) == len(model.calls)
+    for e in refused:
+        assert e.parameters["void_fraction"] + e.parameters["scatterer_fraction"] >= 0.74 or e.objective >= 10
+
+
+def test_budget_smaller_than_one_generation_is_refused(measured):
+    from precompute.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="--budget-evaluations"):
+        run_fit(measured, budget=Budget(evaluations=5))
+
+
+def test_baseline_fit_recovers_a_known_lambert_and_cook_torrance(tmp_path):
+    views = real_fabric_views()
+    albedo, weight, slope = (0.55, 0.04, 0.12), 0.7, 0.3
+    rgb = baseline_brdf(views, albedo, weight, slope)
+    path = tmp_path / "baseline.csv"
+    path.write_text("theta_i,phi_i,theta_o,phi_o,R,G,B\n" + "\n".join(
+        ",".join(f"{v:g}" for v in view) + "," + ",".join(f"{c:.10g}" for c in values)
+        for view, values in zip(views, rgb)) + "\n")
+    fit = fit_baseline(Objective(load_measurement(path)))
+    assert fit.albedo == pytest.approx(albedo, rel=1e-3)
+    assert fit.weight == pytest.approx(weight, rel=1e-3)
+    assert fit.slope == pytest.approx(slope, rel=1e-3)
+
+
+def test_baseline_is_the_flat_cloth_form():
+    views = np.array(real_fabric_views(), float)
+    rgb = baseline_brdf(views, (0.3, 0.2, 0.1), 0.5, 0.4)
+    expected = np.array([0.3, 0.2, 0.1]) / math.pi + 0.5 * cloth_specular(views, 1.0, 0.4)[:, None]
+    np.testing.assert_allclose(rgb, expected)

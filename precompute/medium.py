@@ -15,7 +15,8 @@ Presets are TOML files in ``precompute/presets``.  The top-level keys ``name``
 and ``description`` and the tables ``[wavelengths]``, ``[host]``,
 ``[[particles]]``, ``[dye]``, ``[yarn]`` and ``[medium]`` belong to this
 module, which rejects unknown keys in them; ``[transport]`` and ``[bake]``
-belong to the bake and are ignored here.  Relative file paths in a preset
+belong to the bake and ``[fit]`` (a fitted preset's specular term) to
+:mod:`precompute.fit`, and are ignored here.  Relative file paths in a preset
 resolve next to the TOML file, then in ``precompute/data``.
 """
 
@@ -41,7 +42,7 @@ MAX_VOLUME_FRACTION = 0.74
 DEPENDENT_SCATTERING_MODELS = ("none", "percus-yevick")
 #: ``medium.phase_samples`` value that lets the optics choose the cos θ grid (the default).
 AUTO_PHASE_SAMPLES = "auto"
-_FOREIGN_TABLES = ("transport", "bake")
+_FOREIGN_TABLES = ("transport", "bake", "fit")
 
 
 def _finite(name: str, value, allowed: str = "a finite number") -> float:

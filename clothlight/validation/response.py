@@ -126,10 +126,17 @@ class ClothResponse:
 
     def specular_brdf(self, weight: float, slope: float, index: float) -> np.ndarray:
         """The Cook–Torrance term's share of each view's cloth BRDF (n_views,), 1/sr: w f_CT (n_c·l) s."""
-        cook_torrance = import_precompute("cook_torrance").cook_torrance_between
-        values = np.array([cook_torrance(v.toward_sun, v.toward_camera, slope, index) * v.toward_sun[2]
-                           for v in self.views])
-        return weight * values * self._specular_share
+        cook_torrance = import_precompute("cook_torrance").cook_torrance(self._toward_sun, self._toward_camera,
+                                                                          slope, index)
+        return weight * cook_torrance * self._toward_sun[:, 2] * self._specular_share
+
+    @functools.cached_property
+    def _toward_sun(self) -> np.ndarray:
+        return np.array([v.toward_sun for v in self.views])
+
+    @functools.cached_property
+    def _toward_camera(self) -> np.ndarray:
+        return np.array([v.toward_camera for v in self.views])
 
     @functools.cached_property
     def _specular_share(self) -> np.ndarray:

@@ -142,17 +142,30 @@ class ForwardModel:
                              optics.boundary_index, ballistic.SUN_MODE_SPREAD_RAD)
         return atlas, attenuation, layout
 
+    def _mean_over_azimuths(self, per_view: np.ndarray) -> np.ndarray:
+        return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), *per_view.shape[1:]).mean(axis=1)
+
     def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float) -> np.ndarray:
         """The cloth BRDF of given tables at the measured views, averaged over the sample azimuths."""
-        per_view = self.response.cloth_brdf(atlas, attenuation, layout, specular_weight=specular_weight,
-                                            specular_slope=specular_slope)
-        return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), -1).mean(axis=1)
+        return self._mean_over_azimuths(self.response.cloth_brdf(
+            atlas, attenuation, layout, specular_weight=specular_weight, specular_slope=specular_slope))
+
+    def parts(self, config: dict, *, relative_error: float, seed: int):
+        """The cloth BRDF split into what the medium gives and what the specular term adds: the
+        first (n_views, 3), 1/sr, with no specular, and ``specular(weight, slope)`` (n_views,), 1/sr,
+        white.  A fit optimises the specular term's two parameters for each medium in milliseconds."""
+        atlas, attenuation, layout = self.tables(config, relative_error=relative_error, seed=seed)
+        yarn = self.cloth_brdf(atlas, attenuation, layout, specular_weight=0.0, specular_slope=1.0)
+
+        def specular(weight: float, slope: float) -> np.ndarray:
+            return self._mean_over_azimuths(self.response.specular_brdf(weight, slope, layout.index))
+
+        return yarn, specular
 
     def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
                  seed: int) -> np.ndarray:
-        atlas, attenuation, layout = self.tables(config, relative_error=relative_error, seed=seed)
-        return self.cloth_brdf(atlas, attenuation, layout, specular_weight=specular_weight,
-                               specular_slope=specular_slope)
+        yarn, specular = self.parts(config, relative_error=relative_error, seed=seed)
+        return yarn + specular(specular_weight, specular_slope)[:, None]
 
 
 def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: int = 0, cache_dir=None,

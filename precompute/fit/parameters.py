@@ -28,9 +28,7 @@ from ..errors import ParameterError
 from ..medium import MAX_VOLUME_FRACTION
 
 #: The preset table holding the fitted specular term (``[fit]``, keys ``specular_weight`` and
-#: ``specular_slope``).  The medium's loader accepts it only once it is one of its foreign tables
-#: (``precompute.medium._FOREIGN_TABLES``); until then :mod:`precompute.fit.report` writes it as
-#: comments.
+#: ``specular_slope``, the shader's SpecularWeight and Slope); the medium's loader ignores it.
 FIT_TABLE = "fit"
 #: The particle species the void and scatterer parameters act on, by their preset ``name``.
 VOIDS = "voids"

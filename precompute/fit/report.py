@@ -8,8 +8,8 @@ partial folder):
     The fitted medium as a preset TOML (``python -m precompute bake --config DIR/preset.toml``):
     the input preset with the fitted values; relative data files that resolved next to the input
     preset are written as absolute paths (those of ``precompute/data`` stay relative).  The fitted
-    specular term goes in a ``[fit]`` table (``specular_weight``, ``specular_slope``) when the
-    medium's loader accepts that table, as comment lines otherwise.
+    specular term goes in a ``[fit]`` table (``specular_weight``, ``specular_slope``), which the
+    medium's loader ignores.
 ``fit.json``
     Everything: parameters, bounds, metrics, baseline, every view's measured / model / baseline
     BRDF, and the whole history (:meth:`FitResult.to_dict`).
@@ -111,7 +111,7 @@ def _json_safe(value):
 
 def fitted_preset_config(result: FitResult, measured_name: str = "") -> dict:
     """The fitted preset's content: the fit's config with a new name and description, relative data
-    files made to resolve from anywhere, and (when the medium accepts it) the ``[fit]`` table."""
+    files made to resolve from anywhere, and the ``[fit]`` table (the specular term)."""
     config = json.loads(json.dumps(result.config))  # a deep, plain copy
     name = str(config.get("name", "custom"))
     config["name"] = name if name.endswith("_fit") else f"{name}_fit"
@@ -119,14 +119,8 @@ def fitted_preset_config(result: FitResult, measured_name: str = "") -> dict:
     config["description"] = (f"{name} fitted to {measured_name or 'a measurement'} by python -m precompute fit "
                              f"({values})")
     _absolute_data_files(config, result.base_dir)
-    if accepts_fit_table():
-        config[FIT_TABLE] = {key: float(value) for key, value in result.specular.items()}
+    config[FIT_TABLE] = {key: float(value) for key, value in result.specular.items()}
     return config
-
-
-def accepts_fit_table() -> bool:
-    """Whether the medium's loader accepts a ``[fit]`` table (one of its foreign tables)."""
-    return FIT_TABLE in getattr(medium_module, "_FOREIGN_TABLES", ())
 
 
 def _absolute_data_files(config: dict, base_dir: pathlib.Path) -> None:
@@ -156,11 +150,6 @@ def preset_toml(result: FitResult, measured_name: str = "") -> str:
              "# Free parameters: " + ", ".join(f"{p.name} = {result.parameters[p.name]:.6g}"
                                                + (f" {p.unit}" if p.unit else "") for p in result.free)]
     lines += [f"# Note: {hit}" for hit in result.bound_hits]
-    if not accepts_fit_table():
-        lines += ["# The fitted specular term (the shader's SpecularWeight and Slope; a [fit] table once the",
-                  "# medium's loader accepts one):",
-                  f"# [{FIT_TABLE}]"]
-        lines += [f"# {key} = {_toml_value(float(value))}" for key, value in result.specular.items()]
     return "\n".join(lines) + "\n\n" + to_toml(config)
 
 
@@ -371,6 +360,6 @@ def write_plots(result: FitResult, folder: pathlib.Path) -> dict[str, pathlib.Pa
     return paths
 
 
-__all__ = ["FIT_FOLDER_FILES", "JSON_FILE", "PLOT_FILES", "PRESET_FILE", "REPORT_FILE", "accepts_fit_table",
+__all__ = ["FIT_FOLDER_FILES", "JSON_FILE", "PLOT_FILES", "PRESET_FILE", "REPORT_FILE",
            "check_fit_folder", "fit_summary", "fitted_preset_config", "preset_toml", "report_markdown", "to_toml",
            "write_fit_folder", "write_plots"]

@@ -27,6 +27,9 @@ LOBE_SHAPE_SOCKETS = {
     "RetroreflectionAlpha": "retroreflection_alpha",
 }
 
+#: cloth_yarn.osl's inputs for the bake's specular record (``summary.json`` → ``specular``).
+SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope"}
+
 
 def _object_to_world(tree, attribute_name: str, vector_type: str, location):
     """An Attribute node reading ``attribute_name`` and a Vector Transform taking it to world space."""
@@ -100,7 +103,9 @@ def build_yarn_material(
     Parameters
     ----------
     tables
-        A :class:`clothlight.tables.YarnTableFiles`: checked table paths and resolutions.
+        A :class:`clothlight.yarn_tables.YarnTableFiles`: checked table paths and resolutions, and the
+        specular term the bake recorded (SpecularWeight and Slope; the shader's defaults where it
+        has none).
     mode
         :data:`SUN_MODE` (exact under the scene's sun, for validation) or
         :data:`GENERAL_MODE` (closure mixture, any lighting).
@@ -118,6 +123,9 @@ def build_yarn_material(
     for socket, key in LOBE_SHAPE_SOCKETS.items():
         shader.inputs[socket].default_value = tables.lobe_shape[key]
     shader.inputs["IOR"].default_value = tables.host_index
+    if tables.specular is not None:
+        for socket, key in SPECULAR_SOCKETS.items():
+            shader.inputs[socket].default_value = tables.specular[key]
     shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
     return material
 

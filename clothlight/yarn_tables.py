@@ -8,6 +8,7 @@ first (:func:`yarn_tables_from_bake`).
 from __future__ import annotations
 
 import pathlib
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from .addon import import_precompute
@@ -32,6 +33,11 @@ class YarnTableFiles:
         the unscattered light.
     unscattered_samples
         Pixels of the attenuation table.
+    specular
+        The yarn shader's specular term as the bake recorded it (``summary.json`` → ``specular``,
+        docs/table-spec.md): ``weight`` (SpecularWeight), ``slope`` (Slope, the Beckmann rms slope m)
+        and ``source`` (a fitted preset's ``[fit]`` table or the paper's defaults).  None: the
+        shader's own defaults (tables made without a bake).
     """
 
     brdf_path: pathlib.Path
@@ -42,6 +48,7 @@ class YarnTableFiles:
     lobe_shape: dict
     host_index: float
     unscattered_samples: int
+    specular: Mapping | None = None
 
     def __post_init__(self):
         for name in ("brdf_path", "lobe_path", "unscattered_path"):
@@ -61,7 +68,8 @@ def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:
     schema, kind, size against the summary's resolutions, content hash, finite values ≥ 0, one bake):
     ``precompute.tables.TableError`` (a ValueError) names the file and the reason, so that a damaged,
     incomplete or mixed folder is refused rather than rendered.  ``precompute.table_folder`` (and with
-    it OpenEXR) is imported here, when tables are used, not when the add-on is enabled.
+    it OpenEXR) is imported here, when tables are used, not when the add-on is enabled.  The specular
+    term is the summary's, or the paper's defaults for a folder baked before bakes recorded it.
     """
     table_folder = import_precompute("table_folder")
     checked = table_folder.check_yarn_table_folder(pathlib.Path(folder).resolve())
@@ -75,4 +83,5 @@ def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:
         lobe_shape={key: float(value) for key, value in summary["lobe_shape"].items()},
         host_index=float(summary["host_index"]),
         unscattered_samples=summary["unscattered_samples"],
+        specular=table_folder.summary_specular(summary, checked.folder),
     )

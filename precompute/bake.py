@@ -34,6 +34,18 @@ Preset TOML tables owned here (defaults merged when absent)::
     [bake]
     illuminant = "D65"         # colour-science illuminant name, see precompute/color.py
     observer = "CIE 1931 2 Degree Standard Observer"
+
+Read here too, written by ``python -m precompute fit`` (:data:`precompute.fit.parameters.FIT_TABLE`)::
+
+    [fit]
+    specular_weight = 1.0      # the yarn shader's SpecularWeight (Cook–Torrance weight)
+    specular_slope = 0.8       # its Slope: the Beckmann rms slope m (the paper's §6 value)
+
+The bake does not simulate the specular term (the shader computes it); it records it — the
+``[fit]`` values, or :data:`precompute.cook_torrance.DEFAULT_WEIGHT` and ``DEFAULT_SLOPE`` stated as
+defaults — in the tables' summary and headers as ``specular`` (docs/table-spec.md), and the
+materials set the shader from it.  It is part of the tables' key, not of the spectral one: a fitted
+preset reuses the simulation of its medium.
 """
 
 from __future__ import annotations
@@ -52,6 +64,7 @@ import numba
 import numpy as np
 
 from . import __version__, ballistic, bounds
+from .bounds import Bound
 from .cache import canonical_json, cache_key, default_cache_dir, lookup, store
 from .closure_fit import LOBES, LobeShape, fit_closure_weights
 from .color import (
@@ -66,6 +79,7 @@ from .color import (
     white_balance_factors,
 )
 from .errors import ParameterError
+from .fit.parameters import FIT_TABLE, specular_from_config
 from .medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from .optics import medium_optics, planned_phase_grid
 from .outputs import check_writable_folder
@@ -78,10 +92,13 @@ from .table_layout import (
 )
 from .table_folder import (
     FILE_HASHES_KEY,
+    SPECULAR_FROM_PRESET,
+    SPECULAR_KEY,
     SUMMARY_FILE,
     YARN_FOLDER_FILES,
     YARN_TABLE_FILES,
     check_yarn_table_folder,
+    default_specular,
     file_hashes,
     replace_folder,
 )
@@ -99,6 +116,12 @@ TRANSPORT_DEFAULTS = {
     "seed": 0,
 }
 BAKE_DEFAULTS = {"illuminant": DEFAULT_ILLUMINANT, "observer": DEFAULT_OBSERVER}
+#: The ``[fit]`` keys and their defaults (the shader's: precompute.cook_torrance), as the fit writes them.
+FIT_DEFAULTS = specular_from_config({})
+#: What the bake accepts of them (the shader's Cook–Torrance term is defined for any weight ≥ 0 and slope > 0).
+SPECULAR_BOUNDS = {"specular_weight": Bound(f"{FIT_TABLE}.specular_weight", 0.0, float("inf"), high_open=True),
+                   "specular_slope": Bound(f"{FIT_TABLE}.specular_slope", 0.0, float("inf"), low_open=True,
+                                           high_open=True)}
 #: Version of the spectral stage's file (spectral.npz); bump when its content changes meaning.
 SPECTRAL_FORMAT = "clothlight-spectral/2"
 #: Incidence samples per side of the sphere square that the closure fit uses in all (cells ×
@@ -135,11 +158,13 @@ UNITS = {
 
 @dataclasses.dataclass(frozen=True)
 class BakeConfiguration:
-    """Everything a bake is made from: the medium, the ``[transport]`` and the ``[bake]`` settings."""
+    """Everything a bake is made from: the medium, the ``[transport]`` and the ``[bake]`` settings,
+    and the specular term the tables record (:func:`specular_settings`)."""
 
     medium: MediumParameters
     transport: dict
     colour: dict
+    specular: dict = dataclasses.field(default_factory=default_specular)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -239,6 +264,21 @@ def _settings(config: dict, table: str, defaults: dict) -> dict:
     return {**defaults, **given}
 
 
+def specular_settings(config: Mapping) -> dict:
+    """The specular record of a preset's content (``specular`` of the summary, docs/table-spec.md):
+    its ``[fit]`` table's ``specular_weight`` and ``specular_slope``, checked, a key it leaves out at
+    the shader's default; :func:`precompute.table_folder.default_specular` when it has no ``[fit]``."""
+    given = _settings(dict(config), FIT_TABLE, FIT_DEFAULTS)
+    default = default_specular()
+    table = config.get(FIT_TABLE) or {}
+    if not table:
+        return default
+    values = {key: SPECULAR_BOUNDS[key].check(value) for key, value in given.items()}
+    defaulted = [key for key in FIT_DEFAULTS if key not in table]
+    source = SPECULAR_FROM_PRESET + (f"; {', '.join(defaulted)}: {default['source']}" if defaulted else "")
+    return {"weight": values["specular_weight"], "slope": values["specular_slope"], "source": source}
+
+
 def _integer(name: str, value, low: int, high: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low or (high and value > high):
         raise ParameterError(name, value, f"an integer in [{low}, {high}]" if high else f"an integer ≥ {low}")
@@ -321,10 +361,11 @@ def bake_configuration(
     """The validated inputs of a bake (see :func:`bake`)."""
     if isinstance(preset_or_params, MediumParameters):
         config = apply_overrides({}, overrides)
-        foreign = sorted(set(config) - {"transport", "bake"})
+        foreign = sorted(set(config) - {"transport", "bake", FIT_TABLE})
         if foreign:
             raise ParameterError(
-                f"--set {foreign[0]}", config[foreign[0]], "transport.* or bake.* keys when baking MediumParameters"
+                f"--set {foreign[0]}", config[foreign[0]],
+                f"transport.*, bake.* or {FIT_TABLE}.* keys when baking MediumParameters",
             )
         medium = preset_or_params
     else:
@@ -344,7 +385,7 @@ def bake_configuration(
     # Checks the illuminant, the observer and that the wavelengths lie where colour is defined,
     # before any simulation.
     spectral_weights(medium.wavelengths.values, colour["illuminant"], colour["observer"])
-    return BakeConfiguration(medium, settings, colour)
+    return BakeConfiguration(medium, settings, colour, specular_settings(config))
 
 
 # ---- the two stages -----------------------------------------------------------------------------
@@ -371,6 +412,8 @@ def table_inputs(spectral_key: str, configuration: BakeConfiguration) -> dict:
         "code_digest": stage_digest(PROJECT_ROOT, **TABLE_SOURCES),
         "spectral_key": spectral_key,
         "colour": configuration.colour,
+        # the shader's specular term, recorded in the tables (not simulated: no part of the spectral key)
+        SPECULAR_KEY: configuration.specular,
     }
 
 
@@ -505,6 +548,7 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             },
             "units": UNITS,
             "host_index": spectral["host_index"],
+            SPECULAR_KEY: configuration.specular,
             "wavelengths_nm": wavelengths.tolist(),
         }
         layout = {"incidence_resolution": n_i, "exit_resolution": n_o}
@@ -678,5 +722,6 @@ __all__ = [
     "export_bake",
     "load_spectral",
     "parse_override",
+    "specular_settings",
     "transport_settings",
 ]

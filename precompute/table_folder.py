@@ -12,7 +12,7 @@ refused, with a :class:`~precompute.tables.TableError` naming the file and the r
   :func:`~precompute.tables.read_table`: OpenEXR, a ClothLight table of this schema and of the kind its
   name says, the shape its own layout gives, its pixels those its content hash says, finite and ≥ 0;
 * each table's layout is the summary's resolutions, and what its header says that a reader takes from
-  the summary (the host index, the lobe shape) is what the summary says;
+  the summary (the host index, the lobe shape, the specular term) is what the summary says;
 * each table is of the same bake: its cache key is the summary's;
 * each file's bytes are those the summary lists under ``file_sha256`` (bakes write the list; a file
   present but not listed is refused), so a file edited, damaged or copied from another bake of the
@@ -63,6 +63,12 @@ YARN_TABLE_FILES = {
 YARN_REQUIRED_KINDS = ("brdf", "closure_lobes", "unscattered")
 #: Every file of a yarn bake folder (``bake --out``).
 YARN_FOLDER_FILES = (*YARN_TABLE_FILES.values(), SPECTRAL_FILE, SUMMARY_FILE)
+#: The key of a yarn bake's summary (and every table header) recording the yarn shader's specular term
+#: (§5.2, ``osl/cloth_yarn.osl``): ``{"weight": SpecularWeight, "slope": Slope (Beckmann rms slope m),
+#: "source": where they come from}``; a folder baked before bakes recorded it has the defaults.
+SPECULAR_KEY = "specular"
+#: ``source`` of a specular term taken from a preset's ``[fit]`` table (``python -m precompute fit``).
+SPECULAR_FROM_PRESET = "preset [fit]"
 #: Staging folders of :func:`replace_folder` older than this belong to processes that died; a later one
 #: removes them.
 STALE_STAGING_SECONDS = 24 * 3600
@@ -156,6 +162,35 @@ def summary_numbers(summary: dict, key: str, folder: str | pathlib.Path) -> dict
     return {name: float(v) for name, v in value.items()}
 
 
+def default_specular() -> dict:
+    """The specular record of the shader's defaults, the paper's (§6): weight and slope of
+    :mod:`precompute.cook_torrance`, their ``source`` saying so."""
+    from .cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT  # (SciPy) only where a default is needed
+
+    return {"weight": float(DEFAULT_WEIGHT), "slope": float(DEFAULT_SLOPE),
+            "source": f"default (paper §6: m = {DEFAULT_SLOPE:g})"}
+
+
+def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
+    """The specular record of a yarn bake's summary (:data:`SPECULAR_KEY`): ``weight`` (a finite number
+    ≥ 0), ``slope`` (finite, > 0) and ``source``; :func:`default_specular` where the summary has none
+    (a folder baked before bakes recorded it).  :class:`TableError` naming the summary otherwise."""
+    value = summary.get(SPECULAR_KEY)
+    if value is None:
+        return default_specular()
+
+    def number(key: str, positive: bool) -> bool:
+        v = value.get(key)
+        return (not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
+                and (v > 0 if positive else v >= 0))
+
+    if not (isinstance(value, dict) and number("weight", False) and number("slope", True)
+            and isinstance(value.get("source"), str)):
+        raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SPECULAR_KEY} {value!r} is not an object of "
+                         "weight (≥ 0), slope (> 0) and source")
+    return {"weight": float(value["weight"]), "slope": float(value["slope"]), "source": value["source"]}
+
+
 def check_files(
     folder: str | pathlib.Path,
     summary: dict,
@@ -234,7 +269,8 @@ def check_yarn_table_folder(folder: str | pathlib.Path) -> CheckedFolder:
     summary = load_summary(folder, SCHEMA, "bake them again")
     grid = {"incidence_resolution": summary_integer(summary, "incidence_resolution", folder),
             "exit_resolution": summary_integer(summary, "exit_resolution", folder)}
-    agree = {"host_index": summary_number(summary, "host_index", folder)}
+    summary_specular(summary, folder)  # checked; absent in folders baked before bakes recorded it
+    agree = {"host_index": summary_number(summary, "host_index", folder), SPECULAR_KEY: summary.get(SPECULAR_KEY)}
     lobes = {**grid, "lobe_count": summary_integer(summary, "lobe_count", folder)}
     lobe_shape = summary_numbers(summary, "lobe_shape", folder)
     attenuation = {"attenuation_samples": summary_integer(summary, "unscattered_samples", folder)}

@@ -49,11 +49,13 @@ def table_metadata(kind: str, layout: dict, cache_key: str, **extra) -> dict:
 
 def write_yarn_table_folder(folder, brdf, lobes, unscattered, *, incidence_resolution: int, exit_resolution: int,
                             cache_key: str = "c0" * 32, host_index: float = 1.557, listed: bool = True,
-                            optional: bool = True) -> pathlib.Path:
+                            optional: bool = True, specular: dict | None = None) -> pathlib.Path:
     """A yarn bake folder as precompute/bake.py writes one, from given images (RGB; ``brdf`` (N_i·N_o)²,
     ``lobes`` N_o × K·N_o, ``unscattered`` 1 × M): tables of this schema and of one cache key, with
     ``optional`` also brdf_stderr.exr, albedo.exr and spectral.npz, and summary.json with what readers
-    use and, when ``listed``, every file's SHA-256 (folders baked before bakes listed them have none)."""
+    use and, when ``listed``, every file's SHA-256 (folders baked before bakes listed them have none).
+    ``specular``: the bake's specular record (``{"weight", "slope", "source"}``) in the headers and the
+    summary; None, none (a folder baked before bakes recorded it)."""
     from precompute.closure_fit import LobeShape
     from precompute.table_folder import FILE_HASHES_KEY, SPECTRAL_FILE, SUMMARY_FILE, YARN_TABLE_FILES, file_hashes
     from precompute.tables import SCHEMA, write_table
@@ -68,8 +70,9 @@ def write_yarn_table_folder(folder, brdf, lobes, unscattered, *, incidence_resol
               "unscattered": (unscattered, {"attenuation_samples": unscattered.shape[1]})}
     if optional:
         images.update(brdf_stderr=(0.1 * brdf, grid), albedo=(brdf[::n_o, ::n_o], grid))
+    recorded = {} if specular is None else {"specular": specular}
     for kind, (image, layout) in images.items():
-        extra = {"lobe_shape": lobe_shape} if kind == "closure_lobes" else {}
+        extra = {**recorded, "lobe_shape": lobe_shape} if kind == "closure_lobes" else recorded
         write_table(folder / YARN_TABLE_FILES[kind], image,
                     table_metadata(kind, layout, cache_key, host_index=host_index, **extra))
     spectral_key = "5" + cache_key[1:]
@@ -77,7 +80,7 @@ def write_yarn_table_folder(folder, brdf, lobes, unscattered, *, incidence_resol
         np.savez(folder / SPECTRAL_FILE, metadata=np.array(json.dumps({"key": spectral_key})))
     summary = {"schema": SCHEMA, "cache_key": cache_key, "spectral_key": spectral_key, "incidence_resolution": n_i,
                "exit_resolution": n_o, "lobe_count": lobe_count, "lobe_shape": lobe_shape, "host_index": host_index,
-               "unscattered_samples": unscattered.shape[1]}
+               "unscattered_samples": unscattered.shape[1], **recorded}
     if listed:
         summary[FILE_HASHES_KEY] = file_hashes(folder, [*YARN_TABLE_FILES.values(), SPECTRAL_FILE])
     (folder / SUMMARY_FILE).write_text(json.dumps(summary, indent=1))

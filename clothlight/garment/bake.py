@@ -1,7 +1,7 @@
 """Bake a cloth BSDF (measure → tables), or find it in the cache.
 
 Two cache entries, as for a yarn (``precompute.bake``: spectral → tables): the measurement
-(``measurement.npz``: ρ per side and coverage), keyed by the yarn's ρ and host index, the
+(``measurement.npz``: ρ per side and coverage), keyed by the yarn's ρ, host index and specular term, the
 gonioreflectometer's settings (weave included) and the code that measures (the yarn shader
 included: the measurement renders it); and the tables written from it, keyed by that key and
 the code that fits and writes them (and renders the weave detail texture, :mod:`.detail`).
@@ -45,9 +45,12 @@ TABLE_SOURCES = {"entries": ("clothlight.garment.bake",)}
 def measurement_inputs(yarn_tables, settings: GoniometerSettings) -> dict:
     """Everything a cloth measurement depends on (its cache key is their hash): of the yarn bake
     only what the sun-mode yarn material reads — ρ (the pixels' hash, not the bake's cache key,
-    which also changes with the closure fit) and the host index of the specular term."""
+    which also changes with the closure fit), the host index and the weight and slope of the
+    specular term (a fitted preset's, ``YarnTableFiles.specular``; None: the shader's defaults)."""
     rho = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").pixels
+    specular = yarn_tables.specular
     return {"yarn_rho_sha256": precompute_tables.content_hash(rho), "host_index": yarn_tables.host_index,
+            "specular": None if specular is None else {key: float(specular[key]) for key in ("weight", "slope")},
             "goniometer": settings.to_dict(), "code_digest": sources.stage_digest(_ROOT, **MEASUREMENT_SOURCES)}
 
 

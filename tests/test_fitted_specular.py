@@ -1,0 +1,151 @@
+"""A fitted preset's specular term (its ``[fit]`` table) reaches the tables: recorded in the summary and
+every header, part of the tables' cache key but not of the spectral one, read back by the folder check
+and the yarn material's table files (the paper's defaults for folders baked before)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from precompute import bake as bake_module
+from precompute import cache
+from precompute.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT
+from precompute.errors import ParameterError
+from precompute.fit.parameters import FIT_TABLE
+from precompute.medium import DEFAULT_PRESET, load_preset_config
+from precompute.table_folder import (
+    SPECULAR_FROM_PRESET,
+    SPECULAR_KEY,
+    SUMMARY_FILE,
+    check_yarn_table_folder,
+    default_specular,
+    summary_specular,
+)
+from precompute.tables import TableError, read_table
+from tests.helpers import write_yarn_table_folder
+
+#: A reduced grid, as tests/test_cache.py bakes.
+SMALL = ["transport.angular_resolution=4", "transport.incidence_resolution=5",
+         "transport.n_around=8", "transport.n_along=4"]
+FITTED = {"specular_weight": 0.55, "specular_slope": 0.35}
+N_I, N_O, LOBES, SAMPLES = 5, 4, 5, 9
+
+
+def keys(configuration) -> tuple[str, str]:
+    spectral = cache.cache_key(bake_module.spectral_inputs(configuration))
+    return spectral, cache.cache_key(bake_module.table_inputs(spectral, configuration))
+
+
+def test_the_default_record_is_the_papers_from_the_cook_torrance_twin():
+    assert default_specular() == {"weight": DEFAULT_WEIGHT, "slope": DEFAULT_SLOPE,
+                                  "source": f"default (paper §6: m = {DEFAULT_SLOPE:g})"}
+    assert bake_module.FIT_DEFAULTS == {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE}
+
+
+def test_a_fit_table_is_recorded_as_such_and_checked():
+    assert bake_module.specular_settings({}) == default_specular()
+    assert bake_module.specular_settings({FIT_TABLE: {}}) == default_specular()
+    assert bake_module.specular_settings({FIT_TABLE: FITTED}) == {"weight": 0.55, "slope": 0.35,
+                                                                  "source": SPECULAR_FROM_PRESET}
+    partial = bake_module.specular_settings({FIT_TABLE: {"specular_weight": 0.2}})
+    assert (partial["weight"], partial["slope"]) == (0.2, DEFAULT_SLOPE)
+    assert partial["source"].startswith(SPECULAR_FROM_PRESET) and "specular_slope: default" in partial["source"]
+    for table, name in (({"specular_slop": 0.3}, "fit.specular_slop"), ({"specular_slope": 0.0}, "fit.specular_slope"),
+                        ({"specular_weight": -0.1}, "fit.specular_weight"),
+                        ({"specular_weight": True}, "fit.specular_weight"),
+                        ({"specular_slope": float("nan")}, "fit.specular_slope"),
+                        ({"specular_slope": "rough"}, "fit.specular_slope")):
+        with pytest.raises(ParameterError, match=name.replace(".", r"\.")):
+            bake_module.specular_settings({FIT_TABLE: table})
+    with pytest.raises(ParameterError, match="fit"):
+        bake_module.specular_settings({FIT_TABLE: 0.5})
+
+
+def test_the_specular_term_keys_the_tables_not_the_simulation():
+    config, _ = load_preset_config(DEFAULT_PRESET)
+    plain = bake_module.bake_configuration(config, SMALL, paths_per_cell=100)
+    fitted = bake_module.bake_configuration({**config, FIT_TABLE: FITTED}, SMALL, paths_per_cell=100)
+    overridden = bake_module.bake_configuration(DEFAULT_PRESET, [*SMALL, "fit.specular_weight=0.55",
+                                                               "fit.specular_slope=0.35"], paths_per_cell=100)
+    other = bake_module.bake_configuration({**config, FIT_TABLE: {**FITTED, "specular_slope": 0.5}}, SMALL,
+                                           paths_per_cell=100)
+    assert plain.specular == default_specular()
+    assert fitted.specular == overridden.specular == {"weight": 0.55, "slope": 0.35, "source": SPECULAR_FROM_PRESET}
+    assert bake_module.spectral_inputs(fitted) == bake_module.spectral_inputs(plain)
+    (plain_spectral, plain_tables), (fitted_spectral, fitted_tables) = keys(plain), keys(fitted)
+    assert fitted_spectral == plain_spectral == keys(other)[0]
+    assert len({plain_tables, fitted_tables, keys(other)[1]}) == 3
+    assert keys(overridden) == keys(fitted)
+    # MediumParameters take [fit] overrides as they take [transport] and [bake] ones.
+    assert bake_module.bake_configuration(plain.medium, [*SMALL, "fit.specular_slope=0.35"]).specular["slope"] == 0.35
+
+
+@pytest.mark.slow  # a (tiny) Monte-Carlo transport, as tests/test_cache.py's bakes
+def test_a_bake_records_the_fit_in_its_summary_and_headers_on_the_same_simulation(tmp_path, monkeypatch):
+    runs = []
+    real = bake_module.simulate_yarn
+    monkeypatch.setattr(bake_module, "simulate_yarn", lambda *a, **k: runs.append(1) or real(*a, **k))
+    fitted = bake_module.bake(DEFAULT_PRESET, [*SMALL, *(f"fit.{k}={v}" for k, v in FITTED.items())],
+                              paths_per_cell=100, cache_dir=tmp_path)
+    plain = bake_module.bake(DEFAULT_PRESET, SMALL, paths_per_cell=100, cache_dir=tmp_path)
+    assert len(runs) == 1 and fitted.simulated and not plain.simulated and not plain.cache_hit
+    assert fitted.folder != plain.folder and fitted.summary["spectral_key"] == plain.summary["spectral_key"]
+    assert fitted.summary[SPECULAR_KEY] == {"weight": 0.55, "slope": 0.35, "source": SPECULAR_FROM_PRESET}
+    assert plain.summary[SPECULAR_KEY] == default_specular()
+    for result in (fitted, plain):
+        for kind in bake_module.TABLE_FILES:
+            assert read_table(result.table(kind)).metadata[SPECULAR_KEY] == result.summary[SPECULAR_KEY]
+        checked = check_yarn_table_folder(result.folder)
+        assert summary_specular(checked.summary, result.folder) == result.summary[SPECULAR_KEY]
+    # The same tables again: a cache hit, fit or not; the colour tables of both are the same pixels.
+    assert bake_module.bake(DEFAULT_PRESET, [*SMALL, "fit.specular_weight=0.55", "fit.specular_slope=0.35"],
+                            paths_per_cell=100, cache_dir=tmp_path).cache_hit
+    np.testing.assert_array_equal(read_table(fitted.brdf_table).pixels, read_table(plain.brdf_table).pixels)
+
+
+def folder(path, **options):
+    rng = np.random.default_rng(3)
+    brdf = 10.0 ** rng.uniform(-4.0, 0.0, (N_I * N_O, N_I * N_O, 3))
+    return write_yarn_table_folder(path, brdf, rng.uniform(0.0, 1.0, (N_O, LOBES * N_O, 3)),
+                                   rng.uniform(0.0, 1.0, (1, SAMPLES, 3)), incidence_resolution=N_I,
+                                   exit_resolution=N_O, **options)
+
+
+RECORDED = {"weight": 0.55, "slope": 0.35, "source": SPECULAR_FROM_PRESET}
+
+
+def test_the_table_files_carry_the_recorded_specular_or_the_defaults(tmp_path):
+    from clothlight.yarn_tables import yarn_tables_from_bake
+
+    recorded = folder(tmp_path / "fitted", specular=RECORDED)
+    older = folder(tmp_path / "older")
+    assert yarn_tables_from_bake(recorded).specular == RECORDED
+    assert yarn_tables_from_bake(older).specular == default_specular()  # baked before bakes recorded it
+
+
+def rewrite_summary(path, **changes):
+    summary = json.loads((path / SUMMARY_FILE).read_text())
+    summary.update(changes)
+    (path / SUMMARY_FILE).write_text(json.dumps(summary))
+
+
+@pytest.mark.parametrize("specular, reason", [
+    ({**RECORDED, "slope": 0.5}, "header specular"),  # the tables were baked with another one
+    ({**RECORDED, "slope": 0.0}, "specular .* is not an object"),
+    ({"weight": 0.55, "slope": 0.35}, "specular .* is not an object"),
+    ("fitted", "specular .* is not an object"),
+])
+def test_a_summary_whose_specular_is_not_the_tables_or_malformed_is_refused(tmp_path, specular, reason):
+    path = folder(tmp_path / "fitted", specular=RECORDED)
+    rewrite_summary(path, specular=specular)
+    with pytest.raises(TableError, match=reason):
+        check_yarn_table_folder(path)
+
+
+def test_a_summary_that_drops_the_record_of_tables_that_have_one_is_refused(tmp_path):
+    path = folder(tmp_path / "fitted", specular=RECORDED)
+    summary = json.loads((path / SUMMARY_FILE).read_text())
+    del summary[SPECULAR_KEY]
+    (path / SUMMARY_FILE).write_text(json.dumps(summary))
+    with pytest.raises(TableError, match="header specular"):
+        check_yarn_table_folder(path)

@@ -1,0 +1,32 @@
+"""The yarn material sets the shader's specular term from the bake's record (tests/test_fitted_specular.py
+for the bake side), and the cloth bake's measurement is keyed by it."""
+
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from clothlight.garment.bake import measurement_inputs  # noqa: E402
+from clothlight.garment.measure import GoniometerSettings  # noqa: E402
+from clothlight.materials import SPECULAR_SOCKETS, build_yarn_material, shader_node  # noqa: E402
+from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
+from precompute.table_folder import default_specular  # noqa: E402
+from tests.helpers import empty_render_scene  # noqa: E402
+from tests.test_fitted_specular import RECORDED, folder  # noqa: E402
+
+
+def specular_inputs(material) -> dict:
+    node = shader_node(material)
+    return {key: node.inputs[socket].default_value for socket, key in SPECULAR_SOCKETS.items()}
+
+
+def test_the_yarn_material_takes_the_recorded_specular_or_the_defaults(tmp_path):
+    empty_render_scene(resolution=8, samples=1)  # Cycles with OSL: the script node compiles
+    fitted = yarn_tables_from_bake(folder(tmp_path / "fitted", specular=RECORDED))
+    older = yarn_tables_from_bake(folder(tmp_path / "older"))
+    for tables, expected in ((fitted, RECORDED), (older, default_specular())):
+        inputs = specular_inputs(build_yarn_material(tables, name="test fitted specular"))
+        assert inputs == {key: pytest.approx(expected[key], rel=1e-6) for key in ("weight", "slope")}
+    # The cloth bake measures that material: its measurement is another with another specular term.
+    settings = GoniometerSettings()
+    assert measurement_inputs(fitted, settings)["specular"] == {"weight": 0.55, "slope": 0.35}
+    assert measurement_inputs(fitted, settings) != measurement_inputs(older, settings)

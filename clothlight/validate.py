@@ -57,7 +57,9 @@ def build_parser():
                                                           "sample) instead of building the default woven sample")
     parser.add_argument("--material", nargs="+", choices=MATERIALS,
                         help="materials to sweep (default: yarn and baseline with --tables, else baseline); "
-                             "yarn_general is the general-lighting mode, compared with yarn when both run")
+                             "yarn_general is the general-lighting mode, compared with yarn when both run; "
+                             "yarn_scene is that mode path traced (light between yarns), compared with "
+                             "yarn_general when both run")
     parser.add_argument("--tables", help="bake folder of the yarn material (python -m precompute bake --out DIR)")
     parser.add_argument("--cloth-tables",
                         help="cloth bake folder of the garment material (python -m clothlight.garment bake --out DIR)")
@@ -195,6 +197,12 @@ def _main(argv) -> int:
     if comparison:
         print(f"general-lighting mode vs sun mode: RMS relative difference {comparison['RGB']['relative_rms']:.1%} "
               f"(red {comparison['R']['relative_rms']:.1%}) over {comparison['views_compared']} views")
+    light = results.get("interreflection")
+    if light and light["R"]:
+        print("light between yarns (yarn_scene / yarn_general): "
+              + ", ".join(f"{c} mean {light[c]['mean']:.3g}, max {light[c]['max']:.3g} at θi = "
+                          f"{light[c]['max_at']['theta_i_deg']:g}°, θv = {light[c]['max_at']['theta_v_deg']:g}°"
+                          for c in ("R", "G", "B") if light[c]))
     for kind, mode in (("garment", "sun mode"), ("garment_general", "general lighting")):
         comparison = results.get(f"{kind}_vs_yarn")
         if comparison:

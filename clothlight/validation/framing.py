@@ -44,11 +44,14 @@ MAX_INCIDENCE_DEG = 85.0
 
 #: Materials a sweep can measure, in the order they are swept and plotted (:mod:`.run`; here, without
 #: Blender, so that the command line checks its arguments before importing bpy).
-MATERIALS = ("yarn", "yarn_general", "baseline", "garment", "garment_general")
+MATERIALS = ("yarn", "yarn_general", "yarn_scene", "baseline", "garment", "garment_general")
 #: What a sweep measures when no materials are named and tables are given.
 DEFAULT_MATERIALS = ("yarn", "baseline")
 #: Materials that read the yarn tables.
-YARN_MATERIALS = ("yarn", "yarn_general")
+YARN_MATERIALS = ("yarn", "yarn_general", "yarn_scene")
+#: Materials rendered with full path tracing (light bounces between yarns); every other one is
+#: rendered with direct light only (:meth:`clothlight.validation.rig.Rig.use_path_tracing`).
+PATH_TRACED_MATERIALS = ("yarn_scene",)
 #: Materials that read a cloth bake, swept on a flat patch in place of the sample.
 GARMENT_MATERIALS = ("garment", "garment_general")
 

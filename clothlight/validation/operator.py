@@ -24,7 +24,7 @@ from ..addon import import_precompute
 from ..mesh_attributes import CLOTH_NORMAL
 from ..render_bounds import VALIDATION_RESOLUTION, VALIDATION_SAMPLES
 from ..weave import WeaveParameterError
-from .framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG
+from .framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, MATERIALS
 from .measured_data import MeasurementFormatError
 from .rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES, RigSettings
 
@@ -73,6 +73,11 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
     materials: bpy.props.EnumProperty(
         name="Materials", options={"ENUM_FLAG"}, default={"YARN", "BASELINE"},
         items=[("YARN", "Yarn", "ClothLight's yarn material from baked tables"),
+               ("YARN_GENERAL", "Yarn, General Lighting",
+                "The yarn material's general-lighting closure mixture under the rig's sun, direct light only"),
+               ("YARN_SCENE", "Yarn in a Scene",
+                "The general-lighting yarn material with full path tracing: light between yarns "
+                "(compared with Yarn, General Lighting when both run)"),
                ("BASELINE", "Baseline", "The paper's baseline: Lambert (0.6/π, 0, 0) + Cook–Torrance m = 0.8")])
     tables_dir: bpy.props.StringProperty(
         name="Tables", subtype="DIR_PATH", default="",
@@ -103,7 +108,7 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
         from .run import ValidationRun
 
         sample = sample_in_context(context)
-        materials = tuple(kind for kind in ("yarn", "baseline") if kind.upper() in self.materials)
+        materials = tuple(kind for kind in MATERIALS if kind.upper() in self.materials)
         tables = bpy.path.abspath(self.tables_dir) if self.tables_dir else None
         settings = RigSettings(incidences_deg=parse_angles(self.incidences, "incidences"),
                                views_deg=parse_angles(self.views, "views"),

@@ -149,6 +149,34 @@ def _ratio_cell(value) -> str:
     return "–" if value is None or not math.isfinite(value) else f"{value:.3g}"
 
 
+def interreflection_section(light: dict | None) -> list[str]:
+    """The report's lines on light between yarns (``results["interreflection"]``), or none."""
+    if not light:
+        return []
+    lines = ["## Light between yarns", "",
+             "The general-lighting yarn material path traced in a scene (`yarn_scene`: the rig's sun lamp, light "
+             "bouncing between yarns) over the same material under direct light only (`yarn_general`), per view "
+             "and channel: what inter-reflection adds (1 = nothing; the paper's model has none, §7).", "",
+             "| channel | mean | min | max | max at θi, θv |", "| --- | --- | --- | --- | --- |"]
+    for channel in ("R", "G", "B", "RGB"):
+        c = light.get(channel)
+        if c:
+            at = c["max_at"]
+            lines.append(f"| {channel if channel != 'RGB' else 'R + G + B'} | {c['mean']:.4g} | {c['min']:.4g} | "
+                         f"{c['max']:.4g} | {at['theta_i_deg']:g}°, {at['theta_v_deg']:g}° |")
+    swatches = light.get("swatches") or {}
+    if swatches:
+        lines += ["", "Swatches (normal view), mean radiance ratio (R, G, B) and what the scene adds, L/E (1/sr): "
+                  + "; ".join(f"lit from the {side} " + ", ".join(_ratio_cell(x) for x in sw["ratio_rgb"])
+                              + " (+" + ", ".join(f"{x:.3g}" for x in sw["added_rgb_per_irradiance"]) + ")"
+                              for side, sw in swatches.items()) + "."]
+    lines += ["", "| θi | θv | R | G | B |", "| --- | --- | --- | --- | --- |"]
+    for v in light["views"]:
+        lines.append(f"| {v['theta_i_deg']:g} | {v['theta_v_deg']:g} | "
+                     + " | ".join("–" if x is None else f"{x:.4g}" for x in v["ratio_rgb"]) + " |")
+    return lines + [""]
+
+
 def markdown_report(results: dict, plots: list[str], plot_note: str | None) -> str:
     """The compact report: settings, plots, colour checks, metrics and the per-view table."""
     s = results["settings"]
@@ -211,6 +239,8 @@ def markdown_report(results: dict, plots: list[str], plot_note: str | None) -> s
                             if e.get("paper_normalisation_factor"))
         lines += ["", "Paper normalisation coefficients (measured / model ΣRGB at θi = θv = 0): "
                   f"{factors or 'none'}.", ""]
+
+    lines += interreflection_section(results.get("interreflection"))
 
     kinds = list(results["materials"])
     lines += ["## Cloth BRDF per view (1/sr, R G B)", "",

@@ -13,7 +13,10 @@ Render settings (:func:`clothlight.measurement_render.configure_measurement_rend
 on the CPU with OSL, no denoising, no adaptive sampling, a fixed seed, "Standard" view transform,
 32-bit float EXR read back from disk.  The materials run in sun mode: they evaluate the BRDF for
 the sun exactly and emit the reflected radiance, shadowed by other yarns, so the rig needs no
-light bounces (the paper's model has no inter-reflection between yarns, §7).
+light bounces (the paper's model has no inter-reflection between yarns, §7).  The general-lighting
+materials are lit by the rig's sun lamp, direct light only by default, so that they see the same
+single sun as the sun mode; the one measured "in a scene" (``yarn_scene``) is rendered with full
+path tracing instead (:meth:`Rig.use_path_tracing`, :data:`SCENE_BOUNCES`), so yarns light each other.
 """
 
 from __future__ import annotations
@@ -62,6 +65,20 @@ DEFAULT_RESOLUTION = DEFAULT_VALIDATION_RESOLUTION
 DEFAULT_SAMPLES = DEFAULT_VALIDATION_SAMPLES
 #: Sun irradiance on a plane facing it, W/m² (any value calibrates out; tests use others).
 DEFAULT_SUN_IRRADIANCE = 1.0
+
+#: Cycles' bounce limits for a sweep "in a scene" (full path tracing, light between yarns).  Each
+#: bounce off the cloth keeps at most its albedo, well under 1 (the rig has no world and no other
+#: object), so the light left after 16 bounces is far below the render noise (on the shipped red
+#: cotton 4, 16 and 64 bounces agree to four digits: docs/validation.md); Blender's defaults
+#: (12, diffuse 4, glossy 4) could cut the chains between yarns of a more scattering yarn short.
+#: Transparent: a shadow ray passes each yarn it crosses through that yarn's
+#: back face (the shader's transparent far side), so 16 lets it cross more yarns than a ray through
+#: a single cloth layer meets.  No volumes in the rig.
+SCENE_BOUNCES = {"max_bounces": 16, "diffuse_bounces": 16, "glossy_bounces": 16, "transmission_bounces": 16,
+                 "transparent_max_bounces": 16, "volume_bounces": 0}
+#: The same limits for direct light only (every other material): no bounce at all.  The
+#: transparent limit stays as in the scene sweep so that shadow rays cross yarns alike in both.
+DIRECT_BOUNCES = {**{name: 0 for name in SCENE_BOUNCES}, "transparent_max_bounces": 16}
 
 RIG_SCENE = "ClothLight Gonioreflectometer"
 RIG_SAMPLE = "ClothLight Gonioreflectometer Sample"
@@ -206,6 +223,12 @@ class Rig:
         if self.material is not None:
             self.use_material(self.material)
 
+    def use_path_tracing(self, on: bool) -> None:
+        """Full path tracing (:data:`SCENE_BOUNCES`: light bounces between yarns) or direct light
+        only (:data:`DIRECT_BOUNCES`, the default); a sweep sets it for every material it renders."""
+        for name, value in (SCENE_BOUNCES if on else DIRECT_BOUNCES).items():
+            setattr(self.scene.cycles, name, value)
+
     def set_incidence(self, theta_i_deg: float) -> None:
         """Sun at zenith θi on the −x side (θi = 180°: straight from behind), and the material told."""
         _aim(self.sun, toward_sun(theta_i_deg), self.patch_center, 0.0)
@@ -292,7 +315,12 @@ def build_rig(sample, settings: RigSettings = RigSettings()) -> Rig:
         configure_measurement_render(scene, resolution=(settings.resolution, settings.resolution),
                                      samples=settings.samples, seed=settings.seed)
         scene.world = None
-        scene.cycles.max_bounces = 0
+        # Unbiased indirect light when it bounces: no clamping, no glossy blur (Blender's defaults
+        # clamp indirect samples at 10 and blur glossy lobes after a diffuse bounce).
+        scene.cycles.sample_clamp_direct = 0.0
+        scene.cycles.sample_clamp_indirect = 0.0
+        scene.cycles.blur_glossy = 0.0
+        scene.cycles.caustics_reflective = scene.cycles.caustics_refractive = True
         # Only the camera and the sun move between renders: keep the BVH and shaders.
         scene.render.use_persistent_data = True
         scene.unit_settings.system = "METRIC"
@@ -318,6 +346,7 @@ def build_rig(sample, settings: RigSettings = RigSettings()) -> Rig:
         scene.collection.objects.link(camera)
         scene.camera = camera
         rig = Rig(scene, copy, sun, camera, settings, bounds, patch_mm, _owned=owned)
+        rig.use_path_tracing(False)
         camera_data.clip_start = 0.01
         camera_data.clip_end = 2.0 * rig._camera_distance
         return rig

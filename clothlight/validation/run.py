@@ -6,7 +6,8 @@ sequence of steps, one render each, so that a modal operator can interleave them
 :func:`run_validation` can run them in one go.
 
 For every material asked for (the yarn material reading baked tables, the paper's §6 baseline) the
-rig renders every (θi, θv) and measures the calibrated cloth BRDF; then, for the colour checks of
+rig renders every (θi, θv) and measures the calibrated cloth BRDF (``yarn_scene`` with full path
+tracing, every other material with direct light only); then, for the colour checks of
 §6.1, the sample at normal view lit from the front (θi = 0) and from behind (θi = 180°).  With a
 measurement the paper's normalisation and the metrics are added.  Outputs in ``out_dir``:
 ``results.json``, ``report.md``, ``sweeps.png`` (and ``sweeps_paper_normalised.png`` with a
@@ -27,7 +28,14 @@ from ..garment.material import build_garment_material, cloth_tables_from_bake
 from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
 from ..mesh_attributes import YARN_TANGENT
 from ..yarn_tables import yarn_tables_from_bake
-from .framing import DEFAULT_MATERIALS, GARMENT_MATERIALS, MATERIALS, YARN_MATERIALS, ParameterError
+from .framing import (
+    DEFAULT_MATERIALS,
+    GARMENT_MATERIALS,
+    MATERIALS,
+    PATH_TRACED_MATERIALS,
+    YARN_MATERIALS,
+    ParameterError,
+)
 from .measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
 from .measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
 from .report import swatch_exposure, write_report, write_swatch_png
@@ -36,6 +44,7 @@ from .rig import RigSettings, build_rig, calibration_plane
 MATERIAL_LABELS = {
     "yarn": "ClothLight yarn BRDF",
     "yarn_general": "ClothLight yarn BRDF, general-lighting closure mixture",
+    "yarn_scene": "ClothLight yarn BRDF in a scene: general-lighting material, full path tracing, light between yarns",
     "baseline": "baseline: Lambert (0.6/π, 0, 0) + Cook–Torrance m = 0.8",
     "garment": "ClothLight cloth BSDF on a flat patch (garment material, sun mode)",
     "garment_general": "ClothLight cloth BSDF on a flat patch (garment material, general-lighting mixture)",
@@ -155,6 +164,7 @@ class ValidationRun:
                 if kind in GARMENT_MATERIALS and rig.sample.name != GARMENT_PATCH:
                     rig.replace_sample(garment_patch(rig))
                 rig.use_material(material)
+                rig.use_path_tracing(kind in PATH_TRACED_MATERIALS)
                 views = []
                 for theta_i in self.settings.incidences_deg:
                     rig.set_incidence(theta_i)
@@ -197,8 +207,10 @@ class ValidationRun:
         if kind in GARMENT_MATERIALS:
             return build_garment_material(self.cloth_tables, name=f"ClothLight Gonioreflectometer {kind}",
                                           mode=SUN_MODE if kind == "garment" else GENERAL_MODE)
-        if kind == "yarn_general":
-            return build_yarn_material(self.tables, name="ClothLight Gonioreflectometer Yarn General",
+        if kind in ("yarn_general", "yarn_scene"):
+            # the same material; yarn_scene differs only in the rig's light paths (use_path_tracing)
+            title = "General" if kind == "yarn_general" else "Scene"
+            return build_yarn_material(self.tables, name=f"ClothLight Gonioreflectometer Yarn {title}",
                                        mode=GENERAL_MODE)
         return build_baseline_material(name="ClothLight Gonioreflectometer Baseline", mode=SUN_MODE)
 
@@ -246,6 +258,9 @@ class ValidationRun:
             results["materials"][kind] = entry
         if "yarn" in curves and "yarn_general" in curves:
             results["general_vs_sun"] = compare_sweeps(curves["yarn_general"], curves["yarn"])
+        if "yarn_general" in curves and "yarn_scene" in curves:
+            results["interreflection"] = interreflection(curves["yarn_scene"], curves["yarn_general"],
+                                                         swatches.get("yarn_scene"), swatches.get("yarn_general"))
         for kind in GARMENT_MATERIALS:
             if "yarn" in curves and kind in curves:
                 results[f"{kind}_vs_yarn"] = compare_sweeps(curves[kind], curves["yarn"])
@@ -323,12 +338,10 @@ def compare_sweeps(views, reference_views) -> dict:
     of model / reference − 1: every view counts alike, dark ones too), and the view of the worst
     red ratio.  This is the check of the yarn shader's general-lighting mode against its exact
     sun mode."""
+    shared, ratio = view_ratios(views, reference_views)
     reference = {(v.theta_i_deg, v.theta_v_deg): np.array(v.brdf_rgb) for v in reference_views}
-    shared = [v for v in views if (v.theta_i_deg, v.theta_v_deg) in reference]
-    model = np.array([v.brdf_rgb for v in shared])
-    exact = np.array([reference[(v.theta_i_deg, v.theta_v_deg)] for v in shared])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(exact > 0, model / exact, np.nan)
+    model = np.array([v.brdf_rgb for v in shared], dtype=float).reshape(-1, 3)
+    exact = np.array([reference[(v.theta_i_deg, v.theta_v_deg)] for v in shared], dtype=float).reshape(-1, 3)
     comparison = {"views_compared": len(shared)}
     for name, columns in (("R", [0]), ("G", [1]), ("B", [2]), ("RGB", [0, 1, 2])):
         deviation = ratio[:, columns] - 1.0
@@ -340,6 +353,61 @@ def compare_sweeps(views, reference_views) -> dict:
         comparison["worst_red"] = {"theta_i_deg": shared[worst].theta_i_deg,
                                    "theta_v_deg": shared[worst].theta_v_deg, "ratio": float(ratio[worst, 0])}
     return comparison
+
+
+def view_ratios(views, reference_views) -> tuple[list, np.ndarray]:
+    """The views two sweeps share and, per view and channel, one sweep's calibrated BRDF over the
+    other's (NaN where the reference is 0): (shared views, ratios of shape (views, 3))."""
+    reference = {(v.theta_i_deg, v.theta_v_deg): np.array(v.brdf_rgb) for v in reference_views}
+    shared = [v for v in views if (v.theta_i_deg, v.theta_v_deg) in reference]
+    model = np.array([v.brdf_rgb for v in shared], dtype=float).reshape(-1, 3)
+    exact = np.array([reference[(v.theta_i_deg, v.theta_v_deg)] for v in shared], dtype=float).reshape(-1, 3)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return shared, np.where(exact > 0, model / exact, np.nan)
+
+
+def interreflection(scene_views, direct_views, scene_swatches=None, direct_swatches=None) -> dict:
+    """What light between yarns adds: the general-lighting yarn material path traced in a scene
+    (``yarn_scene``) over the same material under direct light only (``yarn_general``).
+
+    ``views``: per shared view θi, θv, ``ratio_rgb`` (scene / direct per channel; None where the
+    direct value is 0) and ``added_brdf_rgb`` (scene − direct, 1/sr); per channel R, G, B and for
+    the sum R + G + B (``RGB``): the ``mean`` and ``min`` of the ratio over views and its ``max``
+    with the view where it is (``max_at``);
+    ``comparison``: :func:`compare_sweeps` of the two; ``swatches``: per side (front, back), when
+    both were rendered, the ratio of the swatches' mean radiance (``ratio_rgb``; None for a channel
+    whose direct light is below 10⁻⁶ of the swatch's brightest, e.g. green lit from behind) and what
+    the scene adds to it over the irradiance (``added_rgb_per_irradiance``, 1/sr)."""
+    shared, ratio = view_ratios(scene_views, direct_views)
+    reference = {(v.theta_i_deg, v.theta_v_deg): np.array(v.brdf_rgb, dtype=float) for v in direct_views}
+    direct = {key: float(rgb.sum()) for key, rgb in reference.items()}
+    with np.errstate(divide="ignore", invalid="ignore"):
+        total = np.array([sum(v.brdf_rgb) / direct[(v.theta_i_deg, v.theta_v_deg)]
+                          if direct[(v.theta_i_deg, v.theta_v_deg)] > 0 else np.nan for v in shared])
+    result = {"views_compared": len(shared),
+              "views": [{"theta_i_deg": v.theta_i_deg, "theta_v_deg": v.theta_v_deg,
+                         "ratio_rgb": [float(r) if np.isfinite(r) else None for r in row],
+                         "added_brdf_rgb": (np.array(v.brdf_rgb) - reference[(v.theta_i_deg, v.theta_v_deg)]).tolist()}
+                        for v, row in zip(shared, ratio)]}
+    for name, values in (("R", ratio[:, 0]), ("G", ratio[:, 1]), ("B", ratio[:, 2]), ("RGB", total)):
+        if not np.any(np.isfinite(values)):
+            result[name] = None
+            continue
+        worst = int(np.nanargmax(values))
+        result[name] = {"mean": float(np.nanmean(values)), "min": float(np.nanmin(values)),
+                        "max": float(values[worst]),
+                        "max_at": {"theta_i_deg": shared[worst].theta_i_deg, "theta_v_deg": shared[worst].theta_v_deg}}
+    result["comparison"] = compare_sweeps(scene_views, direct_views)
+    if scene_swatches and direct_swatches:
+        result["swatches"] = {}
+        for side in (side for side in scene_swatches if side in direct_swatches):
+            a = np.array(scene_swatches[side]["mean_rgb_per_irradiance"])
+            b = np.array(direct_swatches[side]["mean_rgb_per_irradiance"])
+            with np.errstate(divide="ignore", invalid="ignore"):  # None where the direct light is ~0
+                ratio = np.where(b > 1e-6 * b.max(initial=0.0), a / b, np.nan)
+            result["swatches"][side] = {"ratio_rgb": [float(x) if np.isfinite(x) else None for x in ratio],
+                                        "added_rgb_per_irradiance": (a - b).tolist()}
+    return result
 
 
 def run_validation(sample=None, out_dir="clothlight_validation", *,

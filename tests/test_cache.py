@@ -104,24 +104,24 @@ def transport_runs(monkeypatch):
 
 
 def test_a_second_bake_is_a_cache_hit_that_simulates_nothing(tmp_path, transport_runs):
-    first = bake("red_cotton", SMALL, paths_per_cell=100, cache_dir=tmp_path)
+    first = bake("paper_2008", SMALL, paths_per_cell=100, cache_dir=tmp_path)
     assert first.simulated and not first.cache_hit and len(transport_runs) == 1
     files = {p: p.stat().st_mtime_ns for p in first.folder.iterdir()}
-    second = bake("red_cotton", SMALL, paths_per_cell=100, cache_dir=tmp_path)
+    second = bake("paper_2008", SMALL, paths_per_cell=100, cache_dir=tmp_path)
     assert second.cache_hit and not second.simulated and len(transport_runs) == 1
     assert second.folder == first.folder and {p: p.stat().st_mtime_ns for p in first.folder.iterdir()} == files
     assert second.summary["table1_ratios_normal"] == first.summary["table1_ratios_normal"]
     # The thread count does not change the result, so it is not part of the key.
-    assert bake("red_cotton", SMALL, paths_per_cell=100, threads=1, cache_dir=tmp_path).cache_hit
+    assert bake("paper_2008", SMALL, paths_per_cell=100, threads=1, cache_dir=tmp_path).cache_hit
     # Any input that changes the result is: the seed, the medium.
-    bake("red_cotton", SMALL, paths_per_cell=100, seed=5, cache_dir=tmp_path)
-    bake("red_cotton", [*SMALL, "dye.weight_percent=1"], paths_per_cell=100, cache_dir=tmp_path)
+    bake("paper_2008", SMALL, paths_per_cell=100, seed=5, cache_dir=tmp_path)
+    bake("paper_2008", [*SMALL, "dye.weight_percent=1"], paths_per_cell=100, cache_dir=tmp_path)
     assert transport_runs == [0, 5, 0] and len(entries(tmp_path, "tables")) == 3
 
 
 def test_another_illuminant_recomputes_colour_without_simulating(tmp_path, transport_runs):
-    daylight = bake("red_cotton", SMALL, paths_per_cell=100, cache_dir=tmp_path)
-    tungsten = bake("red_cotton", [*SMALL, "bake.illuminant=A"], paths_per_cell=100, cache_dir=tmp_path)
+    daylight = bake("paper_2008", SMALL, paths_per_cell=100, cache_dir=tmp_path)
+    tungsten = bake("paper_2008", [*SMALL, "bake.illuminant=A"], paths_per_cell=100, cache_dir=tmp_path)
     assert len(transport_runs) == 1 and not tungsten.simulated and not tungsten.cache_hit
     assert tungsten.folder != daylight.folder
     assert tungsten.summary["spectral_key"] == daylight.summary["spectral_key"]
@@ -141,11 +141,11 @@ def test_a_bake_interrupted_while_writing_tables_leaves_no_table(tmp_path, monke
 
     monkeypatch.setattr(bake_module, "write_table", write_then_crash)
     with pytest.raises(KeyboardInterrupt):
-        bake("red_cotton", SMALL, paths_per_cell=100, cache_dir=tmp_path)
+        bake("paper_2008", SMALL, paths_per_cell=100, cache_dir=tmp_path)
     assert entries(tmp_path, "tables") == []  # neither an entry nor its temporary folder
     # The finished simulation stage is kept and valid: the next bake only writes the tables.
     monkeypatch.setattr(bake_module, "write_table", real_write)
-    result = bake("red_cotton", SMALL, paths_per_cell=100, cache_dir=tmp_path)
+    result = bake("paper_2008", SMALL, paths_per_cell=100, cache_dir=tmp_path)
     assert not result.simulated and len(transport_runs) == 1
     read_table(result.table("albedo"), kind="albedo")
 
@@ -165,7 +165,7 @@ def test_a_killed_bake_leaves_no_table(tmp_path):
     assert process.returncode == -signal.SIGKILL
     assert entries(tmp_path, "tables") == []
     assert all(name.endswith(".partial") for name in entries(tmp_path, "spectral"))
-    configuration = bake_module.bake_configuration("red_cotton", SMALL, paths_per_cell=400000)
+    configuration = bake_module.bake_configuration("paper_2008", SMALL, paths_per_cell=400000)
     key = cache.cache_key(bake_module.spectral_inputs(configuration))
     assert cache.lookup(tmp_path, "spectral", key) is None  # a later bake of these inputs starts afresh
 

@@ -35,7 +35,7 @@ from precompute.errors import InputError, ParameterError
 from precompute.tables import TableError
 from tests.helpers import REPO
 
-YARN_BAKE = REPO / "example_blends" / "tables" / "red_cotton"
+YARN_BAKE = REPO / "example_blends" / "tables" / "paper_2008"
 CLIS = {"precompute": precompute_cli.main, "validate": validate_cli.main, "garment": garment_cli.main,
         "report": report_cli.main}
 
@@ -234,7 +234,7 @@ def test_the_bake_worker_reports_bad_input_and_internal_errors_in_its_events(fil
         child.stdin.close()
         return subprocess.CompletedProcess(child.args, child.wait(timeout=600), stdout, stderr)
 
-    refused = worker(jobs.BakeRequest(preset="red_cotton", paths_per_cell=10**12, target_rel_stderr=None).to_json())
+    refused = worker(jobs.BakeRequest(preset="paper_2008", paths_per_cell=10**12, target_rel_stderr=None).to_json())
     events = [json.loads(line) for line in refused.stdout.splitlines()]
     assert refused.returncode == 2 and events[-1]["event"] == "error" and events[-1]["bad_input"]
     assert "transport.paths_per_cell" in events[-1]["message"] and "100000000" in events[-1]["message"]
@@ -470,9 +470,9 @@ def test_the_bake_api_refuses_out_of_range_transport_settings_by_name(bound, dat
     key = bound.name.split(".")[-1]
     with pytest.raises(ParameterError) as error:
         if key in ("paths_per_cell", "target_rel_stderr", "seed"):
-            bake_configuration("red_cotton", **{key: value})
+            bake_configuration("paper_2008", **{key: value})
         else:
-            bake_configuration("red_cotton", {bound.name: value})
+            bake_configuration("paper_2008", {bound.name: value})
     assert error.value.name == bound.name and bound.allowed() in error.value.allowed
 
 
@@ -481,13 +481,13 @@ def test_the_bake_refuses_grids_beyond_memory_with_the_estimate(monkeypatch):
 
     small = {"transport.angular_resolution": 4, "transport.n_around": 8, "transport.n_along": 2,
              "transport.incidence_resolution": 5}
-    settings_ = bake_configuration("red_cotton", small).transport
+    settings_ = bake_configuration("paper_2008", small).transport
     need = bounds.transport_memory_bytes(8, 2, 4, 5, 35)
     assert need == (4 * 16 * 8 * 4 * 16 * 35 + 4 * 16 * 8 * 16 * 35) + (8 * 25 * 16 * 8 + 4 * 16 * 8 * 16 * 35
                                                                          + 32 * 25 * 16 * 35)
     monkeypatch.setattr(bounds, "memory_limit_bytes", lambda: need - 1)
     with pytest.raises(ParameterError) as error:
-        bake_configuration("red_cotton", small)
+        bake_configuration("paper_2008", small)
     assert "transport.angular_resolution" in error.value.name and bounds.gib(need) in error.value.allowed
     assert settings_["angular_resolution"] == 4
 

@@ -82,7 +82,7 @@ def test_unknown_parameter_is_bad_input(inputs, tmp_path, fake_forward, capsys):
 @pytest.mark.parametrize("args, words", [
     (["--measured", "{tmp}/missing.csv"], ["--measured", "missing.csv"]),
     (["--config", "{tmp}/missing.toml"], ["preset", "missing.toml"]),
-    (["--preset", "red_cotton"], ["voids", "[[particles]]"]),  # no voids species in the shipped preset
+    (["--preset", "paper_2008"], ["voids", "[[particles]]"]),  # no voids species in the paper's preset
     (["--target-ratios", "B/R=-1"], ["--target-ratios"]),
     (["--budget-evaluations", "4"], ["--budget-evaluations"]),
     (["--out", "{tmp}/synthetic.csv"], ["--out", "is a file"]),

@@ -95,7 +95,7 @@ def test_unknown_parameter_names_the_allowed_ones():
 
 
 def test_a_preset_without_voids_is_refused_with_the_table_to_add():
-    config, _ = load_preset_config("red_cotton")
+    config, _ = load_preset_config("paper_2008")
     with pytest.raises(MissingSpeciesError) as caught:
         initial_values(parse_free("void_fraction"), config)
     message = str(caught.value)
@@ -168,7 +168,7 @@ def test_target_ratios_parse_and_refuse():
 
 
 def test_toml_writer_round_trips_a_preset():
-    config, _ = load_preset_config("red_cotton")
+    config, _ = load_preset_config("paper_2008")
     config["particles"].append({"name": "voids \"air\"", "refractive_index": {"n": [1.0, 1.0],
                                 "wavelengths_nm": [390.0, 730.0]}, "diameter_nm": 1e-3 * 2, "volume_fraction": 0.02})
     config["transport"] = {"paths_per_cell": 2000, "incidence_resolution": "auto"}

@@ -65,20 +65,20 @@ def mie_sums(m: complex, x: float) -> tuple[float, float]:
 
 @pytest.fixture(scope="module")
 def red_cotton() -> MediumOptics:
-    return medium_optics(load_preset("red_cotton"))
+    return medium_optics(load_preset("paper_2008"))
 
 
 @pytest.fixture(scope="module")
 def red_cotton_py() -> MediumOptics:
-    return medium_optics(dataclasses.replace(load_preset("red_cotton"), dependent_scattering="percus-yevick"))
+    return medium_optics(dataclasses.replace(load_preset("paper_2008"), dependent_scattering="percus-yevick"))
 
 
 # ---- the paper's medium, checked by hand ---------------------------------------------------------
 
 
 def test_default_preset_is_the_papers_medium():
-    params = load_preset("red_cotton")
-    assert params.name == "red_cotton" and params.host.refractive_index.n == 1.557
+    params = load_preset("paper_2008")
+    assert params.name == "paper_2008" and params.host.refractive_index.n == 1.557
     (scatterers,) = params.particles
     assert (scatterers.refractive_index.n, scatterers.diameter_nm, scatterers.volume_fraction) == (1.61, 150.0, 0.14)
     assert 1.0 <= params.dye.weight_percent <= 5.0
@@ -330,7 +330,7 @@ def test_percus_yevick_vanishes_for_a_dilute_medium():
 
 def test_optics_command_json_and_plot(tmp_path, capsys, red_cotton, red_cotton_py):
     png = tmp_path / "optics.png"
-    assert main(["optics", "--json", "--plot", str(png)]) == 0
+    assert main(["optics", "--preset", "paper_2008", "--json", "--plot", str(png)]) == 0
     report = json.loads(capsys.readouterr().out)
     np.testing.assert_allclose(report["mu_s_per_mm"], red_cotton.mu_s)
     np.testing.assert_allclose(report["albedo"], red_cotton.albedo)
@@ -340,7 +340,7 @@ def test_optics_command_json_and_plot(tmp_path, capsys, red_cotton, red_cotton_p
 
 
 def test_optics_command_table_with_percus_yevick(capsys, red_cotton_py):
-    assert main(["optics", "--preset", "red_cotton", "--percus-yevick"]) == 0
+    assert main(["optics", "--preset", "paper_2008", "--percus-yevick"]) == 0
     out = capsys.readouterr().out
     assert "percus-yevick" in out
     line = next(l for l in out.splitlines() if l.strip().startswith("550.0"))  # noqa: E741

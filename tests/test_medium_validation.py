@@ -22,7 +22,7 @@ from precompute.medium import (
 )
 from precompute.optics import medium_optics
 
-BASE, BASE_DIR = load_preset_config("red_cotton")
+BASE, BASE_DIR = load_preset_config("paper_2008")
 
 
 def build(edit, base_dir=BASE_DIR) -> MediumParameters:
@@ -232,7 +232,7 @@ def test_transport_and_bake_tables_belong_to_the_bake():
         config["transport"] = {"photons": 10, "anything": "goes"}
         config["bake"] = {"resolution": 8}
 
-    assert build(edit).name == "red_cotton"
+    assert build(edit).name == "paper_2008"
 
 
 @pytest.mark.parametrize(
@@ -292,12 +292,12 @@ def test_phase_samples_default_to_auto_which_fits_the_particles():
     assert optics.phase_grid == "uniform-angle" and optics.mu_s[0] > 0
     assert build(set_in(["medium", "phase_samples"], "auto")).phase_samples == "auto"
     # the paper's medium keeps the default grid, uniform in cos θ
-    red = medium_optics(load_preset("red_cotton"))
+    red = medium_optics(load_preset("paper_2008"))
     assert (red.phase_grid, red.phase_samples) == ("uniform-cos", 2001)
 
 
 def test_shipped_presets_all_load():
-    assert "red_cotton" in preset_names() and len(preset_names()) >= 4
+    assert "paper_2008" in preset_names() and len(preset_names()) >= 4
     for name in preset_names():
         params = load_preset(name)
         assert params.name == name and params.yarn.radius_mm > 0
@@ -305,7 +305,7 @@ def test_shipped_presets_all_load():
 
 
 def test_unknown_preset_and_bad_toml(tmp_path):
-    with pytest.raises(ParameterError, match="red_cotton"):
+    with pytest.raises(ParameterError, match="paper_2008"):
         load_preset("no_such_preset")
     broken = tmp_path / "broken.toml"
     broken.write_text("[host\nrefractive_index = 1.5\n")
@@ -315,7 +315,7 @@ def test_unknown_preset_and_bad_toml(tmp_path):
 
 def test_command_exits_2_and_names_the_parameter(tmp_path, capsys):
     config = tmp_path / "bad.toml"
-    text = (PRESET_DIR / "red_cotton.toml").read_text().replace("volume_fraction = 0.14", "volume_fraction = 0.8")
+    text = (PRESET_DIR / "paper_2008.toml").read_text().replace("volume_fraction = 0.14", "volume_fraction = 0.8")
     config.write_text(text)
     assert main(["optics", "--config", str(config)]) == 2
     err = capsys.readouterr().err

@@ -42,7 +42,7 @@ def tree(tmp_path):
 def bake_keys(tree, monkeypatch):
     """The yarn bake's two cache keys, for the default red cotton, of the code in ``tree``."""
     monkeypatch.setattr(bake_module, "PROJECT_ROOT", tree)
-    configuration = bake_module.bake_configuration("red_cotton")
+    configuration = bake_module.bake_configuration("paper_2008")
 
     def keys() -> dict:
         spectral = cache.cache_key(bake_module.spectral_inputs(configuration))

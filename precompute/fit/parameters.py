@@ -186,11 +186,13 @@ _SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAU
 
 #: Every parameter a fit may free, by name.  The ranges (docs/fitting.md, "Parameters"):
 PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
-    FitParameter("void_fraction", f"particles[{VOIDS}].volume_fraction", "", 0.001, 0.35, log=True,
-                 note="air voids (lumens, inter-fibre pores) in a yarn: a few tenths of a percent to a third of "
-                      f"its volume; the medium allows (0, {MAX_VOLUME_FRACTION}) for all species together"),
-    FitParameter("void_diameter_um", f"particles[{VOIDS}].diameter_nm", "µm", 0.2, 20.0, log=True, scale=1000.0,
-                 note="pores from sub-micron gaps to a cotton fibre's lumen (~10–20 µm); the medium allows "
+    FitParameter("void_fraction", f"particles[{VOIDS}].volume_fraction", "", 0.001, 0.55, log=True,
+                 note="air in a yarn, from lumens and pores to the space between fibres (a spun yarn packs its "
+                      "fibres to 0.4–0.6 of its volume); the medium allows "
+                      f"(0, {MAX_VOLUME_FRACTION}) for all species together"),
+    FitParameter("void_diameter_um", f"particles[{VOIDS}].diameter_nm", "µm", 0.2, 40.0, log=True, scale=1000.0,
+                 note="sub-micron gaps to a fibre's lumen (~10 µm) and the gaps between fibres (of a cotton "
+                      "fibre's 12–20 µm diameter and more); the medium allows "
                       f"{bounds.PARTICLE_DIAMETER_NM.low:g}–{bounds.PARTICLE_DIAMETER_NM.high:g} nm, and Mie "
                       "series grow with the size"),
     FitParameter("scatterer_fraction", f"particles[{SCATTERERS}].volume_fraction", "", 0.005, 0.4, log=True,
@@ -205,9 +207,9 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
                       f"allows {bounds.YARN_RADIUS_MM.low:g}–{bounds.YARN_RADIUS_MM.high:g} mm"),
     FitParameter("specular_weight", "specular_weight", "", 0.0, 3.0, log=False,
                  note="the Cook–Torrance term's weight (shader default 1): 0 is no sheen"),
-    FitParameter("specular_slope", "specular_slope", "", 0.05, 1.2, log=True,
+    FitParameter("specular_slope", "specular_slope", "", 0.05, 1.0, log=True,
                  note="the Beckmann rms slope m (the paper's 0.8): below 0.05 the lobe falls between the "
-                      "measured views, above 1.2 it is flat"),
+                      "measured views; 1.0 is the garment closure fit's largest gloss roughness"),
 )}
 
 

@@ -59,7 +59,7 @@ from precompute.reference import (
 )
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-DEFAULT_TABLES = ROOT / "example_blends" / "tables" / "red_cotton"
+DEFAULT_TABLES = ROOT / "example_blends" / "tables" / "paper_2008"
 #: name → (azimuth from the view in the plane perpendicular to the axis, elevation toward the axis), degrees
 INCIDENCES = {
     "front": (0.0, 0.0),

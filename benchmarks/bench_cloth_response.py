@@ -46,7 +46,7 @@ def main() -> None:
     from precompute import ballistic
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--tables", type=pathlib.Path, default=ROOT / "example_blends" / "tables" / "red_cotton")
+    parser.add_argument("--tables", type=pathlib.Path, default=ROOT / "example_blends" / "tables" / "paper_2008")
     parser.add_argument("--samples", type=int, default=64, help="the sweep's samples per pixel")
     parser.add_argument("--supersampling", type=int, default=8, help="the response's samples per pixel per axis")
     args = parser.parse_args()

@@ -6,7 +6,7 @@ same see-through (its alpha the cloth's coverage) for what that costs any materi
 the light through the cloth too (transmission=False), with how much each faster option changes
 the picture: the image's mean radiance against the full material's.
 
-The cloth tables are the shipped example's (example_blends/tables/red_cotton_cloth): their grid
+The cloth tables are the shipped example's (example_blends/tables/paper_2008_cloth): their grid
 does not change the shader's cost (the same texture lookups), their weights do (the share of
 paths that go on through the cloth)."""
 
@@ -29,7 +29,7 @@ from render_cost import light_and_camera, principled_with_sheen, print_render_co
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-garment-"))
-cloth_dir = REPO / "example_blends" / "tables" / "red_cotton_cloth"
+cloth_dir = REPO / "example_blends" / "tables" / "paper_2008_cloth"
 tables = cloth_tables_from_bake(cloth_dir)
 
 bpy.ops.wm.read_homefile(use_empty=True)

@@ -12,16 +12,16 @@
   a sphere (Blender's cloth simulation, frozen), wearing the garment material: the cloth BSDF
   measured on the woven sample (``python -m clothlight.garment bake``, paper §7) in general-
   lighting mode, under a sun, with a lamp behind the cloth so that the back-lit fabric glows
-  (paper Figure 9b).  Its tables are in ``example_blends/tables/red_cotton_cloth/`` (measured with
+  (paper Figure 9b).  Its tables are in ``example_blends/tables/paper_2008_cloth/`` (measured with
   the default gonioreflectometer).
 * ``twill_closeup_general.blend`` — a 2/2 twill of the same yarn close up, in general-lighting
   mode (the closure mixture, §5, lit by everything Cycles has) under a physical sky: sun and
   sky light from every direction, as an HDRI would give.
 
-Both read the red-cotton tables from ``example_blends/tables/red_cotton/`` through ``//``-relative
+Both read the paper's red-cotton tables from ``example_blends/tables/paper_2008/`` through ``//``-relative
 paths, so the folder can be moved as a whole; the OSL shaders are embedded with their compiled
 bytecode.  The tables are the untouched preset's bake (``python -m precompute bake --preset
-red_cotton``; cached, so a re-run bakes nothing new).  Scenes are in millimetres
+paper_2008``; cached, so a re-run bakes nothing new).  Scenes are in millimetres
 (``unit_settings.scale_length = 0.001``): one Blender unit is one millimetre of cloth.
 """
 
@@ -52,7 +52,7 @@ from clothlight.validation.rig import RigSettings, build_rig  # noqa: E402
 from clothlight.weave import WeaveParameters  # noqa: E402
 from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
 
-PRESET = "red_cotton"
+PRESET = "paper_2008"
 TABLE_FILES = ("brdf.exr", "lobes.exr", "unscattered.exr", "summary.json")
 # Coarser tessellation than the default for the sample seen whole: the files stay small.
 PAPER_WEAVE = WeaveParameters(interlacing="plain", warp_count=12, weft_count=12, spacing_mm=0.5, yarn_radius_mm=0.1,

@@ -191,7 +191,7 @@ def test_apply_garment_material_puts_a_cloth_bake_on_meshes_with_uvs_only(addon,
     from clothlight.garment.bake import bake_cloth
     from clothlight.garment.measure import GoniometerSettings
 
-    yarn = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "red_cotton"
+    yarn = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
     cloth, _ = bake_cloth(yarn, GoniometerSettings(incidence_resolution=3, exit_resolution=2, pixels_per_patch=6,
                                                    samples=1), cache_dir=tmp_path_factory.mktemp("cloth"))
     bpy.ops.wm.read_homefile(use_empty=True)

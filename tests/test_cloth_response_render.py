@@ -17,7 +17,7 @@ from clothlight.validation.response_render import measure_response  # noqa: E402
 from clothlight.validation.rig import RigSettings  # noqa: E402
 from clothlight.validation.run import run_validation  # noqa: E402
 
-SHIPPED_TABLES = "example_blends/tables/red_cotton"
+SHIPPED_TABLES = "example_blends/tables/paper_2008"
 INCIDENCES = (0.0, 45.0)
 VIEWS = (-30.0, 0.0, 45.0)
 

@@ -53,7 +53,7 @@ N_I, N_O, N_LOBES = 5, 6, 8
 SUN_IRRADIANCE = 2.0
 COVERAGE = {"front": 0.8, "back": 0.6}
 SPECULAR = {"weight": 0.7, "slope": 0.5, "ior": 1.45}
-YARN_BAKE = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "red_cotton"
+YARN_BAKE = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
 
 
 def analytic_rho(wi, wo, side):

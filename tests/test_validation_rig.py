@@ -346,7 +346,7 @@ def test_the_command_line_and_the_blender_script_share_arguments(tmp_path):
 
 # -- light between yarns: the general-lighting yarn material path traced in a scene ---------------
 
-SHIPPED_TABLES = REPO / "example_blends" / "tables" / "red_cotton"
+SHIPPED_TABLES = REPO / "example_blends" / "tables" / "paper_2008"
 BOUNCE_SETTINGS = ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces")
 
 

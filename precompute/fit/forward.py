@@ -97,7 +97,7 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
             from clothlight.yarn_tables import yarn_tables_from_bake
 
             # Any tables: the lookup directions do not depend on the medium.
-            tables = yarn_tables_from_bake(PROJECT_ROOT / "example_blends" / "tables" / "red_cotton")
+            tables = yarn_tables_from_bake(PROJECT_ROOT / "example_blends" / "tables" / "paper_2008")
             measure_response(tables, views, resolution=RESPONSE_RESOLUTION, supersampling=RESPONSE_SUPERSAMPLING,
                              seed=seed, progress=progress).save(staging / RESPONSE_FILE)
 

@@ -28,7 +28,7 @@ print(f"{numba.config.NUMBA_NUM_THREADS} threads; cache {cache_dir}")
 ratios = []
 for seed in (0, 1, 2):
     start = time.perf_counter()
-    result = bake("red_cotton", seed=seed, cache_dir=cache_dir)
+    result = bake("paper_2008", seed=seed, cache_dir=cache_dir)
     wall = time.perf_counter() - start
     s = result.summary
     ratios.append((s["table1_ratios_normal"]["B/R"], s["table1_ratios_normal"]["G/R"],
@@ -42,10 +42,10 @@ print(f"over 3 seeds: B/R = {mean[0]:.4f} ± {spread[0]:.4f}, G/R = {mean[1]:.4f
       f"(unclipped {mean[2]:.4f} ± {spread[2]:.4f}); paper Table 1, real red cotton: 0.08 and 0.011")
 
 start = time.perf_counter()
-hit = bake("red_cotton", seed=0, cache_dir=cache_dir)
+hit = bake("paper_2008", seed=0, cache_dir=cache_dir)
 print(f"same inputs again: cache hit = {hit.cache_hit}, {time.perf_counter() - start:.3f} s")
 start = time.perf_counter()
-tungsten = bake("red_cotton", ["bake.illuminant=A"], seed=0, cache_dir=cache_dir)
+tungsten = bake("paper_2008", ["bake.illuminant=A"], seed=0, cache_dir=cache_dir)
 print(f"illuminant A: simulated = {tungsten.simulated}, {time.perf_counter() - start:.2f} s, "
       f"B/R = {tungsten.blue_red:.4f}, G/R = {tungsten.green_red:.4f}")
 

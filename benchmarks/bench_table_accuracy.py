@@ -26,7 +26,7 @@ from precompute import ballistic
 from precompute.bake import SPECTRAL_FILE, bake, load_spectral
 from precompute.grids import AngularGrid
 
-result = bake("red_cotton")
+result = bake("paper_2008")
 arrays, spectral = load_spectral(result.folder / SPECTRAL_FILE)
 wavelengths = arrays["wavelengths_nm"]
 resolution = spectral["transport"]["angular_resolution"]

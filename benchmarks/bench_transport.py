@@ -64,7 +64,7 @@ def slab() -> None:
 
 
 def red_cotton():
-    optics = medium_optics(load_preset("red_cotton"))
+    optics = medium_optics(load_preset("paper_2008"))
     return optics, YarnGeometry(0.1, optics.boundary_index)
 
 

@@ -19,7 +19,7 @@ from render_cost import light_and_camera, print_render_cost
 
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-material-"))
 grids = ["transport.angular_resolution=8", "transport.incidence_resolution=9"]
-tables = yarn_tables_from_bake(bake("red_cotton", grids, paths_per_cell=500, cache_dir=out / "cache").folder)
+tables = yarn_tables_from_bake(bake("paper_2008", grids, paths_per_cell=500, cache_dir=out / "cache").folder)
 
 bpy.ops.wm.read_homefile(use_empty=True)
 scene = bpy.context.scene

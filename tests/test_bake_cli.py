@@ -61,7 +61,7 @@ def test_header_carries_everything_needed_to_reproduce(baked):
     assert header[HASH_KEY] == content_hash(table.pixels)
     assert meta["code_version"] == precompute.__version__ and len(meta["code_digest"]["spectral"]) == 64
     # Every medium parameter, with its unit in its name, exactly as the preset defines it.
-    assert meta["medium"] == json.loads(json.dumps(load_preset("paper_2008").to_dict()))
+    assert meta["medium"] == json.loads(json.dumps(load_preset().to_dict()))  # the default preset
     assert meta["medium"]["particles"][0]["diameter_nm"] == 150.0 and meta["medium"]["yarn"]["radius_mm"] == 0.1
     assert len(meta["medium"]["dye"]["mass_absorption_cm2_per_g"]) > 10  # the dye spectrum itself
     assert meta["transport"] == {"n_around": 8, "n_along": 4, "angular_resolution": N_O, "incidence_resolution": N_I,

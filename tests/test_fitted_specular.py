@@ -12,7 +12,7 @@ from precompute import cache
 from precompute.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT
 from precompute.errors import ParameterError
 from precompute.fit.parameters import FIT_TABLE
-from precompute.medium import DEFAULT_PRESET, load_preset_config
+from precompute.medium import load_preset_config
 from precompute.table_folder import (
     SPECULAR_FROM_PRESET,
     SPECULAR_KEY,
@@ -29,6 +29,9 @@ SMALL = ["transport.angular_resolution=4", "transport.incidence_resolution=5",
          "transport.n_around=8", "transport.n_along=4"]
 FITTED = {"specular_weight": 0.55, "specular_slope": 0.35}
 N_I, N_O, LOBES, SAMPLES = 5, 4, 5, 9
+
+#: A shipped preset without a [fit] table: the paper's medium (the default, red_cotton, is fitted).
+PLAIN_PRESET = "paper_2008"
 
 
 def keys(configuration) -> tuple[str, str]:
@@ -62,10 +65,10 @@ def test_a_fit_table_is_recorded_as_such_and_checked():
 
 
 def test_the_specular_term_keys_the_tables_not_the_simulation():
-    config, _ = load_preset_config(DEFAULT_PRESET)
+    config, _ = load_preset_config(PLAIN_PRESET)
     plain = bake_module.bake_configuration(config, SMALL, paths_per_cell=100)
     fitted = bake_module.bake_configuration({**config, FIT_TABLE: FITTED}, SMALL, paths_per_cell=100)
-    overridden = bake_module.bake_configuration(DEFAULT_PRESET, [*SMALL, "fit.specular_weight=0.55",
+    overridden = bake_module.bake_configuration(PLAIN_PRESET, [*SMALL, "fit.specular_weight=0.55",
                                                                "fit.specular_slope=0.35"], paths_per_cell=100)
     other = bake_module.bake_configuration({**config, FIT_TABLE: {**FITTED, "specular_slope": 0.5}}, SMALL,
                                            paths_per_cell=100)
@@ -85,9 +88,9 @@ def test_a_bake_records_the_fit_in_its_summary_and_headers_on_the_same_simulatio
     runs = []
     real = bake_module.simulate_yarn
     monkeypatch.setattr(bake_module, "simulate_yarn", lambda *a, **k: runs.append(1) or real(*a, **k))
-    fitted = bake_module.bake(DEFAULT_PRESET, [*SMALL, *(f"fit.{k}={v}" for k, v in FITTED.items())],
+    fitted = bake_module.bake(PLAIN_PRESET, [*SMALL, *(f"fit.{k}={v}" for k, v in FITTED.items())],
                               paths_per_cell=100, cache_dir=tmp_path)
-    plain = bake_module.bake(DEFAULT_PRESET, SMALL, paths_per_cell=100, cache_dir=tmp_path)
+    plain = bake_module.bake(PLAIN_PRESET, SMALL, paths_per_cell=100, cache_dir=tmp_path)
     assert len(runs) == 1 and fitted.simulated and not plain.simulated and not plain.cache_hit
     assert fitted.folder != plain.folder and fitted.summary["spectral_key"] == plain.summary["spectral_key"]
     assert fitted.summary[SPECULAR_KEY] == {"weight": 0.55, "slope": 0.35, "source": SPECULAR_FROM_PRESET}
@@ -98,7 +101,7 @@ def test_a_bake_records_the_fit_in_its_summary_and_headers_on_the_same_simulatio
         checked = check_yarn_table_folder(result.folder)
         assert summary_specular(checked.summary, result.folder) == result.summary[SPECULAR_KEY]
     # The same tables again: a cache hit, fit or not; the colour tables of both are the same pixels.
-    assert bake_module.bake(DEFAULT_PRESET, [*SMALL, "fit.specular_weight=0.55", "fit.specular_slope=0.35"],
+    assert bake_module.bake(PLAIN_PRESET, [*SMALL, "fit.specular_weight=0.55", "fit.specular_slope=0.35"],
                             paths_per_cell=100, cache_dir=tmp_path).cache_hit
     np.testing.assert_array_equal(read_table(fitted.brdf_table).pixels, read_table(plain.brdf_table).pixels)
 

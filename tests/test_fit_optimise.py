@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from precompute.cook_torrance import cloth_specular
+from precompute.errors import ParameterError
 from precompute.fit import Budget, fit_medium, load_measurement, split_views
 from precompute.fit.baseline import baseline_brdf, fit_baseline
 from precompute.fit.objective import Objective
@@ -173,8 +174,6 @@ def test_media_the_loader_refuses_are_penalised_not_evaluated(measured):
 
 
 def test_budget_smaller_than_one_generation_is_refused(measured):
-    from precompute.errors import ParameterError
-
     with pytest.raises(ParameterError, match="--budget-evaluations"):
         run_fit(measured, budget=Budget(evaluations=5))
 
@@ -214,3 +213,35 @@ def test_the_specular_term_is_profiled_when_the_model_splits_it_off(measured):
     candidates = [e for e in result.history if e.kind == "candidate"]
     assert len({e.parameters["specular_slope"] for e in candidates}) > 1  # fitted per candidate
     assert len(model.calls) <= 150
+
+
+class SwatchForward(SeparableForward):
+    """The separable cloth with the §6.1 swatches after the measured views, as precompute.fit.forward
+    gives them: lit from the front as at normal view, lit from behind brighter the fewer voids scatter."""
+
+    swatch_count = 2
+
+    def parts(self, config, *, relative_error, seed):
+        medium, specular = super().parts(config, relative_error=relative_error, seed=seed)
+        void = species_table(config, VOIDS, "test")["volume_fraction"]
+        front = medium[np.argmin(np.abs(self.angles[:, 0]) + np.abs(self.angles[:, 2]))]
+        back = front * 0.01 / void  # 0.2 at the truth's 5 % voids
+        rows = np.vstack([medium, front, back])
+        return rows, lambda weight, slope: np.concatenate([specular(weight, slope), [0.0, 0.0]])
+
+
+def test_the_back_lit_constraint_keeps_the_cloth_darker_from_behind(measured):
+    measurement = load_measurement(measured)
+    views = split_views(measurement).forward_views
+    config, base_dir = preset_with_voids()
+    free = "void_fraction,dye_weight_percent,specular_weight,specular_slope"
+    free_fit = fit_medium(measurement, config, base_dir, free=free, forward_model=SwatchForward(views), seed=3,
+                          budget=100)
+    assert free_fit.swatches["back_front_luminance"] == pytest.approx(0.2, rel=0.15)  # the truth's
+    held = fit_medium(measurement, config, base_dir, free=free, forward_model=SwatchForward(views), seed=3,
+                      budget=100, max_back_front=0.1)
+    assert held.swatches["back_front_luminance"] <= 0.1 * 1.05 and held.swatches["max_back_front"] == 0.1
+    assert held.parameters["void_fraction"] > free_fit.parameters["void_fraction"]  # bought with more voids
+    with pytest.raises(ParameterError, match="swatches"):
+        fit_medium(measurement, config, base_dir, free=free, forward_model=SeparableForward(views), seed=3,
+                   budget=100, max_back_front=0.1)

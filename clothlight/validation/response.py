@@ -16,7 +16,8 @@ those samples define A_ρ, A_u and s for any table layout, so one set of renders
 serves every medium: a cloth BRDF sweep in milliseconds instead of minutes (issue 19's "cloth
 operator"; docs/fitting.md).  No Blender here.
 
-A view is (θi, θv, φv, α): the sun at zenith θi on the −x side of the plane of incidence, the
+A view is (θi, θv, φv, α): the sun at zenith θi on the −x side of the plane of incidence (θi > 90°:
+behind the cloth, as the §6.1 swatch lit from behind at 180°), the
 camera at zenith θv and azimuth φv from that plane (φv = 0 with θv signed as in :mod:`.framing`:
 negative on the light's side; φv = 90°: the perpendicular plane), and the sample turned by −α
 about its normal (sun and camera turned by α), so that a set of α averages the weave's anisotropy
@@ -62,8 +63,9 @@ class ResponseView:
 
     @property
     def calibration(self) -> float:
-        """Cloth BRDF (1/sr) per unit of summed sample radiance over unit irradiance: 1 / (N² cos θi)."""
-        return 1.0 / (self.samples_per_side**2 * math.cos(math.radians(self.theta_i_deg)))
+        """Cloth BRDF (1/sr) per unit of summed sample radiance over unit irradiance: 1 / (N² |cos θi|)
+        (θi > 90°: the sun behind the cloth, the BTDF)."""
+        return 1.0 / (self.samples_per_side**2 * abs(math.cos(math.radians(self.theta_i_deg))))
 
     @property
     def toward_camera(self) -> np.ndarray:

@@ -63,7 +63,9 @@ def measure_response(tables, views, sample=None, *, resolution: int = 128, super
     if not views or any(len(view) != 4 for view in views):
         raise ParameterError("views", views, "(θi, θv, φv, α) tuples in degrees")
     samples_per_side = int(resolution) * int(supersampling)
-    settings = RigSettings(incidences_deg=tuple(sorted({v[0] for v in views})),
+    # The sun behind the cloth (θi > 90°, the swatch lit from behind) adds no framing constraint of its own.
+    in_front = {min(v[0], 180.0 - v[0]) for v in views}
+    settings = RigSettings(incidences_deg=tuple(sorted(in_front)),
                            views_deg=tuple(sorted({abs(v[1]) for v in views})),
                            resolution=samples_per_side, samples=1, seed=seed)
     rig = build_rig(sample, settings)

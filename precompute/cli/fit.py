@@ -9,10 +9,12 @@ Exit codes: precompute/exit_codes.py (0 done, 2 bad input, 130 interrupted: noth
 from __future__ import annotations
 
 import json
+import math
 import pathlib
 import sys
 
 from .. import bounds
+from ..errors import ParameterError
 from ..medium import DEFAULT_PRESET, preset_names
 
 
@@ -38,6 +40,9 @@ def add_parser(subparsers) -> None:
                         help=f"comma-separated free parameters: {', '.join(PARAMETERS)}")
     parser.add_argument("--target-ratios", metavar="B/R=0.08,G/R=0.011",
                         help="colour ratios to meet at normal incidence and view (θi = 0, θo ≤ 10°)")
+    parser.add_argument("--max-back-front", type=float, metavar="RATIO",
+                        help="the largest luminance ratio of the cloth lit from straight behind over lit from the "
+                             "front, at normal view (real cloth is darker from behind: e.g. 0.5)")
     parser.add_argument("--seed", type=bounds.SEED.argument("--seed"), default=0,
                         help="seed of the optimiser and of every forward evaluation (default 0)")
     parser.add_argument("--budget-evaluations", type=int, default=150,
@@ -74,6 +79,8 @@ def run(args) -> int:
     Objective(measurement, views, ratios)
     budget = Budget(evaluations=args.budget_evaluations, seconds=args.budget_seconds)
     check_budget(budget, len(free))
+    if args.max_back_front is not None and not (math.isfinite(args.max_back_front) and args.max_back_front > 0):
+        raise ParameterError("--max-back-front", args.max_back_front, "a ratio > 0")
     check_fit_folder(args.out)
     if args.cache_dir is not None:
         check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
@@ -97,7 +104,8 @@ def run(args) -> int:
     try:
         forward_model = _build_forward_model(views, medium_config, base_dir, args, building)
         result = fit_medium(measurement, config, base_dir, free=[p.name for p in free], forward_model=forward_model,
-                            seed=args.seed, budget=budget, target_ratios=ratios, progress=searching)
+                            seed=args.seed, budget=budget, target_ratios=ratios, progress=searching,
+                            max_back_front=args.max_back_front)
     finally:
         for b in bars.values():
             b.close()

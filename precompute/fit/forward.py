@@ -37,6 +37,9 @@ PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[2]
 FIT_INCIDENCE_RESOLUTION = 21
 #: Paths per incidence cell at a relative error of 5 %; the budget grows as 1 / error².
 PATHS_AT_FIVE_PERCENT = 1000
+#: The §6.1 colour swatches the model also gives, after the measured views: normal view, lit from the
+#: front and from straight behind, (θi, θv, φv) in degrees (clothlight.validation.run's swatches).
+SWATCH_VIEWS = ((0.0, 0.0, 0.0), (180.0, 0.0, 0.0))
 #: Sample azimuths the response averages over, degrees (module docstring).
 SAMPLE_AZIMUTHS_DEG = (0.0, 90.0)
 #: The response's sweep resolution (pixels along the patch side) and camera samples per pixel
@@ -78,7 +81,8 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
     rendered (Blender as the ``bpy`` module; a minute or two) with Cycles' ``seed``."""
     from clothlight.validation.response import ClothResponse
 
-    views = [(*view, azimuth) for view in rig_views(measured_views) for azimuth in SAMPLE_AZIMUTHS_DEG]
+    views = [(*view, azimuth) for view in (*rig_views(measured_views), *SWATCH_VIEWS)
+             for azimuth in SAMPLE_AZIMUTHS_DEG]
     inputs = {
         "schema": "clothlight-response-entry/1",
         "views": views,
@@ -107,11 +111,15 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
 
 class ForwardModel:
     """``model(config, specular_weight=, specular_slope=, relative_error=, seed=)`` → the cloth BRDF
-    (n_views, 3), 1/sr, linear Rec.709, at the measured views given to :func:`build_forward_model`."""
+    (n_views + 2, 3), 1/sr, linear Rec.709, at the measured views given to :func:`build_forward_model`
+    and then at the :data:`SWATCH_VIEWS` (:attr:`swatch_count` rows: the BRDF lit from the front,
+    and the BTDF lit from straight behind, both at normal view)."""
+
+    swatch_count = len(SWATCH_VIEWS)
 
     def __init__(self, response, view_count: int, base_dir: pathlib.Path, threads: int | None = None):
         self.response = response
-        self.view_count = view_count
+        self.view_count = view_count + self.swatch_count
         self.base_dir = pathlib.Path(base_dir)
         self.threads = threads
 

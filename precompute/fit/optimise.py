@@ -187,6 +187,9 @@ class FitResult:
     bound_hits: list[str] = field(default_factory=list)
     seconds: float = 0.0
     generations: int = 0
+    #: The §6.1 swatches of the final evaluation, when the forward model gives them: ``front_rgb``,
+    #: ``back_rgb`` (1/sr at normal view), ``back_front_luminance`` and the ``max_back_front`` asked for.
+    swatches: dict | None = None
 
     @property
     def forward_evaluations(self) -> int:
@@ -215,6 +218,7 @@ class FitResult:
             "forward_evaluations": self.forward_evaluations,
             "generations": self.generations,
             "seconds": round(self.seconds, 3),
+            "swatches": self.swatches,
             "views": [{"theta_i": float(a[0]), "phi_i": float(a[1]), "theta_o": float(a[2]), "phi_o": float(a[3]),
                        "set": "fit" if fit else ("held_out" if held else "other"),
                        "measured": [float(v) for v in measured], "model": [float(v) for v in model],
@@ -392,7 +396,7 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
                target_ratios: str | Mapping[str, float] | None = None,
                progress: Callable[[FitProgress], None] | None = None, cancel: Callable[[], bool] | None = None,
                specular: Mapping[str, float] | None = None, schedule: AccuracySchedule | None = None,
-               popsize: int | None = None) -> FitResult:
+               popsize: int | None = None, max_back_front: float | None = None) -> FitResult:
     """Fit the free parameters of a medium to a measurement (module docstring).
 
     Parameters
@@ -419,6 +423,11 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
     specular
         The specular keywords where not free (default: the preset's ``[fit]`` table, else the
         shader's defaults, weight 1 and m = 0.8).
+    max_back_front
+        The largest luminance ratio of the §6.1 swatches, lit from behind over lit from the front
+        (real cloth is darker lit from behind, the paper's Fig. 9): a forward model that gives the
+        swatches (``swatch_count`` rows after the measured views) adds ``max(0, ln(ratio / max))``
+        to the objective.  None: no constraint.
     """
     began = time.perf_counter()
     if isinstance(measurement, (str, pathlib.Path)):
@@ -441,11 +450,21 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
 
     population = check_budget(budget, len(searched), popsize)
 
+    swatches = int(getattr(forward_model, "swatch_count", 0))
+    if max_back_front is not None and not swatches:
+        raise ParameterError("max_back_front", max_back_front, "a forward model that gives the §6.1 swatches")
+
+    def score(rgb: np.ndarray) -> float:
+        measured_views = rgb[:len(rgb) - swatches]
+        if max_back_front is None:
+            return objective(measured_views)
+        return objective(measured_views) + back_front_penalty(rgb[len(rgb) - swatches:], max_back_front)
+
     def model_and_values(candidate: dict, keywords: dict, relative_error: float, forward_seed: int):
         if not profiled:
             return forward_model(candidate, **keywords, relative_error=relative_error, seed=forward_seed), {}
         medium_part, specular_part = forward_model.parts(candidate, relative_error=relative_error, seed=forward_seed)
-        values = fit_profiled_specular(objective, medium_part, specular_part, profiled, keywords)
+        values = fit_profiled_specular(score, medium_part, specular_part, profiled, keywords)
         keywords = {**keywords, **{p.path: values[p.name] for p in profiled}}
         return medium_part + specular_part(keywords["specular_weight"], keywords["specular_slope"])[:, None], values
 
@@ -460,7 +479,7 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         except ParameterError as error:
             return Refused(str(error))
         rgb, values = model_and_values(candidate, keywords, relative_error, forward_seed)
-        return (objective(rgb), values) if profiled else objective(rgb)
+        return (score(rgb), values) if profiled else score(rgb)
 
     search = minimise(evaluate, searched, {p.name: start[p.name] for p in searched}, seed=seed, budget=budget,
                       schedule=schedule, popsize=population, progress=progress, cancel=cancel)
@@ -471,12 +490,13 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         raise FitCancelled("fit cancelled")
     final_seed = _derived_seed(seed, _FINAL_TAG)
     t0 = time.perf_counter()
-    model_rgb, values = model_and_values(fitted_config, keywords, schedule.final, final_seed)
+    all_rgb, values = model_and_values(fitted_config, keywords, schedule.final, final_seed)
     if values:  # the specular term refitted to the accurate evaluation
         best = {**best, **values}
         fitted_config, keywords = apply(config, specular, best)
-    model_rgb = objective.check(model_rgb)
-    final_objective = objective(model_rgb)
+    final_objective = score(all_rgb)
+    model_rgb = objective.check(all_rgb[:len(all_rgb) - swatches])
+    swatch_rgb = all_rgb[len(all_rgb) - swatches:] if swatches else None
     history.append(Evaluation(len(history), search["generations"], "final", dict(best), final_objective,
                               schedule.final, final_seed, time.perf_counter() - t0))
     if progress is not None:
@@ -490,7 +510,11 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         objective=final_objective, estimate=search["estimate"], history=history, stop_reason=search["stop_reason"],
         seed=seed, budget=budget, schedule=schedule, measurement=measurement, views=views, model_rgb=model_rgb,
         baseline=baseline, baseline_rgb=baseline_rgb, metrics=metrics, target_ratios=objective.target_ratios,
-        bound_hits=bound_hits(free, best), seconds=time.perf_counter() - began, generations=search["generations"])
+        bound_hits=bound_hits(free, best), seconds=time.perf_counter() - began, generations=search["generations"],
+        swatches=None if swatch_rgb is None else {
+            "front_rgb": swatch_rgb[0].tolist(), "back_rgb": swatch_rgb[1].tolist(),
+            "back_front_luminance": float(LUMINANCE @ swatch_rgb[1]) / float(LUMINANCE @ swatch_rgb[0]),
+            "max_back_front": max_back_front})
 
 
 #: Starting points (in the [0, 1] box) of the profiled specular fit: it is cheap, and two starts
@@ -498,7 +522,20 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
 PROFILE_STARTS = (0.25, 0.75)
 
 
-def fit_profiled_specular(objective: Objective, medium_part: np.ndarray, specular_part: Callable,
+#: Rec. 709 luminance of linear R, G, B.
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+
+
+def back_front_penalty(swatch_rgb: np.ndarray, max_back_front: float) -> float:
+    """``max(0, ln(r / max_back_front))`` with r the luminance ratio of the swatch lit from behind
+    over the one lit from the front (rows 1 and 0 of ``swatch_rgb``)."""
+    front, back = (float(LUMINANCE @ row) for row in swatch_rgb[:2])
+    if front <= 0.0:
+        return INFEASIBLE_OBJECTIVE
+    return max(0.0, math.log(max(back, 1e-300) / front / max_back_front))
+
+
+def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part: np.ndarray, specular_part: Callable,
                           profiled: Sequence[FitParameter], keywords: Mapping[str, float]) -> dict[str, float]:
     """The values of the specular parameters ``profiled`` that minimise ``objective`` for one medium:
     its cloth BRDF without the specular term ``medium_part`` (n, 3) plus ``specular_part(weight,

@@ -202,6 +202,10 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
     FitParameter("dye_weight_percent", "dye.weight_percent", "%", 0.1, 10.0, log=True,
                  note="the paper's 1–5 % (§6.2) widened by a factor of ten below and two above; the medium "
                       "allows [0, 100)"),
+    FitParameter("host_absorption_per_mm", "host.absorption_per_mm", "1/mm", 0.01, 30.0, log=True,
+                 note="grey absorption of the fibre itself (impurities, lignin, a shade of dark in the dyeing), "
+                      "beside the dye's spectrum: 0.01 /mm is nothing across a 0.2 mm yarn, 30 /mm absorbs within "
+                      "a fibre's 15 µm twice over"),
     FitParameter("yarn_radius_mm", "yarn.radius_mm", "mm", 0.03, 0.5, log=True,
                  note="fine (Ne 100) to coarse (Ne 2) yarns after Peirce's d = 1/(28 √Ne) inch; the medium "
                       f"allows {bounds.YARN_RADIUS_MM.low:g}–{bounds.YARN_RADIUS_MM.high:g} mm"),

@@ -222,7 +222,13 @@ def report_markdown(result: FitResult, measured_name: str = "") -> str:
              f"- {result.forward_evaluations} forward evaluations in {result.generations} generations, "
              f"{result.seconds:.1f} s; stopped by {result.stop_reason}",
              f"- seed {result.seed}; accuracy schedule {result.schedule.loose:g} → {result.schedule.tight:g} "
-             f"(final {result.schedule.final:g})", ""]
+             f"(final {result.schedule.final:g})"]
+    if result.swatches:
+        limit = result.swatches["max_back_front"]
+        lines.append(f"- §6.1 swatches at normal view: lit from behind / from the front, luminance "
+                     f"**{result.swatches['back_front_luminance']:.3g}**"
+                     + (f" (asked: at most {limit:g})" if limit is not None else " (not constrained)"))
+    lines.append("")
     if result.bound_hits:
         lines += ["## Bounds", ""] + [f"- **{hit}**" for hit in result.bound_hits] + [""]
     lines += ["## Parameters", "", "| parameter | fitted | start | range | unit | sets |", "|---|---|---|---|---|---|"]

@@ -297,21 +297,22 @@ def check_yarn_table_folder(folder: str | pathlib.Path) -> CheckedFolder:
 # ---- writing a folder as a whole ----------------------------------------------------------------
 
 
-def check_output_folder(out: str | pathlib.Path, names: Iterable[str], option: str = "--out") -> pathlib.Path:
+def check_output_folder(out: str | pathlib.Path, names: Iterable[str], option: str = "--out", *,
+                        job: str = "bake") -> pathlib.Path:
     """``out`` (its real path) if :func:`replace_folder` may write it: absent, or a folder holding only
-    files of ``names`` (an earlier bake's, which it replaces), in a writable folder.  Otherwise
+    files of ``names`` (an earlier ``job``'s, which it replaces), in a writable folder.  Otherwise
     :class:`~precompute.errors.ParameterError` naming ``option``: called before any work starts."""
     out = pathlib.Path(os.path.realpath(out))
     names = set(names)
     if out.exists():
         if not out.is_dir():
-            raise ParameterError(option, str(out), "a folder to write the tables into (this is a file)")
+            raise ParameterError(option, str(out), f"a folder to write the {job} into (this is a file)")
         foreign = sorted(entry.name for entry in out.iterdir()
                          if not (entry.name in names and entry.is_file()) and not _is_staging(entry.name))
         if foreign:
             shown = ", ".join(foreign[:5]) + (", …" if len(foreign) > 5 else "")
-            raise ParameterError(option, str(out), f"a new or empty folder, or one that holds an earlier bake "
-                                                   f"only (this one also holds {shown}, which a new bake would "
+            raise ParameterError(option, str(out), f"a new or empty folder, or one that holds an earlier {job} "
+                                                   f"only (this one also holds {shown}, which a new {job} would "
                                                    "remove)")
     place = out.parent
     while not place.exists() and place != place.parent:

@@ -32,8 +32,7 @@ import re
 import numpy as np
 
 from .. import medium as medium_module
-from ..errors import ParameterError
-from ..table_folder import replace_folder
+from ..table_folder import check_output_folder, replace_folder
 from .objective import CHANNELS
 from .optimise import FitResult
 from .parameters import FIT_TABLE
@@ -55,23 +54,7 @@ def check_fit_folder(out: str | os.PathLike, option: str = "--out") -> pathlib.P
     """``out`` (its real path) if a fit may write it: absent, or a folder holding only an earlier
     fit's files, in a writable place.  ParameterError naming ``option`` otherwise; called before any
     work."""
-    out = pathlib.Path(os.path.realpath(out))
-    if out.exists():
-        if not out.is_dir():
-            raise ParameterError(option, str(out), "a folder to write the fit into (this is a file)")
-        foreign = sorted(e.name for e in out.iterdir()
-                         if not (e.name in FIT_FOLDER_FILES and e.is_file())
-                         and not (e.name.startswith(".") and e.name.endswith(".partial")))  # another's staging
-        if foreign:
-            shown = ", ".join(foreign[:5]) + (", …" if len(foreign) > 5 else "")
-            raise ParameterError(option, str(out), f"a new or empty folder, or an earlier fit's (this one also holds "
-                                                   f"{shown}, which the fit would remove)")
-    place = out.parent
-    while not place.exists() and place != place.parent:
-        place = place.parent
-    if not place.is_dir() or not os.access(place, os.W_OK | os.X_OK):
-        raise ParameterError(option, str(out), f"a folder in a writable place ({place} is not writable)")
-    return out
+    return check_output_folder(out, FIT_FOLDER_FILES, option, job="fit")
 
 
 def write_fit_folder(result: FitResult, out: str | os.PathLike, *, measured_name: str = "", option: str = "--out"

@@ -2,11 +2,13 @@
 a folder it could not write into, instead of failing after minutes of work (issue 22).
 
 Standard library only.  Bake folders written as a whole have their own, stricter check
-(:func:`precompute.table_folder.check_output_folder`).
+(:func:`precompute.table_folder.check_output_folder`).  :func:`json_ready` makes results standard JSON.
 """
 
 from __future__ import annotations
 
+import math
+import numbers
 import os
 import pathlib
 
@@ -52,3 +54,20 @@ def check_writable_file(path: str | os.PathLike, option: str, *, what: str = "an
         raise ParameterError(option, str(path), f"{what} this user can write (this one is read-only)")
     check_writable_folder(path.parent, option, what=f"{what} in a writable folder")
     return path
+
+
+def json_ready(value):
+    """``value`` with NumPy numbers as Python ones and NaN and infinities as None, through dicts,
+    lists and tuples, so that the JSON written of it is standard."""
+    if isinstance(value, dict):
+        return {key: json_ready(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(item) for item in value]
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        number = float(value)
+        return number if math.isfinite(number) else None
+    return value

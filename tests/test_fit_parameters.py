@@ -112,13 +112,15 @@ def test_start_values_are_clipped_into_the_fit_range_and_specular_read_from_fit_
     assert specular_from_config(config) == {"specular_weight": 0.4, "specular_slope": 0.8}
 
 
+class Measured:
+    """A measurement of the synthetic cloth at the real fabrics' views (what split_views and Objective read)."""
+
+    angles_deg = np.array(real_fabric_views(), float)
+    rgb = synthetic_brdf(real_fabric_views(), 0.05, 2.0, 0.6, 0.35)
+
+
 def test_views_split_into_the_plane_of_incidence_and_the_held_out_perpendicular_plane():
     views = real_fabric_views()
-
-    class Measured:
-        angles_deg = np.array(views, float)
-        rgb = synthetic_brdf(views, 0.05, 2.0, 0.6, 0.35)
-
     split = split_views(Measured)
     perpendicular = np.array([v[3] == 90 for v in views])
     np.testing.assert_array_equal(split.held_out, perpendicular)
@@ -140,12 +142,6 @@ def test_views_split_into_the_plane_of_incidence_and_the_held_out_perpendicular_
 
 
 def test_objective_is_the_rms_over_channels_of_per_channel_relative_rms():
-    views = real_fabric_views()
-
-    class Measured:
-        angles_deg = np.array(views, float)
-        rgb = synthetic_brdf(views, 0.05, 2.0, 0.6, 0.35)
-
     objective = Objective(Measured)
     assert objective(Measured.rgb) == 0.0
     scaled = Measured.rgb * np.array([1.1, 1.0, 1.0])  # red 10 % high: e_R = 0.1, others 0
@@ -187,3 +183,15 @@ def test_vectorised_cook_torrance_matches_the_scalar_twin():
     up = np.array([0.0, 0.0, 1.0])
     assert cook_torrance(up, up, 0.8) == pytest.approx(cook_torrance_between(up, up, 0.8))
     assert cook_torrance(up, -up, 0.8) == 0.0
+
+
+def test_results_become_standard_json():
+    import json
+
+    from precompute.outputs import json_ready
+
+    value = {"a": [np.float32(0.5), math.nan, (np.int64(3), True)], "b": {"c": math.inf, "d": "text", "e": None}}
+    ready = json_ready(value)
+    assert ready == {"a": [0.5, None, [3, True]], "b": {"c": None, "d": "text", "e": None}}
+    assert type(ready["a"][0]) is float and type(ready["a"][2][0]) is int and ready["a"][2][1] is True
+    json.dumps(ready, allow_nan=False)  # no NaN or infinity left

@@ -28,23 +28,11 @@ except KeyboardInterrupt:  # Ctrl-C while ``python -m clothlight.validation.repo
 CHANNELS = ("R", "G", "B")
 
 
-def _plain(value):
-    """``value`` with NaN and infinities as None, so the JSON is standard."""
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
-
-
 def write_json(results: dict, path) -> pathlib.Path:
     """``results`` as standard JSON (NaN → null)."""
     path = pathlib.Path(path)
-    path.write_text(json.dumps(_plain(results), indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    standard = import_precompute("outputs").json_ready(results)
+    path.write_text(json.dumps(standard, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     return path
 
 

@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ParameterError
+from ..outputs import json_ready
 
 CHANNELS = ("R", "G", "B")
 #: Angles closer than this are the same, degrees (measured_data.ANGLE_TOLERANCE_DEG).
@@ -261,8 +262,8 @@ class Objective:
         fit, held = self.channel_errors(model_rgb, "fit"), self.channel_errors(model_rgb, "held_out")
         out = {
             "objective": self(model_rgb),
-            "fit_views": {"relative_rms": combined(fit), **{c: _plain(e) for c, e in zip(CHANNELS, fit)}},
-            "held_out_views": {"relative_rms": combined(held), **{c: _plain(e) for c, e in zip(CHANNELS, held)}},
+            "fit_views": {"relative_rms": combined(fit), **{c: json_ready(e) for c, e in zip(CHANNELS, fit)}},
+            "held_out_views": {"relative_rms": combined(held), **{c: json_ready(e) for c, e in zip(CHANNELS, held)}},
         }
         if self.target_ratios:
             achieved = ratios_at_normal(model_rgb, self.views)
@@ -270,10 +271,6 @@ class Objective:
                                     for key, target in self.target_ratios.items()}
             out["ratio_penalty"] = self.ratio_penalty(model_rgb)
         return out
-
-
-def _plain(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
 
 
 __all__ = ["CHANNELS", "Objective", "Views", "channel_relative_rms", "combined", "load_measurement",

@@ -32,6 +32,7 @@ import re
 import numpy as np
 
 from .. import medium as medium_module
+from ..outputs import json_ready
 from ..table_folder import check_output_folder, replace_folder
 from .objective import CHANNELS
 from .optimise import FitResult
@@ -74,19 +75,7 @@ def write_fit_folder(result: FitResult, out: str | os.PathLike, *, measured_name
 
 def fit_summary(result: FitResult, measured_name: str = "") -> dict:
     """``fit.json``'s content: :meth:`FitResult.to_dict` with the measurement named and NaN as null."""
-    return _json_safe({"measured": measured_name, "preset": result.config.get("name"), **result.to_dict()})
-
-
-def _json_safe(value):
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
+    return json_ready({"measured": measured_name, "preset": result.config.get("name"), **result.to_dict()})
 
 
 # ---- the preset ---------------------------------------------------------------------------------

@@ -221,7 +221,14 @@ def transport_memory_bytes(n_around: int, n_along: int, angular_resolution: int,
     return tallies + brdf
 
 
+def decayed_tally_bytes(n_around: int, angular_resolution: int, wavelengths: int, steps: int) -> int:
+    """Memory of the absorption-reweighting tallies (:class:`precompute.transport.cylinder.DecayedExits`),
+    bytes: n_in × n_around × n_out × L × K float32."""
+    n_in = n_out = angular_resolution**2
+    return 4 * n_in * n_around * n_out * wavelengths * steps
+
+
 __all__ = ["ANGULAR_RESOLUTION", "Bound", "INCIDENCE_RESOLUTION", "MEMORY_FRACTION", "N_ALONG", "N_AROUND",
            "PARTICLE_DIAMETER_NM", "PATHS_PER_CELL", "SEED", "SLAB_ALBEDO", "SLAB_G", "SLAB_INDEX", "SLAB_PATHS",
-           "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "WAVELENGTH_COUNT", "YARN_RADIUS_MM", "check_memory", "gib",
-           "memory_limit_bytes", "physical_memory_bytes", "transport_memory_bytes"]
+           "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "WAVELENGTH_COUNT", "YARN_RADIUS_MM", "check_memory",
+           "decayed_tally_bytes", "gib", "memory_limit_bytes", "physical_memory_bytes", "transport_memory_bytes"]

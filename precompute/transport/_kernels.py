@@ -10,6 +10,7 @@ Python callers (slab.py, cylinder.py, beam.py).
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numba
 import numpy as np
@@ -18,6 +19,9 @@ from ..grids import hemisphere_cell, square_to_hemisphere
 from ._interactions import fresnel_reflectance, refract
 from ._paths import CYLINDER, EXITED, LOST, SLAB, trace
 from ._rng import seed_stream, uniform
+
+#: The yarn kernel's absorption-reweighting tallies (:func:`yarn_kernel`).
+DecayTallies = namedtuple("DecayTallies", ["extra_mu_a", "bssrdf", "exit_sum", "exit_sq", "unscattered"])
 
 #: Rows of the slab tallies.
 SLAB_R_DIFFUSE, SLAB_R_UNSCATTERED, SLAB_T_DIFFUSE, SLAB_T_UNSCATTERED, SLAB_ABSORBED, SLAB_LOST = range(6)
@@ -76,7 +80,7 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
             pos[0] = pos[1] = pos[2] = 0.0
             d[0] = d[1] = 0.0
             d[2] = 1.0
-            status, collisions = trace(state, SLAB, dims, eta, medium, hero, hero_p, pos, d, 1.0 - specular,
+            status, collisions, _ = trace(state, SLAB, dims, eta, medium, hero, hero_p, pos, d, 1.0 - specular,
                                        ratio, banked, ratios, normal, weights, absorbed)
             collisions_total += collisions
             if status == EXITED:
@@ -144,10 +148,15 @@ def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, inward):
 @numba.njit(cache=True, error_model="numpy")
 def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_res, cos_max, n_around,
                 n_along, cell_length, out_res, table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed,
-                lost, events):
+                lost, events, decay):
     """Run incidence cell ``cell``'s tasks ``first_task + t`` of ``sizes[t]`` paths (a 0 ends the list),
     choosing hero wavelengths with probabilities ``hero_p`` (L,)."""
     n_wl = exit_sum.shape[1]
+    n_decay = decay.extra_mu_a.shape[0]
+    cell_decayed_exit = np.zeros((n_wl, n_decay))
+    cell_decayed_exit_sq = np.zeros((n_wl, n_decay))
+    cell_decayed_unscattered = np.zeros((n_wl, n_decay))
+    factors = np.empty((n_wl, n_decay))
     hero_cdf = np.cumsum(hero_p)
     hero_cdf[-1] = 1.0
     dpsi = 2.0 * math.pi / n_around
@@ -183,15 +192,22 @@ def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_r
             z = uniform(state) * cell_length
             reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, normal)
             hero = _pick_hero(state, hero_cdf)
-            status, collisions = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, pos, d, 1.0 - reflectance,
-                                       ratio, banked, ratios, normal, weights, cell_absorbed)
+            status, collisions, length = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, pos, d,
+                                               1.0 - reflectance, ratio, banked, ratios, normal, weights,
+                                               cell_absorbed)
             cell_events += collisions
             for k in range(n_wl):
                 cell_specular[k] += reflectance
+            if status == EXITED and n_decay:
+                for k in range(n_wl):
+                    for j in range(n_decay):
+                        factors[k, j] = weights[k] * math.exp(-decay.extra_mu_a[j, k] * length)
             if status == EXITED and collisions == 0:
                 # a deterministic caustic, given in closed form (precompute/ballistic.py): kept out of the BSSRDF
                 for k in range(n_wl):
                     cell_unscattered[k] += weights[k]
+                    for j in range(n_decay):
+                        cell_decayed_unscattered[k, j] += factors[k, j]
             elif status == EXITED:
                 around, along, out_cell = _exit_bins(pos, d, dpsi, n_around, n_along, cell_length, out_res)
                 for k in range(n_wl):
@@ -200,6 +216,11 @@ def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_r
                     table_sq[cell, around, out_cell, k] += w * w
                     cell_exit[k] += w
                     cell_exit_sq[k] += w * w
+                    for j in range(n_decay):
+                        f = factors[k, j]
+                        decay.bssrdf[cell, around, out_cell, k, j] += f
+                        cell_decayed_exit[k, j] += f
+                        cell_decayed_exit_sq[k, j] += f * f
             elif status == LOST:
                 for k in range(n_wl):
                     cell_lost[k] += weights[k]
@@ -210,13 +231,17 @@ def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_r
         unscattered[cell, k] += cell_unscattered[k]
         absorbed[cell, k] += cell_absorbed[k]
         lost[cell, k] += cell_lost[k]
+        for j in range(n_decay):
+            decay.exit_sum[cell, k, j] += cell_decayed_exit[k, j]
+            decay.exit_sq[cell, k, j] += cell_decayed_exit_sq[k, j]
+            decay.unscattered[cell, k, j] += cell_decayed_unscattered[k, j]
     events[cell] += cell_events
 
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")
 def yarn_kernel(slots, cells, task_first, task_sizes, seed, radius, eta, medium, hero_p, in_res, cos_max,
                 n_around, n_along, cell_length, out_res,
-                table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed, lost, events):
+                table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed, lost, events, decay):
     """Trace the tasks of incidence cells ``cells``: cell ``cells[i]`` runs, in order, tasks
     ``task_first[i] + t`` with ``task_sizes[i, t]`` paths (a 0 ends its list), choosing hero
     wavelengths with the probabilities ``hero_p[cells[i]]`` (n_in, L).  Thread slot
@@ -232,6 +257,11 @@ def yarn_kernel(slots, cells, task_first, task_sizes, seed, radius, eta, medium,
     ``specular``, ``exit_sum``, ``exit_sq`` (per-path squares), ``unscattered`` (exits without a
     collision, which are not binned), ``absorbed``, ``lost`` (n_in, L)
     and ``events`` (n_in,); the tallies are added to, so a cell's rounds accumulate.
+
+    ``decay`` (:data:`DecayTallies`) tallies the same exits again as if the medium absorbed
+    ``extra_mu_a[j]`` (K, L) 1/mm more, each exit's weight times e^{−Δμa·length}: ``bssrdf``
+    (n_in, n_around, n_out, L, K) summed over the axial bins, ``exit_sum``, ``exit_sq``,
+    ``unscattered`` (n_in, L, K).  K = 0 tallies nothing.
     """
     for s in numba.prange(slots.shape[0]):
         for i in slots[s]:
@@ -239,7 +269,7 @@ def yarn_kernel(slots, cells, task_first, task_sizes, seed, radius, eta, medium,
                 break
             _trace_cell(cells[i], task_first[i], task_sizes[i], seed, radius, eta, medium, hero_p[cells[i]],
                         in_res, cos_max, n_around, n_along, cell_length, out_res, table, table_sq, specular,
-                        exit_sum, exit_sq, unscattered, absorbed, lost, events)
+                        exit_sum, exit_sq, unscattered, absorbed, lost, events, decay)
 
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")
@@ -296,7 +326,7 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
             for k in range(n_wl):
                 task_specular[k] += reflectance
             hero = _pick_hero(state, hero_cdf)
-            status, collisions = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, pos, d, 1.0 - reflectance,
+            status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, pos, d, 1.0 - reflectance,
                                        ratio, banked, ratios, normal, weights, task_absorbed)
             task_events += collisions
             if status == EXITED:
@@ -315,3 +345,21 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
         absorbed[c] = task_absorbed
         lost[c] = task_lost
         events[c] = task_events
+
+
+@numba.njit(cache=True, parallel=True, error_model="numpy")
+def interpolate_steps(values, nodes3, quadratic, nodes2, linear, out):
+    """Each row of ``values`` (R, L, K) at one absorption per wavelength, into ``out`` (R, L):
+    ln of the three steps ``nodes3[λ]`` combined with the weights ``quadratic[λ]``, or, where
+    one of them is 0, the two steps ``nodes2[λ]`` combined linearly (:mod:`.absorption`)."""
+    n_wl = values.shape[1]
+    for r in numba.prange(values.shape[0]):
+        for k in range(n_wl):
+            a = values[r, k, nodes3[k, 0]]
+            b = values[r, k, nodes3[k, 1]]
+            c = values[r, k, nodes3[k, 2]]
+            if a > 0.0 and b > 0.0 and c > 0.0:
+                out[r, k] = math.exp(quadratic[k, 0] * math.log(a) + quadratic[k, 1] * math.log(b)
+                                     + quadratic[k, 2] * math.log(c))
+            else:
+                out[r, k] = linear[k, 0] * values[r, k, nodes2[k, 0]] + linear[k, 1] * values[r, k, nodes2[k, 1]]

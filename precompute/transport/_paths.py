@@ -226,11 +226,15 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
     """Trace one path that has just entered the medium at ``pos`` going along unit ``d``.
 
     ``eta`` = n_inside / n_outside; ``enter_weight`` the flux it carries (per unit incident
-    flux).  Returns ``(status, collisions)``.  On ``EXITED``: ``pos`` is the exit point, ``d``
+    flux).  On ``EXITED``: ``pos`` is the exit point, ``d``
     the refracted direction outside, ``weights`` (L,) the flux leaving per wavelength; on
     ``LOST`` ``weights`` holds the flux still inside; on ``TERMINATED`` (roulette) it is 0.
     ``absorbed`` (L,) is incremented by the absorbed flux in every case.  ``ratio``,
     ``banked``, ``ratios``, ``normal`` are scratch arrays ((L,), (L,), (L,), (3,)).
+
+    Returns ``(status, collisions, length)``, ``length`` the path's length inside the medium
+    (mm): a path's weight under absorption μa + Δμa is its weight here times e^{−Δμa·length}
+    (the absorption reweighting of :mod:`.absorption`).
     """
     n_wl = weights.shape[0]
     for k in range(n_wl):
@@ -301,4 +305,4 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
     # a path ended by roulette ends right after a check that formed its ratios
     _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, status != TERMINATED,
             status == TERMINATED and spectral, ratios, weights, absorbed)
-    return status, n
+    return status, n, length

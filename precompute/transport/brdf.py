@@ -123,13 +123,15 @@ def yarn_brdf_at(transport: YarnTransport, directions: np.ndarray, *, interpolat
     rho = np.zeros((len(weights), n_out * n_wl))
     variance = np.zeros_like(rho)
     for c in range(n_in):
-        w = weights[:, c, :]
-        if not np.any(w):
+        # light from a direction reaches few incidence cells of the source frames: only those rows
+        lit = np.flatnonzero(weights[:, c, :].any(axis=1))
+        if not len(lit):
             continue
+        w = weights[lit, c, :]
         part = w @ axial[c].reshape(n_around, -1)
         second = (w**2) @ transport.bssrdf_axial_second_moment[c].reshape(n_around, -1).astype(np.float64)
-        rho += part
-        variance += np.maximum(second - part**2, 0.0) / (transport.paths_per_cell[c] - 1)
+        rho[lit] += part
+        variance[lit] += np.maximum(second - part**2, 0.0) / (transport.paths_per_cell[c] - 1)
     shape = (len(weights), n_out, n_wl)
     return rho.reshape(shape), np.sqrt(variance).reshape(shape)
 

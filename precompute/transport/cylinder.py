@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from .. import bounds
 from ..errors import ParameterError
 from ..grids import AngularGrid
 from . import _kernels
@@ -98,6 +99,28 @@ class TransportGrids:
 
 
 @dataclass(frozen=True, eq=False)
+class DecayedExits:
+    """The exits of a yarn simulation tallied again at K absorptions above the simulated one: each
+    exit's weight times e^{−Δμa_j ℓ}, ℓ the path's length in the medium (exact: μa enters a path's
+    weight only as e^{−μa ℓ}, docs/transport.md).
+
+    reference_mu_a : (L,) the simulated medium's μa, 1/mm
+    extra_mu_a : (K, L) Δμa_j ≥ 0, 1/mm
+    axial_bssrdf : (n_in, n_around, n_out, L, K) float32, 1/(mm² sr): ``YarnTransport.axial_bssrdf``
+        at μa + Δμa_j
+    exit_fraction, exit_second_moment, unscattered_fraction : (n_in, L, K): the hemispherical
+        albedo, the per-path mean of its square, and the unscattered exits, at μa + Δμa_j
+    """
+
+    reference_mu_a: np.ndarray
+    extra_mu_a: np.ndarray
+    axial_bssrdf: np.ndarray
+    exit_fraction: np.ndarray
+    exit_second_moment: np.ndarray
+    unscattered_fraction: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
 class YarnTransport:
     """Tallies of one yarn simulation, per incidence cell c of ``incidence_grid`` (n_in = N²).
 
@@ -118,6 +141,11 @@ class YarnTransport:
     albedo_rel_stderr : (n_in, L)
         Relative standard error of ``exit_fraction`` (the hemispherical albedo of the cell).
     paths_per_cell : (n_in,) int; ``events``: collisions simulated; ``wall_seconds``.
+    decayed : :class:`DecayedExits` or None
+        The same exits tallied at more absorption (``simulate_yarn(extra_absorption_per_mm=...)``),
+        from which :mod:`.absorption` reweights the tables to any absorption in between.
+    axial_sum : (n_in, n_around, n_out, L) float32 or None
+        Set, with ``bssrdf`` None, by a reweighted transport, which knows only the axial sums.
     """
 
     wavelengths_nm: np.ndarray
@@ -136,6 +164,8 @@ class YarnTransport:
     target_rel_stderr: float | None
     events: int
     wall_seconds: float
+    decayed: DecayedExits | None = None
+    axial_sum: np.ndarray | None = None
 
     @property
     def incidence_grid(self) -> AngularGrid:
@@ -156,6 +186,8 @@ class YarnTransport:
         For light uniform along the yarn this is the exit radiance at offset (δ, ω_out)
         per unit flux on each source cell of a ring around the axis.
         """
+        if self.bssrdf is None:
+            return self.axial_sum.astype(np.float64)
         return self.bssrdf.sum(axis=2, dtype=np.float64)
 
     def axial_bssrdf_stderr(self) -> np.ndarray:
@@ -197,6 +229,7 @@ def simulate_yarn(
     seed: int = 0,
     threads: int | None = None,
     progress: Callable[[float], None] | None = None,
+    extra_absorption_per_mm: np.ndarray | None = None,
 ) -> YarnTransport:
     """Trace light through a yarn from every incidence cell (module docstring; eq. 4).
 
@@ -225,6 +258,9 @@ def simulate_yarn(
     progress
         Called with the completed fraction in [0, 1] (estimated from the error decay in
         target mode).
+    extra_absorption_per_mm
+        (K, L) absorptions Δμa ≥ 0 (1/mm) added to the medium's, at which the exits are
+        tallied again (``decayed`` of the result): the series :mod:`.absorption` reweights.
     """
     medium = optics if isinstance(optics, TransportMedium) else medium_from_optics(optics)
     if not isinstance(geometry, YarnGeometry):
@@ -252,8 +288,16 @@ def simulate_yarn(
         if q.shape != (n_wl,) or not np.all(np.isfinite(q)) or np.any(q <= 0) or abs(q.sum() - 1.0) > 1e-9:
             raise ParameterError("hero_probabilities", hero_probabilities, f"{n_wl} values > 0 summing to 1")
 
+    extra = np.zeros((0, n_wl))
+    if extra_absorption_per_mm is not None:
+        extra = np.asarray(extra_absorption_per_mm, float)
+        if extra.ndim != 2 or extra.shape[1] != n_wl or not np.all(np.isfinite(extra)) or np.any(extra < 0):
+            raise ParameterError("extra_absorption_per_mm", extra.shape, f"(K, {n_wl}) finite values ≥ 0 (1/mm)")
+        bounds.check_memory(bounds.decayed_tally_bytes(grids.n_around, grids.angular_resolution, n_wl, len(extra)),
+                            "extra_absorption_per_mm (steps) with the grids", (len(extra), grids))
+
     start = time.perf_counter()
-    run = _YarnRun(medium, geometry, grids, seed)
+    run = _YarnRun(medium, geometry, grids, seed, extra)
     if hero_probabilities is not None:
         run.hero_p[:] = q / q.sum()
     with numba_threads(threads):
@@ -336,7 +380,8 @@ def _counted(exit_sum: np.ndarray) -> np.ndarray:
 class _YarnRun:
     """The tallies of a yarn simulation while it runs, and the rounds of tasks that fill them."""
 
-    def __init__(self, medium: TransportMedium, geometry: YarnGeometry, grids: TransportGrids, seed: int):
+    def __init__(self, medium: TransportMedium, geometry: YarnGeometry, grids: TransportGrids, seed: int,
+                 extra_mu_a: np.ndarray):
         self.medium = medium
         self.kernel_medium = medium.kernel()
         self.geometry = geometry
@@ -361,6 +406,15 @@ class _YarnRun:
         self.tasks = np.zeros(self.n_in, dtype=np.int64)
         self.hero_p = np.full((self.n_in, n_wl), 1.0 / n_wl)
         self.reported = 0.0
+        n_decay = len(extra_mu_a)
+        self.decay = _kernels.DecayTallies(
+            np.ascontiguousarray(extra_mu_a),
+            _zeroed((self.n_in, grids.n_around, self.n_out, n_wl, n_decay) if n_decay else (0, 0, 0, 0, 0),
+                    np.float32),
+            np.zeros((self.n_in, n_wl, n_decay)),
+            np.zeros((self.n_in, n_wl, n_decay)),
+            np.zeros((self.n_in, n_wl, n_decay)),
+        )
 
     def trace_round(self, new_tasks: list[list[int]], progress, done_before: int, total: int) -> None:
         """Run every cell's new tasks, in blocks of cells (one kernel call each) for progress reports."""
@@ -384,7 +438,7 @@ class _YarnRun:
                 self.cos_max, self.grids.n_around, self.grids.n_along,
                 self.grids.cell_length_mm(self.geometry.radius_mm), self.grids.angular_resolution, self.table,
                 self.table_sq, self.specular, self.exit_sum, self.exit_sq, self.unscattered, self.absorbed, self.lost,
-                self.events,
+                self.events, self.decay,
             )
             for c in chunk:
                 self.tasks[c] += len(new_tasks[c])
@@ -454,6 +508,18 @@ class _YarnRun:
         bssrdf = self.table
         bssrdf *= norm[:, None, None].astype(np.float32)
         second = (self.table_sq * (per_exit[None, :, None] ** 2 / n[:, None, None])[:, None]).astype(np.float32)
+        decayed = None
+        if len(self.decay.extra_mu_a):
+            decayed_bssrdf = self.decay.bssrdf
+            decayed_bssrdf *= norm[:, None, :, :, None].astype(np.float32)
+            decayed = DecayedExits(
+                reference_mu_a=self.medium.mu_a.copy(),
+                extra_mu_a=self.decay.extra_mu_a.copy(),
+                axial_bssrdf=decayed_bssrdf,
+                exit_fraction=self.decay.exit_sum / n[:, None, None],
+                exit_second_moment=self.decay.exit_sq / n[:, None, None],
+                unscattered_fraction=self.decay.unscattered / n[:, None, None],
+            )
         return YarnTransport(
             wavelengths_nm=self.medium.wavelengths_nm,
             geometry=self.geometry,
@@ -471,4 +537,5 @@ class _YarnRun:
             target_rel_stderr=target,
             events=int(self.events.sum()),
             wall_seconds=seconds,
+            decayed=decayed,
         )

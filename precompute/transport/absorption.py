@@ -1,0 +1,149 @@
+"""Absorption without new transport: a yarn's BSSRDF at any absorption from one simulation.
+
+Dye and the host's own absorption change only μa.  A path of n collisions and length ℓ inside the
+medium contributes f_λ = μs^n e^{−(μs + μa) ℓ} Π p(μ_j) (docs/transport.md), so under μa + Δμa its
+contribution is exactly the simulated one times e^{−Δμa ℓ}, whatever the hero wavelength or
+roulette did.  ``simulate_yarn(extra_absorption_per_mm=steps)`` tallies every exit again at K
+absorptions Δμa_j (:class:`.cylinder.DecayedExits`); an absorption in between is read from them by
+interpolation:
+
+    T(μa) = Σ_paths w e^{−(μa − μa_ref) ℓ} is a Laplace transform of the exits' path-length
+    distribution, so ln T is smooth and convex in μa; the steps are uniform in x = ln(μa + μ_0)
+    (μ_0 = :data:`ABSORPTION_FLOOR_PER_MM`: below it a change of μa barely shows across a yarn), at
+    most :data:`STEP_RATIO` apart in μa + μ_0, and ln T is interpolated quadratically in x between
+    the three nearest steps (linearly in T where a bin is empty at one of them).
+
+The reweighted estimate uses the simulated paths with weights e^{−Δμa ℓ} ≤ 1: unbiased, with a
+relative error that grows with the added absorption (the short paths carry it), reported through
+the hemispherical albedo's standard error at each step.  Only more absorption than simulated can be
+read: the reference is the least-absorbing medium of the range (e.g. the least dye).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..errors import ParameterError
+from ._kernels import interpolate_steps
+from .cylinder import YarnTransport
+
+#: Absorption (1/mm) below which the steps are uniform in μa rather than geometric: a change of
+#: μa by it alters a path of 1 mm (five 0.2 mm yarn crossings) by 10 %.
+ABSORPTION_FLOOR_PER_MM = 0.1
+#: Largest ratio of μa + μ_0 between neighbouring steps.  With 1.25 the quadratic interpolation
+#: of ln T stays well within 1 % of a fresh simulation (benchmarks/bench_absorption_reweighting.py).
+STEP_RATIO = 1.25
+
+
+def _log_absorption(mu_a: np.ndarray) -> np.ndarray:
+    return np.log(np.asarray(mu_a, float) + ABSORPTION_FLOOR_PER_MM)
+
+
+def absorption_steps(reference_mu_a, largest_mu_a, *, ratio: float = STEP_RATIO) -> np.ndarray:
+    """The absorptions Δμa (K, L), 1/mm, to tally for reweighting from ``reference_mu_a`` (L,) up to
+    ``largest_mu_a`` (L,): K steps uniform in ln(μa + μ_0) per wavelength, the first 0, the last
+    ``largest − reference``, neighbours at most ``ratio`` apart in μa + μ_0."""
+    reference = np.asarray(reference_mu_a, float)
+    largest = np.asarray(largest_mu_a, float)
+    if reference.ndim != 1 or largest.shape != reference.shape:
+        raise ParameterError("largest_mu_a", largest.shape, f"the reference's shape {reference.shape}")
+    if not (np.all(np.isfinite(reference)) and np.all(reference >= 0)):
+        raise ParameterError("reference_mu_a", reference.tolist(), "finite values ≥ 0 (1/mm)")
+    if not (np.all(np.isfinite(largest)) and np.all(largest >= reference)):
+        raise ParameterError("largest_mu_a", largest.tolist(), "finite, ≥ the reference absorption at every wavelength")
+    if isinstance(ratio, bool) or not isinstance(ratio, (int, float)) or not 1.0 < ratio <= 4.0:
+        raise ParameterError("ratio", ratio, "a number in (1, 4]")
+    span = _log_absorption(largest) - _log_absorption(reference)
+    count = max(3, int(math.ceil(float(span.max()) / math.log(ratio) - 1e-9)) + 1)
+    x = _log_absorption(reference)[None, :] + np.linspace(0.0, 1.0, count)[:, None] * span[None, :]
+    steps = np.exp(x) - ABSORPTION_FLOOR_PER_MM - reference[None, :]
+    steps[0] = 0.0
+    steps[-1] = largest - reference
+    return np.maximum(steps, 0.0)
+
+
+def _stencil(transport: YarnTransport, mu_a: np.ndarray):
+    """Per wavelength, the three steps (L, 3) and their weights (L, 3) for quadratic interpolation in
+    x, and the two bracketing steps (L, 2) with linear weights (L, 2)."""
+    decayed = transport.decayed
+    reference = decayed.reference_mu_a
+    steps = decayed.extra_mu_a
+    count = len(steps)
+    top = reference + steps[-1]
+    tolerance = 1e-9 * np.maximum(top, 1.0)
+    if np.any(mu_a < reference - tolerance) or np.any(mu_a > top + tolerance):
+        worst = int(np.argmax(np.maximum(reference - mu_a, mu_a - top)))
+        raise ParameterError(
+            "mu_a", f"{mu_a[worst]:.6g} /mm at {transport.wavelengths_nm[worst]:g} nm",
+            f"within the series' {reference[worst]:.6g}–{top[worst]:.6g} /mm (reweighting can only add "
+            "absorption, up to the largest simulated)",
+        )
+    x_nodes = _log_absorption(reference[None, :] + steps)  # (K, L), uniform in k per wavelength
+    x_first, x_last = x_nodes[0], x_nodes[-1]
+    spacing = (x_last - x_first) / (count - 1)
+    position = np.divide(np.clip(_log_absorption(mu_a), x_first, x_last) - x_first, spacing,
+                         out=np.zeros_like(spacing), where=spacing > 0)
+    first = np.clip(np.rint(position).astype(int) - 1, 0, count - 3)
+    t = position - first
+    quadratic = np.stack([(t - 1) * (t - 2) / 2, -t * (t - 2), t * (t - 1) / 2], axis=1)
+    low = np.minimum(np.floor(position).astype(int), count - 2)
+    u = position - low
+    linear = np.stack([1 - u, u], axis=1)
+    return (np.ascontiguousarray(first[:, None] + np.arange(3)), np.ascontiguousarray(quadratic),
+            np.ascontiguousarray(low[:, None] + np.arange(2)), np.ascontiguousarray(linear))
+
+
+def _interpolate(values: np.ndarray, stencil) -> np.ndarray:
+    """``values`` (..., L, K) ≥ 0 at the steps → (..., L) at the stencil's absorption, in their dtype."""
+    *rows, n_wl, count = values.shape
+    out = np.empty((*rows, n_wl), values.dtype)
+    interpolate_steps(values.reshape(-1, n_wl, count), *stencil, out.reshape(-1, n_wl))
+    return out
+
+
+def reweighted_transport(transport: YarnTransport, mu_a) -> YarnTransport:
+    """``transport`` as if its medium absorbed ``mu_a`` (L,), 1/mm, read from its decayed exits.
+
+    The result holds the axial BSSRDF (``axial_sum``; the axial bins are not kept), the shares of
+    the incident flux and their errors, and serves :func:`.brdf.yarn_brdf` as a simulation at
+    ``mu_a`` does.  Its standard errors scale the reference's per-bin errors by how the hemispherical
+    albedo's relative error grew (an estimate; the albedo's own is exact at the steps).
+    """
+    if transport.decayed is None:
+        raise ParameterError("transport", "simulated without extra_absorption_per_mm",
+                             "a transport with decayed exits (simulate_yarn(extra_absorption_per_mm=...))")
+    decayed = transport.decayed
+    mu_a = np.asarray(mu_a, float)
+    if mu_a.shape != decayed.reference_mu_a.shape or not np.all(np.isfinite(mu_a)):
+        raise ParameterError("mu_a", mu_a.shape, f"{decayed.reference_mu_a.shape} finite values (1/mm)")
+    stencil = _stencil(transport, mu_a)
+    n = transport.paths_per_cell[:, None].astype(float)
+    exit_fraction = _interpolate(decayed.exit_fraction, stencil)
+    second = _interpolate(decayed.exit_second_moment, stencil)
+    variance = np.maximum(second - exit_fraction**2, 0.0) / (n - 1)
+    albedo_rel_stderr = np.divide(np.sqrt(variance), exit_fraction, out=np.zeros_like(exit_fraction),
+                                  where=exit_fraction > 0)
+    unscattered = _interpolate(decayed.unscattered_fraction, stencil)
+    axial = _interpolate(decayed.axial_bssrdf, stencil)  # (n_in, n_around, n_out, L) float32
+    # the reference's per-bin relative variance, grown as the albedo's relative error grew
+    reference_axial = decayed.axial_bssrdf[..., 0]
+    growth = np.divide(albedo_rel_stderr, transport.albedo_rel_stderr, out=np.ones_like(albedo_rel_stderr),
+                       where=transport.albedo_rel_stderr > 0).astype(np.float32)[:, None, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        relative_second = np.where(reference_axial > 0,
+                                   transport.bssrdf_axial_second_moment / reference_axial**2 - 1, 0)
+    axial_second = axial**2 * (1 + growth**2 * np.maximum(relative_second, 0))
+    return dataclasses.replace(
+        transport,
+        bssrdf=None,
+        axial_sum=axial,
+        bssrdf_axial_second_moment=axial_second.astype(np.float32),
+        exit_fraction=exit_fraction,
+        unscattered_fraction=unscattered,
+        absorbed_fraction=1.0 - transport.specular - exit_fraction - unscattered - transport.lost_fraction,
+        albedo_rel_stderr=albedo_rel_stderr,
+        decayed=None,
+    )

@@ -80,6 +80,7 @@ from .color import (
 )
 from .errors import ParameterError
 from .fit.parameters import FIT_TABLE, specular_from_config
+from .grids import AngularGrid
 from .medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from .optics import medium_optics, planned_phase_grid
 from .outputs import check_writable_folder
@@ -104,7 +105,8 @@ from .table_folder import (
 )
 from .tables import SCHEMA, write_table
 from .transport import TransportGrids, YarnGeometry, simulate_yarn
-from .transport.brdf import INCIDENCE_RESOLUTIONS, yarn_brdf_to_tolerance
+from .transport.absorption import absorption_steps, interpolate_absorption, step_transport
+from .transport.brdf import INCIDENCE_RESOLUTIONS, YarnBRDF, yarn_brdf, yarn_brdf_to_tolerance
 
 TRANSPORT_DEFAULTS = {
     "n_around": TransportGrids.n_around,
@@ -139,6 +141,11 @@ TABLE_SOURCES = {"entries": ("precompute.bake",)}
 TABLE_FILES = YARN_TABLE_FILES
 #: The spectral stage's file (named here, in the stage's code; precompute.table_folder checks it by this name).
 SPECTRAL_FILE = "spectral.npz"
+#: A dye series' file and format (:func:`bake` with ``dye_series``): eq. (5)'s ρ at the absorption steps.
+SERIES_FILE = "series.npz"
+SERIES_FORMAT = "clothlight-dye-series/1"
+#: The cache namespace of dye series: a folder per medium without its dye amount, an entry per range.
+SERIES_NAMESPACE = "dye_series"
 UNITS = {
     "rho": "1/sr: exit radiance L_o per irradiance E_perp of a parallel beam (plane facing the beam)",
     "brdf_stderr": "1/sr: upper bound of the standard error of rho",
@@ -417,6 +424,18 @@ def table_inputs(spectral_key: str, configuration: BakeConfiguration) -> dict:
     }
 
 
+def _paths_record(transport) -> dict:
+    return {
+        "per_incidence_cell": transport.paths_per_cell.tolist(),
+        "total": int(transport.paths_per_cell.sum()),
+        "min": int(transport.paths_per_cell.min()),
+        "max": int(transport.paths_per_cell.max()),
+        "scattering_events": int(transport.events),
+        "albedo_rel_stderr_max": float(transport.counted_albedo_rel_stderr().max()),
+        "lost_fraction_max": float(transport.lost_fraction.max()),
+    }
+
+
 def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads, progress) -> Callable:
     """The writer of a spectral cache entry: optics → transport → yarn BRDF → spectral.npz."""
 
@@ -449,15 +468,7 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
             "exit_resolution": brdf.exit_grid.resolution,
             "incidence_grid_checks": [check.to_dict() for check in checks],
             "radius_mm": geometry.radius_mm,
-            "paths": {
-                "per_incidence_cell": transport.paths_per_cell.tolist(),
-                "total": int(transport.paths_per_cell.sum()),
-                "min": int(transport.paths_per_cell.min()),
-                "max": int(transport.paths_per_cell.max()),
-                "scattering_events": int(transport.events),
-                "albedo_rel_stderr_max": float(transport.counted_albedo_rel_stderr().max()),
-                "lost_fraction_max": float(transport.lost_fraction.max()),
-            },
+            "paths": _paths_record(transport),
             "seconds": {
                 "optics": optics_seconds,
                 "transport": transport.wall_seconds,
@@ -477,6 +488,164 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
             absorbed_fraction=transport.absorbed_fraction,
             albedo_rel_stderr=transport.albedo_rel_stderr,
             paths_per_cell=transport.paths_per_cell,
+            mu_s=optics.mu_s,
+            mu_a=optics.mu_a,
+            g=optics.g,
+        )
+
+    return write
+
+
+# ---- dye series: any dye amount of a range from one simulation (precompute/transport/absorption.py) ----
+
+
+def _with_dye(medium: MediumParameters, weight_percent: float) -> MediumParameters:
+    return dataclasses.replace(medium, dye=dataclasses.replace(medium.dye, weight_percent=float(weight_percent)))
+
+
+def check_dye_series(configuration: BakeConfiguration, dye_series) -> tuple[float, float]:
+    """The dye range (low, high) in % of fibre weight, checked: a dyed medium whose dye amount lies in it."""
+    dye = configuration.medium.dye
+    if dye is None:
+        raise ParameterError("dye_series", dye_series, "a dyed medium (this preset has no [dye])")
+    try:
+        low, high = (float(v) for v in dye_series)
+    except (TypeError, ValueError):
+        raise ParameterError("dye_series", dye_series, "two dye amounts LOW,HIGH in % of fibre weight") from None
+    if not (0.0 <= low < high < 100.0):
+        raise ParameterError("dye_series", dye_series, "0 ≤ LOW < HIGH < 100 (% of fibre weight)")
+    if not low <= dye.weight_percent <= high:
+        raise ParameterError("dye.weight_percent", dye.weight_percent, f"within the dye series' {low:g}–{high:g} %")
+    return low, high
+
+
+def series_inputs(configuration: BakeConfiguration, dye_range: tuple[float, float]) -> tuple[str, dict]:
+    """The folder (per medium without its dye amount) and the inputs of a dye series' cache entry."""
+    inputs = spectral_inputs(configuration)
+    inputs["medium"]["dye"]["weight_percent"] = None
+    inputs["format"] = SERIES_FORMAT
+    folder = f"{SERIES_NAMESPACE}/{cache_key(inputs)}"
+    return folder, {**inputs, "dye_range_percent": list(dye_range)}
+
+
+def _simulate_series(configuration: BakeConfiguration, inputs: dict, key: str, dye_range, threads,
+                     progress) -> Callable:
+    """The writer of a dye series: one transport at the least dye with its exits tallied at the
+    absorption steps up to the most (:func:`precompute.transport.absorption.absorption_steps`), and
+    eq. (5) at every step on the incidence grid the least-dyed yarn needs."""
+
+    def write(folder: pathlib.Path) -> None:
+        settings = configuration.transport
+        start = time.perf_counter()
+        reference = medium_optics(_with_dye(configuration.medium, dye_range[0]))
+        largest = medium_optics(_with_dye(configuration.medium, dye_range[1]))
+        steps = absorption_steps(reference.mu_a, largest.mu_a)
+        geometry = YarnGeometry(configuration.medium.yarn.radius_mm, reference.boundary_index)
+        grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
+        optics_seconds = time.perf_counter() - start
+        transport = simulate_yarn(
+            reference, geometry, grids,
+            paths_per_cell=settings["paths_per_cell"], target_rel_stderr=settings["target_rel_stderr"],
+            seed=settings["seed"], threads=threads, extra_absorption_per_mm=steps,
+            progress=None if progress is None else (lambda fraction: progress(0.8 * fraction)),
+        )
+        brdf_start = time.perf_counter()
+        n_i = settings["incidence_resolution"]
+        brdf, checks = yarn_brdf_to_tolerance(transport, INCIDENCE_RESOLUTIONS if n_i == "auto" else (n_i,))
+        rho_steps = np.empty((*brdf.rho.shape, len(steps)), np.float32)
+        for step in range(len(steps)):
+            rho_steps[..., step] = yarn_brdf(step_transport(transport, step), brdf.incidence_grid.resolution).rho
+            if progress is not None:
+                progress(0.8 + 0.1 * (step + 1) / len(steps))
+        decayed = transport.decayed
+        record = {
+            **inputs,
+            "key": key,
+            "host_index": reference.boundary_index,
+            "phase_grid": {"kind": reference.phase_grid, "samples": reference.phase_samples},
+            "incidence_resolution": brdf.incidence_grid.resolution,
+            "exit_resolution": brdf.exit_grid.resolution,
+            "incidence_grid_checks": [check.to_dict() for check in checks],
+            "radius_mm": geometry.radius_mm,
+            "paths": _paths_record(transport),
+            "seconds": {"optics": optics_seconds, "transport": transport.wall_seconds,
+                        "brdf": time.perf_counter() - brdf_start},
+        }
+        np.savez_compressed(
+            folder / SERIES_FILE,
+            metadata=np.array(json.dumps(record, allow_nan=False)),
+            wavelengths_nm=brdf.wavelengths_nm,
+            absorption_steps=steps,
+            rho_steps=rho_steps,
+            rho_stderr=brdf.rho_stderr.astype(np.float32),
+            specular=transport.specular,
+            exit_fraction_steps=decayed.exit_fraction,
+            exit_second_moment_steps=decayed.exit_second_moment,
+            unscattered_fraction_steps=decayed.unscattered_fraction,
+            lost_fraction=transport.lost_fraction,
+            albedo_rel_stderr=transport.albedo_rel_stderr,
+            paths_per_cell=transport.paths_per_cell,
+            mu_s=reference.mu_s,
+            mu_a=reference.mu_a,
+            g=reference.g,
+        )
+
+    return write
+
+
+def _reweighted_spectral(configuration: BakeConfiguration, inputs: dict, key: str,
+                         series_folder: pathlib.Path) -> Callable:
+    """The writer of a spectral entry read from a dye series at the configuration's dye amount: the
+    same file as a simulation's (:func:`_simulate`), in seconds."""
+
+    def write(folder: pathlib.Path) -> None:
+        start = time.perf_counter()
+        arrays, series = load_spectral(series_folder / SERIES_FILE)
+        optics = medium_optics(configuration.medium)
+        wavelengths = arrays["wavelengths_nm"]
+        if not np.allclose(optics.mu_s, arrays["mu_s"], rtol=1e-12, atol=0.0):
+            raise ParameterError("dye_series", series["key"], "a series of this medium's scattering (μs differs)")
+
+        def at_dye(values):
+            return interpolate_absorption(values, arrays["mu_a"], arrays["absorption_steps"], optics.mu_a,
+                                          wavelengths)
+
+        n = arrays["paths_per_cell"][:, None].astype(float)
+        exit_fraction = at_dye(arrays["exit_fraction_steps"])
+        variance = np.maximum(at_dye(arrays["exit_second_moment_steps"]) - exit_fraction**2, 0.0) / (n - 1)
+        albedo_rel_stderr = np.divide(np.sqrt(variance), exit_fraction, out=np.zeros_like(exit_fraction),
+                                      where=exit_fraction > 0)
+        unscattered = at_dye(arrays["unscattered_fraction_steps"])
+        rho = at_dye(arrays["rho_steps"])
+        # ρ's error: the least dye's, scaled with ρ and with how much the albedo's relative error grew
+        growth = np.divide(albedo_rel_stderr, arrays["albedo_rel_stderr"], out=np.ones_like(albedo_rel_stderr),
+                           where=arrays["albedo_rel_stderr"] > 0).mean(axis=0)
+        reference_rho = arrays["rho_steps"][..., 0]
+        rho_stderr = arrays["rho_stderr"] * growth * np.divide(rho, reference_rho, out=np.zeros_like(rho),
+                                                               where=reference_rho > 0)
+        incidence_grid = AngularGrid("sphere", series["incidence_resolution"])
+        exit_grid = AngularGrid("hemisphere", series["exit_resolution"])
+        brdf = YarnBRDF(wavelengths, incidence_grid, exit_grid, rho, rho_stderr)
+        record = {
+            **inputs,
+            "key": key,
+            **{name: series[name] for name in ("host_index", "phase_grid", "incidence_resolution", "exit_resolution",
+                                               "incidence_grid_checks", "radius_mm", "paths")},
+            "seconds": {"optics": 0.0, "transport": 0.0, "brdf": 0.0, "reweighting": time.perf_counter() - start},
+        }
+        np.savez_compressed(
+            folder / SPECTRAL_FILE,
+            metadata=np.array(json.dumps(record, allow_nan=False)),
+            wavelengths_nm=wavelengths,
+            rho=rho.astype(np.float32),
+            rho_stderr=rho_stderr.astype(np.float32),
+            hemispherical_albedo=brdf.hemispherical_albedo(),
+            specular=arrays["specular"],
+            exit_fraction=exit_fraction,
+            unscattered_fraction=unscattered,
+            absorbed_fraction=1.0 - arrays["specular"] - exit_fraction - unscattered - arrays["lost_fraction"],
+            albedo_rel_stderr=albedo_rel_stderr,
+            paths_per_cell=arrays["paths_per_cell"],
             mu_s=optics.mu_s,
             mu_a=optics.mu_a,
             g=optics.g,
@@ -537,6 +706,7 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             "medium": spectral["medium"],
             "phase_grid": spectral.get("phase_grid"),
             "transport": spectral["transport"],
+            **({"dye_series": spectral["dye_series"]} if "dye_series" in spectral else {}),
             "paths": spectral["paths"],
             "colour": {
                 **colour,
@@ -625,6 +795,7 @@ def bake(
     threads: int | None = None,
     cache_dir: str | pathlib.Path | None = None,
     progress: Callable[[float], None] | None = None,
+    dye_series: tuple[float, float] | None = None,
 ) -> BakeResult:
     """Bake (or find in the cache) the tables of a yarn.
 
@@ -646,6 +817,11 @@ def bake(
         Cache folder (default :func:`precompute.cache.default_cache_dir`).
     progress
         Called with the completed fraction in [0, 1].
+    dye_series
+        A dye range (low, high), % of fibre weight, holding the preset's dye amount: the simulation
+        is made once for the range (at the least dye, its exits tallied at the absorption steps up to
+        the most; cached) and the tables at any dye amount in it are read from it in seconds
+        (:mod:`precompute.transport.absorption`), instead of a simulation per amount.
     """
     started = time.perf_counter()
     if threads is not None:
@@ -656,6 +832,11 @@ def bake(
     cache_dir = check_writable_folder(cache_dir if cache_dir is not None else default_cache_dir(), "cache_dir",
                                       what="a cache folder")
     spectral_in = spectral_inputs(configuration)
+    if dye_series is not None:
+        dye_range = check_dye_series(configuration, dye_series)
+        series_folder_name, series_in = series_inputs(configuration, dye_range)
+        series_key = cache_key(series_in)
+        spectral_in["dye_series"] = {"key": series_key, "dye_range_percent": list(dye_range)}
     spectral_key = cache_key(spectral_in)
     tables_in = table_inputs(spectral_key, configuration)
     tables_key = cache_key(tables_in)
@@ -665,7 +846,15 @@ def bake(
     simulated = False
     if not cache_hit:
         spectral_folder = lookup(cache_dir, "spectral", spectral_key)
-        if spectral_folder is None:
+        if spectral_folder is None and dye_series is not None:
+            series_folder = lookup(cache_dir, series_folder_name, series_key)
+            if series_folder is None:
+                simulate = _simulate_series(configuration, series_in, series_key, dye_range, threads, progress)
+                series_folder, _ = store(cache_dir, series_folder_name, series_key, series_in, simulate)
+                simulated = True
+            reweight = _reweighted_spectral(configuration, spectral_in, spectral_key, series_folder)
+            spectral_folder, _ = store(cache_dir, "spectral", spectral_key, spectral_in, reweight)
+        elif spectral_folder is None:
             simulate = _simulate(configuration, spectral_in, spectral_key, threads, progress)
             spectral_folder, _ = store(cache_dir, "spectral", spectral_key, spectral_in, simulate)
             simulated = True

@@ -43,6 +43,10 @@ def add_parser(subparsers) -> None:
     budget.add_argument("--target-error", type=bounds.TARGET_REL_STDERR.argument("--target-error"),
                         help="relative standard error of every incidence cell's albedo to reach "
                              f"(default 0.01), {bounds.TARGET_REL_STDERR.allowed()}")
+    parser.add_argument("--dye-series", type=_dye_range, metavar="LOW,HIGH",
+                        help="simulate once for this dye range (%% of fibre weight, holding the preset's amount; "
+                        "cached) and read the tables at any amount in it in seconds: a later bake with another "
+                        "dye.weight_percent in the range and the same --dye-series simulates nothing")
     parser.add_argument("--threads", type=int, help="CPU threads (default: all); results do not depend on it")
     parser.add_argument("--cache-dir", type=pathlib.Path, help="cache folder (default: the user cache folder)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
@@ -67,7 +71,7 @@ def run(args) -> int:
     try:
         result = bake(args.config or args.preset, args.overrides, seed=args.seed, paths_per_cell=args.paths,
                       target_rel_stderr=args.target_error, threads=args.threads, cache_dir=args.cache_dir,
-                      progress=progress)
+                      progress=progress, dye_series=args.dye_series)
     finally:
         for bar in bars:
             bar.close()
@@ -78,10 +82,15 @@ def run(args) -> int:
     ratios, paper = summary["table1_ratios_normal"], summary["table1_ratios_paper_real_red_cotton"]
     seconds = summary["seconds"]
     origin = "cache hit" if result.cache_hit else ("simulated" if result.simulated else "colour recomputed")
+    if "dye_series" in summary and not result.cache_hit:
+        low, high = summary["dye_series"]["dye_range_percent"]
+        origin += f"; read from the dye series {low:g}–{high:g} %"
     print(f"tables:  {summary['folder']}  ({origin})")
     print(f"paths:   {summary['paths']['total']:,} in all ({summary['paths']['min']:,} per incidence cell at least), "
           f"albedo rel. stderr <= {summary['paths']['albedo_rel_stderr_max']:.3g}")
     took = f"transport {seconds['transport']:.1f} s, BRDF {seconds['brdf']:.1f} s, tables {seconds['tables']:.1f} s"
+    if "reweighting" in seconds:
+        took = f"read from the dye series {seconds['reweighting']:.1f} s, tables {seconds['tables']:.1f} s"
     print(f"time:    {summary['call_seconds']:.2f} s; when baked: {took}")
     print(f"B/R = {_ratio(ratios['B/R'])}, G/R = {_ratio(ratios['G/R'])} at normal incidence and view "
           f"(paper, Table 1, real red cotton: {paper['B/R']} and {paper['G/R']})")
@@ -90,6 +99,16 @@ def run(args) -> int:
         print(f"         before clipping to the Rec.709 gamut: B/R = {_ratio(unclipped['B/R'])}, "
               f"G/R = {_ratio(unclipped['G/R'])}")
     return 0
+
+
+def _dye_range(text: str) -> tuple[float, float]:
+    import argparse
+
+    try:
+        low, high = (float(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: two dye amounts LOW,HIGH, e.g. 0.5,5") from None
+    return low, high
 
 
 def _ratio(value) -> str:

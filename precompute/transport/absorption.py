@@ -65,23 +65,20 @@ def absorption_steps(reference_mu_a, largest_mu_a, *, ratio: float = STEP_RATIO)
     return np.maximum(steps, 0.0)
 
 
-def _stencil(transport: YarnTransport, mu_a: np.ndarray):
+def _stencil(reference_mu_a: np.ndarray, steps: np.ndarray, mu_a: np.ndarray, wavelengths_nm: np.ndarray):
     """Per wavelength, the three steps (L, 3) and their weights (L, 3) for quadratic interpolation in
     x, and the two bracketing steps (L, 2) with linear weights (L, 2)."""
-    decayed = transport.decayed
-    reference = decayed.reference_mu_a
-    steps = decayed.extra_mu_a
     count = len(steps)
-    top = reference + steps[-1]
+    top = reference_mu_a + steps[-1]
     tolerance = 1e-9 * np.maximum(top, 1.0)
-    if np.any(mu_a < reference - tolerance) or np.any(mu_a > top + tolerance):
-        worst = int(np.argmax(np.maximum(reference - mu_a, mu_a - top)))
+    if np.any(mu_a < reference_mu_a - tolerance) or np.any(mu_a > top + tolerance):
+        worst = int(np.argmax(np.maximum(reference_mu_a - mu_a, mu_a - top)))
         raise ParameterError(
-            "mu_a", f"{mu_a[worst]:.6g} /mm at {transport.wavelengths_nm[worst]:g} nm",
-            f"within the series' {reference[worst]:.6g}–{top[worst]:.6g} /mm (reweighting can only add "
+            "mu_a", f"{mu_a[worst]:.6g} /mm at {wavelengths_nm[worst]:g} nm",
+            f"within the series' {reference_mu_a[worst]:.6g}–{top[worst]:.6g} /mm (reweighting can only add "
             "absorption, up to the largest simulated)",
         )
-    x_nodes = _log_absorption(reference[None, :] + steps)  # (K, L), uniform in k per wavelength
+    x_nodes = _log_absorption(reference_mu_a[None, :] + steps)  # (K, L), uniform in k per wavelength
     x_first, x_last = x_nodes[0], x_nodes[-1]
     spacing = (x_last - x_first) / (count - 1)
     position = np.divide(np.clip(_log_absorption(mu_a), x_first, x_last) - x_first, spacing,
@@ -96,12 +93,36 @@ def _stencil(transport: YarnTransport, mu_a: np.ndarray):
             np.ascontiguousarray(low[:, None] + np.arange(2)), np.ascontiguousarray(linear))
 
 
-def _interpolate(values: np.ndarray, stencil) -> np.ndarray:
-    """``values`` (..., L, K) ≥ 0 at the steps → (..., L) at the stencil's absorption, in their dtype."""
+def interpolate_absorption(values: np.ndarray, reference_mu_a, steps: np.ndarray, mu_a, wavelengths_nm) -> np.ndarray:
+    """``values`` (..., L, K) ≥ 0 tallied at absorptions ``reference_mu_a + steps[k]`` (steps from
+    :func:`absorption_steps`) → (..., L) at ``mu_a`` (L,), 1/mm, in ``values``' dtype (module docstring).
+
+    Any quantity that sums path weights times e^{−Δμa ℓ} interpolates so: the BSSRDF's bins, the
+    albedo, and eq. (5)'s ρ, a positive combination of them.
+    """
+    reference_mu_a = np.asarray(reference_mu_a, float)
+    mu_a = np.asarray(mu_a, float)
+    if mu_a.shape != reference_mu_a.shape or not np.all(np.isfinite(mu_a)):
+        raise ParameterError("mu_a", mu_a.shape, f"{reference_mu_a.shape} finite values (1/mm)")
+    stencil = _stencil(reference_mu_a, np.asarray(steps, float), mu_a, np.asarray(wavelengths_nm, float))
     *rows, n_wl, count = values.shape
     out = np.empty((*rows, n_wl), values.dtype)
-    interpolate_steps(values.reshape(-1, n_wl, count), *stencil, out.reshape(-1, n_wl))
+    interpolate_steps(np.ascontiguousarray(values).reshape(-1, n_wl, count), *stencil, out.reshape(-1, n_wl))
     return out
+
+
+def step_transport(transport: YarnTransport, step: int) -> YarnTransport:
+    """``transport`` at its decayed exits' step ``step``: the axial BSSRDF and the shares of the flux
+    (without standard errors: ``bssrdf_axial_second_moment`` is the reference's)."""
+    decayed = transport.decayed
+    exit_fraction = decayed.exit_fraction[..., step]
+    unscattered = decayed.unscattered_fraction[..., step]
+    return dataclasses.replace(
+        transport, bssrdf=None, axial_sum=decayed.axial_bssrdf[..., step], exit_fraction=exit_fraction,
+        unscattered_fraction=unscattered,
+        absorbed_fraction=1.0 - transport.specular - exit_fraction - unscattered - transport.lost_fraction,
+        decayed=None,
+    )
 
 
 def reweighted_transport(transport: YarnTransport, mu_a) -> YarnTransport:
@@ -116,18 +137,19 @@ def reweighted_transport(transport: YarnTransport, mu_a) -> YarnTransport:
         raise ParameterError("transport", "simulated without extra_absorption_per_mm",
                              "a transport with decayed exits (simulate_yarn(extra_absorption_per_mm=...))")
     decayed = transport.decayed
-    mu_a = np.asarray(mu_a, float)
-    if mu_a.shape != decayed.reference_mu_a.shape or not np.all(np.isfinite(mu_a)):
-        raise ParameterError("mu_a", mu_a.shape, f"{decayed.reference_mu_a.shape} finite values (1/mm)")
-    stencil = _stencil(transport, mu_a)
+
+    def interpolate(values):
+        return interpolate_absorption(values, decayed.reference_mu_a, decayed.extra_mu_a, mu_a,
+                                      transport.wavelengths_nm)
+
     n = transport.paths_per_cell[:, None].astype(float)
-    exit_fraction = _interpolate(decayed.exit_fraction, stencil)
-    second = _interpolate(decayed.exit_second_moment, stencil)
+    exit_fraction = interpolate(decayed.exit_fraction)
+    second = interpolate(decayed.exit_second_moment)
     variance = np.maximum(second - exit_fraction**2, 0.0) / (n - 1)
     albedo_rel_stderr = np.divide(np.sqrt(variance), exit_fraction, out=np.zeros_like(exit_fraction),
                                   where=exit_fraction > 0)
-    unscattered = _interpolate(decayed.unscattered_fraction, stencil)
-    axial = _interpolate(decayed.axial_bssrdf, stencil)  # (n_in, n_around, n_out, L) float32
+    unscattered = interpolate(decayed.unscattered_fraction)
+    axial = interpolate(decayed.axial_bssrdf)  # (n_in, n_around, n_out, L) float32
     # the reference's per-bin relative variance, grown as the albedo's relative error grew
     reference_axial = decayed.axial_bssrdf[..., 0]
     growth = np.divide(albedo_rel_stderr, transport.albedo_rel_stderr, out=np.ones_like(albedo_rel_stderr),

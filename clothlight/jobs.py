@@ -84,6 +84,10 @@ class BakeRequest:
         Transport and table grids (``[transport]`` of a preset, see :mod:`precompute.bake`); the
         defaults are the bake's.  ``incidence_resolution`` is an odd integer or ``AUTO_RESOLUTION``
         (the bake chooses it by its accuracy checks).
+    dye_series
+        A dye range (low, high), % of fibre weight: the bake simulates once for the range and reads
+        any dye amount in it in seconds (``precompute.bake.bake(dye_series=...)``); None: one
+        simulation per medium.
     """
 
     preset: str = "red_cotton"
@@ -95,9 +99,12 @@ class BakeRequest:
     n_along: int = 4
     angular_resolution: int = 12
     incidence_resolution: int | str = "auto"
+    dye_series: tuple[float, float] | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "overrides", tuple(sorted((str(k), typed_number(v)) for k, v in self.overrides)))
+        if self.dye_series is not None:
+            object.__setattr__(self, "dye_series", tuple(typed_number(v) for v in self.dye_series))
         if self.target_rel_stderr is not None:
             object.__setattr__(self, "target_rel_stderr", typed_number(self.target_rel_stderr))
 
@@ -109,7 +116,18 @@ class BakeRequest:
     def from_json(cls, text: str) -> "BakeRequest":
         fields = json.loads(text)
         fields["overrides"] = tuple(tuple(pair) for pair in fields.get("overrides", ()))
+        if fields.get("dye_series") is not None:
+            fields["dye_series"] = tuple(fields["dye_series"])
         return cls(**fields)
+
+    def same_but_dye(self, other: "BakeRequest") -> bool:
+        """Whether ``other`` asks for the same bake but another dye amount."""
+
+        def without_dye(request):
+            return dataclasses.replace(request, overrides=tuple(pair for pair in request.overrides
+                                                                if pair[0] != "dye.weight_percent"))
+
+        return without_dye(self) == without_dye(other)
 
     def bake_arguments(self) -> dict:
         """Keyword arguments of :func:`precompute.bake.bake`."""
@@ -122,6 +140,7 @@ class BakeRequest:
             "seed": self.seed,
             "paths_per_cell": self.paths_per_cell,
             "target_rel_stderr": None if self.paths_per_cell is not None else self.target_rel_stderr,
+            "dye_series": self.dye_series,
         }
 
 

@@ -8,6 +8,8 @@ does not see them.
 
 from __future__ import annotations
 
+import pathlib
+
 import bpy
 
 from .addon import import_precompute
@@ -113,6 +115,29 @@ def build_yarn_material(
     material, shader = _new_material(name, "cloth_yarn")
     tree = material.node_tree
     tree.links.new(_object_to_world(tree, YARN_TANGENT, "VECTOR", (-200, 200)), shader.inputs["YarnTangent"])
+    _read_tables(shader, tables)
+    shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
+    return material
+
+
+def yarn_tables_folder(material) -> str | None:
+    """The folder of the tables a yarn material reads, or None (not a ClothLight yarn material)."""
+    node = shader_node(material)
+    if node is None or "Table" not in node.inputs:
+        return None
+    return str(pathlib.Path(bpy.path.abspath(node.inputs["Table"].default_value)).parent)
+
+
+def read_other_tables(material, tables) -> None:
+    """Point a yarn material at other tables (another bake of its yarn): the shader's table inputs
+    only, its mode and sun kept."""
+    node = shader_node(material)
+    if node is None or "Table" not in node.inputs:
+        raise ValueError(f"material {material.name!r} has no ClothLight yarn shader")
+    _read_tables(node, tables)
+
+
+def _read_tables(shader, tables) -> None:
     shader.inputs["Table"].default_value = str(tables.brdf_path)
     shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
     shader.inputs["ExitResolution"].default_value = tables.exit_resolution
@@ -126,8 +151,6 @@ def build_yarn_material(
     if tables.specular is not None:
         for socket, key in SPECULAR_SOCKETS.items():
             shader.inputs[socket].default_value = tables.specular[key]
-    shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
-    return material
 
 
 def sync_sun(material, sun_object) -> None:

@@ -28,7 +28,15 @@ from .jobs import (
     missing_bake_dependencies,
     preset_request,
 )
-from .materials import GENERAL_MODE, SUN_MODE, build_yarn_material, shader_node, sync_sun
+from .materials import (
+    GENERAL_MODE,
+    SUN_MODE,
+    build_yarn_material,
+    read_other_tables,
+    shader_node,
+    sync_sun,
+    yarn_tables_folder,
+)
 from .mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from .prebaked import PREBAKED_DIR, REQUEST_FILE, prebaked_tables, user_copy  # noqa: F401 - the panel's names
 from .properties import ParameterError, millimetre_scale
@@ -292,6 +300,60 @@ def _redraw_panels(context) -> None:
                 area.tag_redraw()
 
 
+def _recolour_materials(medium, request: BakeRequest, folder: pathlib.Path) -> int:
+    """After a bake of a dye series that changed only the dye: point the yarn materials that read the
+    previous tables at the new ones (the dye recolours them live).  Returns how many."""
+    if request.dye_series is None or not (medium.tables_dir and medium.tables_request):
+        return 0
+    try:
+        if not request.same_but_dye(BakeRequest.from_json(medium.tables_request)):
+            return 0
+    except (ValueError, TypeError, KeyError):
+        return 0
+    previous = str(pathlib.Path(bpy.path.abspath(medium.tables_dir)))
+    readers = [m for m in bpy.data.materials if m.node_tree is not None and yarn_tables_folder(m) == previous]
+    if readers:
+        tables = yarn_tables_from_bake(folder)
+        for material in readers:
+            read_other_tables(material, tables)
+    return len(readers)
+
+
+#: Seconds after the last dye change before a recolouring bake starts (a slider drag changes it often).
+RECOLOUR_DELAY_SECONDS = 0.4
+
+
+def schedule_recolour(scene_name: str) -> None:
+    """Start Bake Tables for ``scene_name`` once the dye stops changing and no bake runs (a timer)."""
+
+    def start():
+        if _RunningBake.job is not None:
+            return RECOLOUR_DELAY_SECONDS  # the latest dye bakes after the running one
+        scene = bpy.data.scenes.get(scene_name)
+        window = bpy.context.window_manager.windows[0] if bpy.context.window_manager.windows else None
+        if scene is None or window is None:
+            return None
+        with bpy.context.temp_override(window=window, scene=scene):
+            bpy.ops.clothlight.bake_tables("INVOKE_DEFAULT")
+        return None
+
+    _ScheduledRecolour.cancel()
+    _ScheduledRecolour.start = start
+    bpy.app.timers.register(start, first_interval=RECOLOUR_DELAY_SECONDS)
+
+
+class _ScheduledRecolour:
+    """The pending recolouring bake's timer function (None when none is pending)."""
+
+    start = None
+
+    @classmethod
+    def cancel(cls) -> None:
+        if cls.start is not None and bpy.app.timers.is_registered(cls.start):
+            bpy.app.timers.unregister(cls.start)
+        cls.start = None
+
+
 class CLOTHLIGHT_OT_bake_tables(bpy.types.Operator):
     """Bake the yarn's BRDF tables from the medium settings (Monte-Carlo light transport in a background
     process; cached, so an unchanged medium is instant). Esc cancels"""
@@ -331,9 +393,12 @@ class CLOTHLIGHT_OT_bake_tables(bpy.types.Operator):
             return {"CANCELLED"}
         outcome = job.outcome
         medium = scene.clothlight.medium
+        recoloured = _recolour_materials(medium, job.request, outcome.folder)
         medium.tables_dir = str(outcome.folder)
         medium.tables_request = job.request.to_json()
         how = "found in the cache" if outcome.cache_hit else f"baked in {outcome.seconds:.0f} s"
+        if recoloured:
+            how += f", {recoloured} material{'s' if recoloured > 1 else ''} recoloured"
         self.report({"INFO"}, f"Tables {how}: {outcome.folder}{_ratios_text(outcome)}")
         return {"FINISHED"}
 
@@ -484,6 +549,7 @@ def register() -> None:
 
 
 def unregister() -> None:
+    _ScheduledRecolour.cancel()
     if _RunningBake.job is not None:
         _RunningBake.job.cancel()
         _RunningBake.job = None

@@ -216,6 +216,25 @@ def _load_base(self, _context) -> None:
     self.load_preset(self.base)
 
 
+#: The Dye Range's default, % of fibre weight: the shipped dyed presets' amounts and the paper's 1–5 % (§6.2).
+DYE_SERIES_DEFAULT = (0.05, 5.0)
+
+
+def _recolour(self, context) -> None:
+    """A dye change with Dye Range on, after a bake of these settings at another dye: re-bake (seconds)."""
+    if not (self.use_dye_series and self.tables_request):
+        return
+    try:
+        baked = BakeRequest.from_json(self.tables_request)
+        wanted = self.request()
+    except (ValueError, TypeError, KeyError):
+        return
+    if wanted != baked and wanted.same_but_dye(baked) and baked.dye_series is not None:
+        from . import operators
+
+        operators.schedule_recolour(context.scene.name)
+
+
 def _forget_request(self, _context) -> None:
     # A folder chosen by hand: what it was baked from is in its summary, not in these settings.
     self.tables_request = ""
@@ -231,8 +250,20 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
                     "choosing one loads its values")
     dye_weight_percent: FloatProperty(
         name="Dye (% of fibre weight)", default=_default("dye.weight_percent", 0.0), min=0.0, max=100.0,
-        soft_max=10.0, precision=2, step=10,
-        description="Dye content as a percentage of the fibre's weight; the paper's range is 1–5 % (§6.2)")
+        soft_max=10.0, precision=2, step=10, update=_recolour,
+        description="Dye content as a percentage of the fibre's weight; the paper's range is 1–5 % (§6.2). "
+                    "With Dye Range on and its tables baked, a change recolours the yarn materials in seconds")
+    use_dye_series: BoolProperty(
+        name="Dye Range", default=False,
+        description="Bake once for a range of dye amounts (one Monte-Carlo transport, reweighted for absorption); "
+                    "then changing the dye within the range re-bakes in seconds and recolours the yarn materials "
+                    "that read these tables")
+    dye_series_low: FloatProperty(
+        name="From (%)", default=DYE_SERIES_DEFAULT[0], min=0.0, max=99.0, soft_max=10.0, precision=2, step=10,
+        description="Least dye of the range, % of fibre weight")
+    dye_series_high: FloatProperty(
+        name="To (%)", default=DYE_SERIES_DEFAULT[1], min=0.01, max=99.9, soft_max=10.0, precision=2, step=10,
+        description="Most dye of the range, % of fibre weight (a wider range takes more memory while baking)")
     particle_diameter_nm: FloatProperty(
         name="Particle Diameter (nm)", default=_default(_particle_size_key(_DEFAULT_CONFIG) or "", 150.0),
         **_bounds.PARTICLE_DIAMETER_NM.limits(), soft_min=10.0, soft_max=2000.0, precision=1, step=100,
@@ -311,7 +342,11 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         overrides = [(key, typed_number(getattr(self, prop))) for prop, key in medium_keys(config).items()
                      if typed_number(getattr(self, prop)) != typed_number(config_value(config, key))]
         fixed = self.budget == "PATHS"
+        series = None
+        if self.use_dye_series and "dye_weight_percent" in medium_keys(config):
+            series = (typed_number(self.dye_series_low), typed_number(self.dye_series_high))
         return BakeRequest(
+            dye_series=series,
             preset=self.base, overrides=tuple(overrides), seed=self.seed,
             paths_per_cell=self.paths_per_cell if fixed else None,
             target_rel_stderr=None if fixed else self.target_error,

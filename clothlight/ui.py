@@ -100,6 +100,16 @@ class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
                 col.prop(medium, prop)
         if "dye_weight_percent" not in keys:
             layout.label(text="This medium is undyed", icon="INFO")
+        else:
+            row = layout.row(heading="Dye Range")
+            row.prop(medium, "use_dye_series", text="")
+            sub = row.row(align=True)
+            sub.active = medium.use_dye_series
+            sub.prop(medium, "dye_series_low", text="")
+            sub.prop(medium, "dye_series_high", text="")
+            if medium.use_dye_series and not (medium.dye_series_low <= medium.dye_weight_percent
+                                              <= medium.dye_series_high):
+                layout.label(text="The dye lies outside the range", icon="ERROR")
 
         job = operators.running_bake()
         if job is not None:

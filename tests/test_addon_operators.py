@@ -247,6 +247,54 @@ def test_bake_tables_runs_to_the_end_in_background_mode_and_apply_uses_its_table
     assert table == folder / "brdf.exr"
 
 
+def test_bake_request_with_a_dye_range_round_trips_and_knows_a_dye_change():
+    from clothlight.jobs import BakeRequest
+
+    request = BakeRequest(overrides=(("dye.weight_percent", 0.5),), dye_series=(0.1, 3.0))
+    assert BakeRequest.from_json(request.to_json()) == request
+    assert request.bake_arguments()["dye_series"] == (0.1, 3.0)
+    other_dye = BakeRequest(overrides=(("dye.weight_percent", 2.0),), dye_series=(0.1, 3.0))
+    assert other_dye != request and other_dye.same_but_dye(request)
+    assert not BakeRequest(overrides=(("dye.weight_percent", 2.0), ("yarn.radius_mm", 0.2)),
+                           dye_series=(0.1, 3.0)).same_but_dye(request)
+    assert not BakeRequest(overrides=(("dye.weight_percent", 2.0),), dye_series=(0.1, 4.0)).same_but_dye(request)
+
+
+def test_a_dye_range_bakes_once_then_a_dye_change_rebakes_from_it_and_recolours_the_material(addon, scene):
+    operators = addon["operators"]
+    medium = scene.clothlight.medium
+    tiny(medium)
+    medium.use_dye_series = True
+    medium.dye_series_low, medium.dye_series_high = 0.1, 3.0
+    medium.dye_weight_percent = 0.5
+    assert medium.request().dye_series == (0.1, 3.0)
+    assert bpy.ops.clothlight.bake_tables() == {"FINISHED"}
+    first = pathlib.Path(medium.tables_dir)
+    bpy.ops.clothlight.build_sample()
+    assert bpy.ops.clothlight.apply_material() == {"FINISHED"}
+    material = bpy.context.active_object.active_material
+    assert pathlib.Path(shader_inputs(material)["Table"].default_value) == first / "brdf.exr"
+
+    medium.dye_weight_percent = 2.0  # the update schedules the re-bake (a timer: never run in background mode)
+    pending = operators._ScheduledRecolour.start
+    assert pending is not None and bpy.app.timers.is_registered(pending)
+    operators._ScheduledRecolour.cancel()
+    assert bpy.ops.clothlight.bake_tables() == {"FINISHED"}
+    second = pathlib.Path(medium.tables_dir)
+    summary, before = (json.loads((folder / "summary.json").read_text()) for folder in (second, first))
+    assert second != first and summary["dye_series"] == before["dye_series"]
+    # one simulation for the range, both dye amounts read from it
+    cache = pathlib.Path(addon["preferences"].cache_directory())
+    assert len([entry for entry in cache.glob("dye_series/*/*") if not entry.name.startswith(".")]) == 1
+    assert "reweighting" in summary["seconds"] and "reweighting" in before["seconds"]
+    assert summary["rho_normal_rgb"][0] < before["rho_normal_rgb"][0]  # more dye, darker
+    assert pathlib.Path(shader_inputs(material)["Table"].default_value) == second / "brdf.exr"
+
+    medium.use_dye_series = False  # a dye change then waits for Bake Tables
+    medium.dye_weight_percent = 1.0
+    assert operators._ScheduledRecolour.start is None
+
+
 def test_bake_tables_reports_bad_input_by_parameter_name(addon, scene):
     medium = scene.clothlight.medium
     tiny(medium)

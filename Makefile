@@ -15,9 +15,13 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.clothlight-installed
 OUT ?= out
 
+# numba keeps compiled kernels beside their sources (__pycache__), keyed by the source files: the
+# kernels are compiled once per checkout here rather than during the first job (docs/transport.md).
+KERNEL_STAMP := precompute/transport/__pycache__/.kernels-compiled
+
 .PHONY: setup demo test test-fast lint bench extension clean
 
-setup: $(STAMP)
+setup: $(STAMP) $(KERNEL_STAMP)
 
 $(STAMP): requirements.txt scripts/setup_env.py
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -26,6 +30,10 @@ $(STAMP): requirements.txt scripts/setup_env.py
 	$(PY) scripts/setup_env.py
 	@touch $(STAMP)
 	@echo "environment ready: $(VENV)"
+
+$(KERNEL_STAMP): $(STAMP) $(wildcard precompute/transport/*.py) precompute/grids.py
+	$(PY) -m precompute.transport.compile
+	@touch $(KERNEL_STAMP)
 
 demo: setup
 	$(PY) scripts/run_demo.py --out $(OUT)

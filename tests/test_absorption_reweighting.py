@@ -80,6 +80,7 @@ def test_reweighted_yarn_agrees_with_a_fresh_simulation(series, fraction):
     mean_sigma = np.sqrt((sigma**2).sum(axis=0)) / len(sigma)
     assert np.all(np.abs(reweighted.exit_fraction.mean(axis=0) - fresh.exit_fraction.mean(axis=0)) < 3 * mean_sigma)
     a, b = yarn_brdf(reweighted, 5), yarn_brdf(fresh, 5)
+    assert np.all(np.isfinite(a.rho_stderr)) and np.all(a.rho_stderr >= 0)
     total_a, total_b = a.rho.sum(axis=(0, 1)), b.rho.sum(axis=(0, 1))
     bound = a.rho_stderr.sum(axis=(0, 1)) + b.rho_stderr.sum(axis=(0, 1))  # cells share paths: linear
     assert np.all(np.abs(total_a - total_b) < 3 * bound)

@@ -150,19 +150,22 @@ def reweighted_transport(transport: YarnTransport, mu_a) -> YarnTransport:
                                   where=exit_fraction > 0)
     unscattered = interpolate(decayed.unscattered_fraction)
     axial = interpolate(decayed.axial_bssrdf)  # (n_in, n_around, n_out, L) float32
-    # the reference's per-bin relative variance, grown as the albedo's relative error grew
+    # the reference's per-bin relative variance v, grown as the albedo's relative error grew (g):
+    # second = axial² (1 + g² v), v = second_ref / ref² − 1, in float32 without forming ref²
     reference_axial = decayed.axial_bssrdf[..., 0]
     growth = np.divide(albedo_rel_stderr, transport.albedo_rel_stderr, out=np.ones_like(albedo_rel_stderr),
-                       where=transport.albedo_rel_stderr > 0).astype(np.float32)[:, None, None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        relative_second = np.where(reference_axial > 0,
-                                   transport.bssrdf_axial_second_moment / reference_axial**2 - 1, 0)
-    axial_second = axial**2 * (1 + growth**2 * np.maximum(relative_second, 0))
+                       where=transport.albedo_rel_stderr > 0)
+    growth_squared = (growth**2).astype(np.float32)[:, None, None, :]
+    axial_second = np.divide(axial, reference_axial, out=np.zeros_like(axial), where=reference_axial > 0)
+    axial_second *= axial_second
+    axial_second *= transport.bssrdf_axial_second_moment
+    axial_second *= growth_squared
+    axial_second += axial * axial * (1 - growth_squared)
     return dataclasses.replace(
         transport,
         bssrdf=None,
         axial_sum=axial,
-        bssrdf_axial_second_moment=axial_second.astype(np.float32),
+        bssrdf_axial_second_moment=axial_second,
         exit_fraction=exit_fraction,
         unscattered_fraction=unscattered,
         absorbed_fraction=1.0 - transport.specular - exit_fraction - unscattered - transport.lost_fraction,

@@ -106,6 +106,7 @@ from .table_folder import (
 from .tables import SCHEMA, write_table
 from .transport import TransportGrids, YarnGeometry, simulate_yarn
 from .transport.absorption import absorption_steps, interpolate_absorption, step_transport
+from .transport.cylinder import ALBEDO_FLOOR
 from .transport.brdf import INCIDENCE_RESOLUTIONS, YarnBRDF, yarn_brdf, yarn_brdf_to_tolerance
 
 TRANSPORT_DEFAULTS = {
@@ -626,11 +627,14 @@ def _reweighted_spectral(configuration: BakeConfiguration, inputs: dict, key: st
         incidence_grid = AngularGrid("sphere", series["incidence_resolution"])
         exit_grid = AngularGrid("hemisphere", series["exit_resolution"])
         brdf = YarnBRDF(wavelengths, incidence_grid, exit_grid, rho, rho_stderr)
+        counted = exit_fraction >= ALBEDO_FLOOR * exit_fraction.max(axis=1, keepdims=True)
         record = {
             **inputs,
             "key": key,
             **{name: series[name] for name in ("host_index", "phase_grid", "incidence_resolution", "exit_resolution",
-                                               "incidence_grid_checks", "radius_mm", "paths")},
+                                               "incidence_grid_checks", "radius_mm")},
+            # the series' paths, with the error they give at this dye amount (larger than at the least dye)
+            "paths": {**series["paths"], "albedo_rel_stderr_max": float(albedo_rel_stderr[counted].max())},
             "seconds": {"optics": 0.0, "transport": 0.0, "brdf": 0.0, "reweighting": time.perf_counter() - start},
         }
         np.savez_compressed(

@@ -46,8 +46,10 @@ def test_first_bake_of_a_range_simulates_then_any_amount_in_it_does_not(series_b
     assert not again.simulated and not again.cache_hit
     assert "reweighting" in again.summary["seconds"]
     assert again.summary["dye_series"] == series_bake.summary["dye_series"]
-    # more dye, a darker and redder yarn
+    # more dye, a darker and redder yarn, read with a larger error from the same paths
     assert again.summary["rho_normal_rgb"][0] < series_bake.summary["rho_normal_rgb"][0]
+    assert again.summary["paths"]["total"] == series_bake.summary["paths"]["total"]
+    assert again.summary["paths"]["albedo_rel_stderr_max"] > series_bake.summary["paths"]["albedo_rel_stderr_max"]
 
 
 @pytest.mark.parametrize("percent", [0.5, 2.5, 5.0])

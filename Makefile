@@ -43,7 +43,7 @@ test: setup
 
 # CLOTHLIGHT_TESTS_WITHOUT_BPY makes `import bpy` fail (tests/conftest.py): the tier must not need it.
 test-fast: setup
-	CLOTHLIGHT_TESTS_WITHOUT_BPY=1 $(PY) -m pytest -m "not blender and not render and not slow"
+	CLOTHLIGHT_TESTS_WITHOUT_BPY=1 $(PY) -m pytest -n auto -m "not blender and not render and not slow"
 
 lint: setup
 	$(PY) -m ruff check .

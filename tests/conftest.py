@@ -59,9 +59,12 @@ RENDER_MODULES = {"test_addon_operators", "test_cloth_response_render", "test_cy
 SLOW_MODULES = {"test_addon_operators", "test_bake_cli", "test_bake_dye_series", "test_extension"}
 #: Fixtures that bake (yarn or cloth) or build the extension zip: a test that uses one is slow.
 SLOW_FIXTURES = {"extension_zip", "red_cotton_cloth", "transport_runs"}
-#: Single tests of otherwise quick modules that bake in a child process or run Monte-Carlo transport
-#: for seconds (module::name).
+#: Single tests of otherwise quick modules that bake in a child process, run Monte-Carlo transport
+#: or a fit's optimiser for seconds (module::name).
 SLOW_TESTS = {"test_cache::test_a_killed_bake_leaves_no_table",
+              "test_cli_exit_codes::test_the_bake_worker_reports_bad_input_and_internal_errors_in_its_events",
+              "test_fit_optimise::test_the_back_lit_constraint_keeps_the_cloth_darker_from_behind",
+              "test_fit_optimise::test_the_specular_term_is_profiled_when_the_model_splits_it_off",
               "test_cache::test_two_concurrent_bakes_of_one_key_end_with_one_valid_table",
               "test_transport_brdf::test_discretisation_error_shrinks_with_the_grids",
               "test_transport_cylinder::test_error_target_is_reached_deterministically",

@@ -22,14 +22,17 @@ except KeyboardInterrupt:
 COMMAND_MODULES = ("optics", "slab", "bake", "plot", "fit")
 
 
-def build_parser():
+def build_parser(argv: list[str] | None = None):
+    """The parser; with ``argv`` naming a command, only that command's module is imported (a slab
+    need not import the bake's colour science), else all of them (the help lists every command)."""
     import argparse
     import importlib
 
     parser = argparse.ArgumentParser(prog="python -m precompute", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     subparsers = parser.add_subparsers(dest="command", required=True)
-    for name in COMMAND_MODULES:
+    requested = next((arg for arg in argv or () if not arg.startswith("-")), None)
+    for name in (requested,) if requested in COMMAND_MODULES else COMMAND_MODULES:
         try:
             module = importlib.import_module(f"precompute.cli.{name}")
         except ModuleNotFoundError as exc:
@@ -44,8 +47,10 @@ def main(argv: list[str] | None = None) -> int:
     """Run a command; its exit code.  The command modules (numba, scipy) are imported in here, so a
     Ctrl-C during those imports ends as one at any other moment: code 130, one line."""
 
+    arguments = sys.argv[1:] if argv is None else list(argv)
+
     def command() -> int:
-        args = build_parser().parse_args(argv)
+        args = build_parser(arguments).parse_args(arguments)
         return args.func(args)
 
     return run_cli(command)

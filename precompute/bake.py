@@ -106,8 +106,8 @@ from .table_folder import (
 from .tables import SCHEMA, write_table
 from .transport import TransportGrids, YarnGeometry, simulate_yarn
 from .transport.absorption import absorption_steps, interpolate_absorption, step_transport
-from .transport.cylinder import ALBEDO_FLOOR
 from .transport.brdf import INCIDENCE_RESOLUTIONS, YarnBRDF, yarn_brdf, yarn_brdf_to_tolerance
+from .transport.cylinder import ALBEDO_FLOOR
 
 TRANSPORT_DEFAULTS = {
     "n_around": TransportGrids.n_around,
@@ -132,10 +132,13 @@ SPECTRAL_FORMAT = "clothlight-spectral/2"
 CLOSURE_FIT_SAMPLES_PER_SIDE = 36
 #: Code the result of each stage depends on, digested into its key (:mod:`precompute.sources`): the
 #: modules the stage runs and every project module they import, transitively.  The spectral stage
-#: runs the optics, the transport and :func:`_simulate` of this file, without the colour and fit
-#: this file imports (tests/test_sources.py checks that what _simulate calls comes from the former).
+#: runs the optics, the transport (with its absorption reweighting, for dye series) and
+#: :func:`_simulate`, :func:`_simulate_series` and :func:`_reweighted_spectral` of this file, without
+#: the colour and fit this file imports (tests/test_sources.py checks that what those call comes
+#: from the former).
 PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[1]
-SPECTRAL_SOURCES = {"entries": ("precompute.medium", "precompute.optics", "precompute.transport"),
+SPECTRAL_SOURCES = {"entries": ("precompute.medium", "precompute.optics", "precompute.transport",
+                                "precompute.transport.absorption"),
                     "files": ("precompute/bake.py",)}
 TABLE_SOURCES = {"entries": ("precompute.bake",)}
 #: The table files of a bake folder, written in this order (summary.json last; precompute/table_folder.py).

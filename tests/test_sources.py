@@ -108,8 +108,8 @@ def test_the_spectral_stage_is_the_physics_without_the_colour_and_the_fit():
 
 def test_what_the_spectral_stage_runs_of_bake_py_comes_from_the_spectral_modules():
     spectral = set(stage_sources(REPO, **bake_module.SPECTRAL_SOURCES))
-    used = modules_called_from("precompute/bake.py", ["_simulate"])
-    assert {"precompute.optics", "precompute.transport"} <= used
+    used = modules_called_from("precompute/bake.py", ["_simulate", "_simulate_series", "_reweighted_spectral"])
+    assert {"precompute.optics", "precompute.transport", "precompute.transport.absorption"} <= used
     assert {module_file(REPO, m).relative_to(REPO).as_posix() for m in used} <= spectral
 
 

@@ -81,7 +81,7 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
             d[0] = d[1] = 0.0
             d[2] = 1.0
             status, collisions, _ = trace(state, SLAB, dims, eta, medium, hero, hero_p, pos, d, 1.0 - specular,
-                                       ratio, banked, ratios, normal, weights, absorbed)
+                                          ratio, banked, ratios, normal, weights, absorbed)
             collisions_total += collisions
             if status == EXITED:
                 if d[2] < 0.0:
@@ -326,8 +326,8 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
             for k in range(n_wl):
                 task_specular[k] += reflectance
             hero = _pick_hero(state, hero_cdf)
-            status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, pos, d, 1.0 - reflectance,
-                                       ratio, banked, ratios, normal, weights, task_absorbed)
+            status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, pos, d,
+                                          1.0 - reflectance, ratio, banked, ratios, normal, weights, task_absorbed)
             task_events += collisions
             if status == EXITED:
                 around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)

@@ -26,6 +26,10 @@ import threading
 import time
 from collections.abc import Callable
 
+from .addon import import_precompute
+
+#: The ``[transport]`` defaults (standard library only, as the add-on's start needs).
+_TRANSPORT_DEFAULTS = import_precompute("bounds").TRANSPORT_DEFAULTS
 #: The folder holding the ``clothlight`` and ``precompute`` packages (the extension's root).
 PACKAGE_ROOT = pathlib.Path(__file__).resolve().parents[1]
 WORKER_MODULE = "clothlight.bake_worker"
@@ -92,13 +96,13 @@ class BakeRequest:
 
     preset: str = "red_cotton"
     overrides: tuple[tuple[str, float], ...] = ()
-    seed: int = 0
-    paths_per_cell: int | None = None
-    target_rel_stderr: float | None = 0.01
-    n_around: int = 32
-    n_along: int = 4
-    angular_resolution: int = 12
-    incidence_resolution: int | str = "auto"
+    seed: int = _TRANSPORT_DEFAULTS["seed"]
+    paths_per_cell: int | None = _TRANSPORT_DEFAULTS["paths_per_cell"]
+    target_rel_stderr: float | None = _TRANSPORT_DEFAULTS["target_rel_stderr"]
+    n_around: int = _TRANSPORT_DEFAULTS["n_around"]
+    n_along: int = _TRANSPORT_DEFAULTS["n_along"]
+    angular_resolution: int = _TRANSPORT_DEFAULTS["angular_resolution"]
+    incidence_resolution: int | str = _TRANSPORT_DEFAULTS["incidence_resolution"]
     dye_series: tuple[float, float] | None = None
 
     def __post_init__(self):
@@ -131,8 +135,6 @@ class BakeRequest:
 
     def bake_arguments(self) -> dict:
         """Keyword arguments of :func:`precompute.bake.bake`."""
-        from .addon import import_precompute
-
         grids = {f"transport.{name}": getattr(self, name) for name in import_precompute("bounds").GRID_SETTINGS}
         return {
             "preset_or_params": self.preset,
@@ -146,8 +148,6 @@ class BakeRequest:
 
 def preset_request(name: str) -> BakeRequest:
     """The request of the shipped preset ``name`` untouched: its own [transport] table over the defaults."""
-    from .addon import import_precompute
-
     config = import_precompute("medium").load_preset_config(name)[0]
     given = config.get("transport", {})
     defaults = BakeRequest(preset=name)

@@ -109,15 +109,7 @@ from .transport.absorption import absorption_steps, interpolate_absorption, step
 from .transport.brdf import INCIDENCE_RESOLUTIONS, YarnBRDF, yarn_brdf, yarn_brdf_to_tolerance
 from .transport.cylinder import ALBEDO_FLOOR
 
-TRANSPORT_DEFAULTS = {
-    "n_around": TransportGrids.n_around,
-    "n_along": TransportGrids.n_along,
-    "angular_resolution": TransportGrids.angular_resolution,
-    "incidence_resolution": "auto",
-    "paths_per_cell": None,
-    "target_rel_stderr": 0.01,
-    "seed": 0,
-}
+TRANSPORT_DEFAULTS = bounds.TRANSPORT_DEFAULTS
 BAKE_DEFAULTS = {"illuminant": DEFAULT_ILLUMINANT, "observer": DEFAULT_OBSERVER}
 #: The ``[fit]`` keys and their defaults (the shader's: precompute.cook_torrance), as the fit writes them.
 FIT_DEFAULTS = specular_from_config({})

@@ -22,6 +22,7 @@ import math
 import operator
 import os
 from decimal import Decimal, InvalidOperation
+from types import MappingProxyType
 
 from .errors import ParameterError
 
@@ -159,6 +160,20 @@ INCIDENCE_RESOLUTION = Bound("transport.incidence_resolution", 3, 63, integer=Tr
 #: budget and seed (:class:`clothlight.jobs.BakeRequest`), and what sizes the transport's tallies.
 GRID_SETTINGS = ("n_around", "n_along", "angular_resolution", "incidence_resolution")
 SEED = Bound("transport.seed", 0, 2**63 - 1, integer=True)
+#: The ``[transport]`` defaults, the one place for them: the bake merges a preset's table over them,
+#: the transport's grids (:class:`precompute.transport.TransportGrids`) and the add-on's bake request
+#: (:class:`clothlight.jobs.BakeRequest`) take theirs from here.  32 × 4 cells around and along: a
+#: uniformly lit yarn reads only the sum along the axis (docs/transport.md); 12 × 12 angular cells as
+#: the paper's 144; the incidence grid chosen by the bake's accuracy checks.
+TRANSPORT_DEFAULTS = MappingProxyType({
+    "n_around": 32,
+    "n_along": 4,
+    "angular_resolution": 12,
+    "incidence_resolution": "auto",
+    "paths_per_cell": None,
+    "target_rel_stderr": 0.01,
+    "seed": 0,
+})
 
 # ---- the medium (preset TOML, --set, the Yarn Medium panel) ----
 
@@ -230,5 +245,6 @@ def decayed_tally_bytes(n_around: int, angular_resolution: int, wavelengths: int
 
 __all__ = ["ANGULAR_RESOLUTION", "Bound", "INCIDENCE_RESOLUTION", "MEMORY_FRACTION", "N_ALONG", "N_AROUND",
            "PARTICLE_DIAMETER_NM", "PATHS_PER_CELL", "SEED", "SLAB_ALBEDO", "SLAB_G", "SLAB_INDEX", "SLAB_PATHS",
-           "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "WAVELENGTH_COUNT", "YARN_RADIUS_MM", "check_memory",
-           "decayed_tally_bytes", "gib", "memory_limit_bytes", "physical_memory_bytes", "transport_memory_bytes"]
+           "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "TRANSPORT_DEFAULTS", "WAVELENGTH_COUNT", "YARN_RADIUS_MM",
+           "check_memory", "decayed_tally_bytes", "gib", "memory_limit_bytes", "physical_memory_bytes",
+           "transport_memory_bytes"]

@@ -80,9 +80,9 @@ class TransportGrids:
     front (24: 2.3 %, 32: 1.3 %, 48: 0.3 %; docs/transport.md).
     """
 
-    n_around: int = 32
-    n_along: int = 4
-    angular_resolution: int = 12
+    n_around: int = bounds.TRANSPORT_DEFAULTS["n_around"]
+    n_along: int = bounds.TRANSPORT_DEFAULTS["n_along"]
+    angular_resolution: int = bounds.TRANSPORT_DEFAULTS["angular_resolution"]
 
     def __post_init__(self):
         integer_at_least("grid.n_around", self.n_around, 3)

@@ -290,6 +290,8 @@ def test_a_dye_range_bakes_once_then_a_dye_change_rebakes_from_it_and_recolours_
     assert summary["rho_normal_rgb"][0] < before["rho_normal_rgb"][0]  # more dye, darker
     assert pathlib.Path(shader_inputs(material)["Table"].default_value) == second / "brdf.exr"
 
+    medium.dye_weight_percent = 4.0  # outside the range: the panel says so, nothing is scheduled
+    assert operators._ScheduledRecolour.start is None
     medium.use_dye_series = False  # a dye change then waits for Bake Tables
     medium.dye_weight_percent = 1.0
     assert operators._ScheduledRecolour.start is None

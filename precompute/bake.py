@@ -420,6 +420,23 @@ def table_inputs(spectral_key: str, configuration: BakeConfiguration) -> dict:
     }
 
 
+def _simulation_record(inputs: dict, key: str, optics, transport, brdf, checks, seconds: dict) -> dict:
+    """The metadata of a simulated spectral entry or dye series: its inputs and key, what the optics,
+    the transport and eq. (5) chose and measured, and the seconds each took."""
+    return {
+        **inputs,
+        "key": key,
+        "host_index": optics.boundary_index,
+        "phase_grid": {"kind": optics.phase_grid, "samples": optics.phase_samples},
+        "incidence_resolution": brdf.incidence_grid.resolution,
+        "exit_resolution": brdf.exit_grid.resolution,
+        "incidence_grid_checks": [check.to_dict() for check in checks],
+        "radius_mm": transport.geometry.radius_mm,
+        "paths": _paths_record(transport),
+        "seconds": seconds,
+    }
+
+
 def _paths_record(transport) -> dict:
     return {
         "per_incidence_cell": transport.paths_per_cell.tolist(),
@@ -455,22 +472,9 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
         brdf_start = time.perf_counter()
         n_i = settings["incidence_resolution"]
         brdf, checks = yarn_brdf_to_tolerance(transport, INCIDENCE_RESOLUTIONS if n_i == "auto" else (n_i,))
-        record = {
-            **inputs,
-            "key": key,
-            "host_index": optics.boundary_index,
-            "phase_grid": {"kind": optics.phase_grid, "samples": optics.phase_samples},
-            "incidence_resolution": brdf.incidence_grid.resolution,
-            "exit_resolution": brdf.exit_grid.resolution,
-            "incidence_grid_checks": [check.to_dict() for check in checks],
-            "radius_mm": geometry.radius_mm,
-            "paths": _paths_record(transport),
-            "seconds": {
-                "optics": optics_seconds,
-                "transport": transport.wall_seconds,
-                "brdf": time.perf_counter() - brdf_start,
-            },
-        }
+        record = _simulation_record(inputs, key, optics, transport, brdf, checks,
+                                    {"optics": optics_seconds, "transport": transport.wall_seconds,
+                                     "brdf": time.perf_counter() - brdf_start})
         np.savez_compressed(
             folder / SPECTRAL_FILE,
             metadata=np.array(json.dumps(record, allow_nan=False)),
@@ -554,19 +558,9 @@ def _simulate_series(configuration: BakeConfiguration, inputs: dict, key: str, d
             if progress is not None:
                 progress(0.8 + 0.1 * (step + 1) / len(steps))
         decayed = transport.decayed
-        record = {
-            **inputs,
-            "key": key,
-            "host_index": reference.boundary_index,
-            "phase_grid": {"kind": reference.phase_grid, "samples": reference.phase_samples},
-            "incidence_resolution": brdf.incidence_grid.resolution,
-            "exit_resolution": brdf.exit_grid.resolution,
-            "incidence_grid_checks": [check.to_dict() for check in checks],
-            "radius_mm": geometry.radius_mm,
-            "paths": _paths_record(transport),
-            "seconds": {"optics": optics_seconds, "transport": transport.wall_seconds,
-                        "brdf": time.perf_counter() - brdf_start},
-        }
+        record = _simulation_record(inputs, key, reference, transport, brdf, checks,
+                                    {"optics": optics_seconds, "transport": transport.wall_seconds,
+                                     "brdf": time.perf_counter() - brdf_start})
         np.savez_compressed(
             folder / SERIES_FILE,
             metadata=np.array(json.dumps(record, allow_nan=False)),

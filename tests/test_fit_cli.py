@@ -12,6 +12,7 @@ import pytest
 
 import precompute.__main__ as precompute_cli
 from precompute.fit import report as fit_report
+from precompute.fit.parameters import PARAMETERS
 from precompute.fit.report import FIT_FOLDER_FILES
 from precompute.medium import load_preset
 from tests.test_fit_optimise import SyntheticForward, preset_with_voids, write_measurement
@@ -100,6 +101,17 @@ def test_bad_inputs_exit_with_2_before_any_work(inputs, tmp_path, fake_forward, 
         assert word in error
     assert not fake_forward.calls
     assert not (tmp_path / "fit").exists()
+
+
+def test_dye_series_is_for_a_fit_of_the_dye_alone(inputs, tmp_path, fake_forward, capsys):
+    assert fit(inputs, tmp_path / "refused", "--dye-series") == 2  # void_fraction is free too
+    assert "--dye-series" in capsys.readouterr().err and not fake_forward.calls
+    code = precompute_cli.main(["fit", "--measured", str(inputs["measured"]), "--config", str(inputs["config"]),
+                                "--free", "dye_weight_percent,specular_weight", "--budget-evaluations", "12",
+                                "--dye-series", "--out", str(tmp_path / "fit")])
+    assert code == 0
+    dye = PARAMETERS["dye_weight_percent"]
+    assert fake_forward.calls[0]["kwargs"]["dye_range"] == (dye.low, dye.high)
 
 
 def test_a_failure_while_writing_leaves_no_partial_folder(inputs, tmp_path, fake_forward, monkeypatch, capsys):

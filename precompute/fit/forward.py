@@ -15,6 +15,7 @@ Views are the measured-data CSV's ``(θi, φi, θo, φo)`` (``Measurement.angles
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import pathlib
 from collections.abc import Callable, Sequence
@@ -23,7 +24,7 @@ import numpy as np
 
 from .. import ballistic
 from ..bake import BAKE_DEFAULTS, transport_settings
-from ..cache import cache_key, default_cache_dir, lookup, store
+from ..cache import cache_key, canonical_json, default_cache_dir, lookup, store
 from ..color import clip_to_gamut, spectral_to_rgb
 from ..errors import ParameterError
 from ..medium import medium_from_dict
@@ -125,30 +126,14 @@ class ForwardModel:
 
     def tables(self, config: dict, *, relative_error: float, seed: int):
         """A candidate's BRDF atlas (N_i·N_o, N_i·N_o, 3), attenuation table (M, 3) and their layout."""
-        from clothlight.validation.response import TableLayout
-
-        from ..transport import TransportGrids, YarnGeometry, simulate_yarn, yarn_brdf
+        from ..transport import simulate_yarn, yarn_brdf
 
         medium = medium_from_dict(config, self.base_dir)
-        settings = transport_settings(config, seed=seed, paths_per_cell=paths_per_cell(relative_error))
-        colour = {**BAKE_DEFAULTS, **config.get("bake", {})}
         optics = medium_optics(medium)
-        geometry = YarnGeometry(medium.yarn.radius_mm, optics.boundary_index)
-        grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
+        geometry, grids, settings = _yarn_and_grids(config, medium, optics, seed, paths_per_cell(relative_error))
         transport = simulate_yarn(optics, geometry, grids, paths_per_cell=settings["paths_per_cell"],
                                   seed=settings["seed"], threads=self.threads)
-        brdf = yarn_brdf(transport, FIT_INCIDENCE_RESOLUTION)
-
-        def to_rgb(values):
-            return clip_to_gamut(spectral_to_rgb(values, brdf.wavelengths_nm, colour["illuminant"],
-                                                 colour["observer"]))[0]
-
-        atlas = brdf_atlas(to_rgb(brdf.rho))
-        attenuation = to_rgb(ballistic.attenuation(optics.mu_s + optics.mu_a, geometry.radius_mm,
-                                                   ballistic.attenuation_lengths()))
-        layout = TableLayout(FIT_INCIDENCE_RESOLUTION, brdf.exit_grid.resolution, ballistic.ATTENUATION_SAMPLES,
-                             optics.boundary_index, ballistic.SUN_MODE_SPREAD_RAD)
-        return atlas, attenuation, layout
+        return _candidate_tables(config, optics, geometry, yarn_brdf(transport, FIT_INCIDENCE_RESOLUTION).rho)
 
     def _mean_over_azimuths(self, per_view: np.ndarray) -> np.ndarray:
         return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), *per_view.shape[1:]).mean(axis=1)
@@ -176,8 +161,92 @@ class ForwardModel:
         return yarn + specular(specular_weight, specular_slope)[:, None]
 
 
+def _yarn_and_grids(config: dict, medium, optics, seed: int, paths: int):
+    """The yarn, the transport grids and the ``[transport]`` settings of a candidate at ``paths`` per cell."""
+    from ..transport import TransportGrids, YarnGeometry
+
+    settings = transport_settings(config, seed=seed, paths_per_cell=paths)
+    geometry = YarnGeometry(medium.yarn.radius_mm, optics.boundary_index)
+    grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
+    return geometry, grids, settings
+
+
+def _candidate_tables(config: dict, optics, geometry, rho: np.ndarray):
+    """Eq. (5)'s spectral ρ (N_i², N_o², L) on the fit's incidence grid → the BRDF atlas, the
+    attenuation table (RGB, clipped to the gamut as the bake's tables) and their layout."""
+    from clothlight.validation.response import TableLayout
+
+    colour = {**BAKE_DEFAULTS, **config.get("bake", {})}
+
+    def to_rgb(values):
+        return clip_to_gamut(spectral_to_rgb(values, optics.wavelengths_nm, colour["illuminant"],
+                                             colour["observer"]))[0]
+
+    atlas = brdf_atlas(to_rgb(rho))
+    attenuation = to_rgb(ballistic.attenuation(optics.mu_s + optics.mu_a, geometry.radius_mm,
+                                               ballistic.attenuation_lengths()))
+    exit_resolution = round(math.sqrt(rho.shape[1]))
+    layout = TableLayout(FIT_INCIDENCE_RESOLUTION, exit_resolution, ballistic.ATTENUATION_SAMPLES,
+                         optics.boundary_index, ballistic.SUN_MODE_SPREAD_RAD)
+    return atlas, attenuation, layout
+
+
+class DyeSeriesForwardModel(ForwardModel):
+    """The forward model of a fit that frees only the dye amount (and the sheen): one transport for
+    the whole ``dye_range`` (% of fibre weight), at the least dye with its exits tallied at the
+    absorption steps up to the most, at ``relative_error``; every candidate's ρ is then read from it
+    in about a second (:mod:`precompute.transport.absorption`), all from the same paths, so the
+    candidates differ by no Monte-Carlo noise.  The ``relative_error`` a candidate asks for is the
+    series' whatever it asks.  A candidate that changes anything but the dye amount starts a new
+    series."""
+
+    def __init__(self, response, view_count: int, base_dir: pathlib.Path, dye_range: tuple[float, float],
+                 threads: int | None = None, relative_error: float = 0.02, seed: int = 0):
+        super().__init__(response, view_count, base_dir, threads)
+        self.dye_range = (float(dye_range[0]), float(dye_range[1]))
+        self.relative_error = relative_error
+        self.seed = seed
+        self._series = None
+
+    def _series_for(self, config: dict, medium):
+        from ..transport import simulate_yarn, yarn_brdf
+        from ..transport.absorption import absorption_steps, step_transport
+
+        undyed = {**config, "dye": {**config["dye"], "weight_percent": None}}
+        identity = canonical_json(undyed)
+        if self._series is not None and self._series[0] == identity:
+            return self._series[1]
+        low, high = (medium_optics(dataclasses.replace(medium, dye=dataclasses.replace(medium.dye, weight_percent=w)))
+                     for w in self.dye_range)
+        geometry, grids, settings = _yarn_and_grids(config, medium, low, self.seed,
+                                                    paths_per_cell(self.relative_error))
+        steps = absorption_steps(low.mu_a, high.mu_a)
+        transport = simulate_yarn(low, geometry, grids, paths_per_cell=settings["paths_per_cell"],
+                                  seed=settings["seed"], threads=self.threads, extra_absorption_per_mm=steps)
+        rho_steps = np.stack([yarn_brdf(step_transport(transport, k), FIT_INCIDENCE_RESOLUTION).rho
+                              for k in range(len(steps))], axis=-1).astype(np.float32)
+        series = (low.mu_a, steps, rho_steps, geometry)
+        self._series = (identity, series)
+        return series
+
+    def tables(self, config: dict, *, relative_error: float, seed: int):
+        from ..transport.absorption import interpolate_absorption
+
+        if "dye" not in config:
+            raise ParameterError("dye", None, "a dyed medium (a dye series reads dye amounts)")
+        medium = medium_from_dict(config, self.base_dir)
+        if not self.dye_range[0] <= medium.dye.weight_percent <= self.dye_range[1]:
+            raise ParameterError("dye.weight_percent", medium.dye.weight_percent,
+                                 f"within the series' {self.dye_range[0]:g}–{self.dye_range[1]:g} %")
+        reference_mu_a, steps, rho_steps, geometry = self._series_for(config, medium)
+        optics = medium_optics(medium)
+        rho = interpolate_absorption(rho_steps, reference_mu_a, steps, optics.mu_a, optics.wavelengths_nm)
+        return _candidate_tables(config, optics, geometry, rho)
+
+
 def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: int = 0, cache_dir=None,
-                        threads: int | None = None, progress: Callable[[int, int], None] | None = None) -> ForwardModel:
+                        threads: int | None = None, progress: Callable[[int, int], None] | None = None,
+                        dye_range: tuple[float, float] | None = None) -> ForwardModel:
     """The forward model at ``measured_views`` ((θi, φi, θo, φo) in degrees, the CSV's convention)
     for media written like ``preset_config`` (checked here, before any render; relative files
     resolve against ``base_dir``).  ``progress(done, total)`` follows the response's renders when it
@@ -185,4 +254,6 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
     medium_from_dict(preset_config, pathlib.Path(base_dir))
     measured_views = [tuple(float(a) for a in view) for view in measured_views]
     response = cloth_response(measured_views, seed=seed, cache_dir=cache_dir, progress=progress)
+    if dye_range is not None:
+        return DyeSeriesForwardModel(response, len(measured_views), base_dir, dye_range, threads, seed=seed)
     return ForwardModel(response, len(measured_views), base_dir, threads)

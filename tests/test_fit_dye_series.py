@@ -1,0 +1,57 @@
+"""The fit's forward model for a dye-only fit: one transport for the dye range, every candidate's
+tables read from it (precompute.fit.forward.DyeSeriesForwardModel), against the per-candidate one."""
+
+import copy
+
+import numpy as np
+import pytest
+
+from precompute.errors import ParameterError
+from precompute.fit.forward import DyeSeriesForwardModel, ForwardModel
+from precompute.medium import PRESET_DIR, load_preset_config
+
+SMALL = {"n_around": 8, "n_along": 4, "angular_resolution": 4}
+
+
+def red_cotton(dye: float) -> dict:
+    config = copy.deepcopy(load_preset_config("red_cotton")[0])
+    config.pop("fit")
+    config["transport"] = dict(SMALL)
+    config["dye"]["weight_percent"] = dye
+    return config
+
+
+@pytest.fixture(scope="module")
+def series_model():
+    return DyeSeriesForwardModel(None, 0, PRESET_DIR, (0.1, 3.0), relative_error=0.015, seed=2)
+
+
+def test_candidates_read_from_one_series_agree_with_their_own_transport(series_model):
+    per_candidate = ForwardModel(None, 0, PRESET_DIR)
+    previous = None
+    for dye in (0.1, 0.8, 3.0):
+        atlas, attenuation, layout = series_model.tables(red_cotton(dye), relative_error=0.08, seed=0)
+        fresh, fresh_attenuation, fresh_layout = per_candidate.tables(red_cotton(dye), relative_error=0.015, seed=5)
+        assert layout == fresh_layout
+        np.testing.assert_allclose(attenuation, fresh_attenuation, rtol=1e-12)
+        red = atlas[..., 0].sum(), fresh[..., 0].sum()
+        assert abs(red[0] / red[1] - 1) < 0.03, (dye, red)
+        if previous is not None:
+            assert red[0] < previous  # more dye, less red
+        previous = red[0]
+    first = series_model._series
+    series_model.tables(red_cotton(1.5), relative_error=0.08, seed=9)
+    assert series_model._series is first  # another dye amount: the same series, no transport
+    again = series_model.tables(red_cotton(1.5), relative_error=0.02, seed=1)[0]
+    np.testing.assert_array_equal(again, series_model.tables(red_cotton(1.5), relative_error=0.08, seed=3)[0])
+
+
+def test_another_medium_starts_a_new_series_and_a_dye_outside_is_refused(series_model):
+    series_model.tables(red_cotton(1.0), relative_error=0.08, seed=0)
+    first = series_model._series
+    thinner = red_cotton(1.0)
+    thinner["yarn"]["radius_mm"] = 0.08
+    series_model.tables(thinner, relative_error=0.08, seed=0)
+    assert series_model._series is not first
+    with pytest.raises(ParameterError, match="dye.weight_percent"):
+        series_model.tables(red_cotton(4.0), relative_error=0.08, seed=0)

@@ -196,9 +196,9 @@ class DyeSeriesForwardModel(ForwardModel):
     the whole ``dye_range`` (% of fibre weight), at the least dye with its exits tallied at the
     absorption steps up to the most, at ``relative_error``; every candidate's ρ is then read from it
     in about a second (:mod:`precompute.transport.absorption`), all from the same paths, so the
-    candidates differ by no Monte-Carlo noise.  The ``relative_error`` a candidate asks for is the
-    series' whatever it asks.  A candidate that changes anything but the dye amount starts a new
-    series."""
+    candidates differ by no Monte-Carlo noise.  Every candidate has the series' accuracy, whatever
+    ``relative_error`` it asks for.  A candidate that changes anything but the dye amount starts a
+    new series."""
 
     def __init__(self, response, view_count: int, base_dir: pathlib.Path, dye_range: tuple[float, float],
                  threads: int | None = None, relative_error: float = 0.02, seed: int = 0):
@@ -250,7 +250,8 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
     """The forward model at ``measured_views`` ((θi, φi, θo, φo) in degrees, the CSV's convention)
     for media written like ``preset_config`` (checked here, before any render; relative files
     resolve against ``base_dir``).  ``progress(done, total)`` follows the response's renders when it
-    is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call)."""
+    is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call).  With
+    ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone."""
     medium_from_dict(preset_config, pathlib.Path(base_dir))
     measured_views = [tuple(float(a) for a in view) for view in measured_views]
     response = cloth_response(measured_views, seed=seed, cache_dir=cache_dir, progress=progress)

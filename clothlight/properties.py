@@ -229,9 +229,10 @@ def _recolour(self, context) -> None:
         wanted = self.request()
     except (ValueError, TypeError, KeyError):
         return
-    low, high = wanted.dye_series or (0.0, -1.0)
-    if wanted != baked and wanted.same_but_dye(baked) and baked.dye_series is not None and (
-            low <= typed_number(self.dye_weight_percent) <= high):
+    if baked.dye_series is None or wanted == baked or not wanted.same_but_dye(baked):
+        return
+    low, high = baked.dye_series
+    if low <= typed_number(self.dye_weight_percent) <= high:
         from . import operators
 
         operators.schedule_recolour(context.scene.name)

@@ -105,9 +105,14 @@ from .table_folder import (
 )
 from .tables import SCHEMA, write_table
 from .transport import TransportGrids, YarnGeometry, simulate_yarn
-from .transport.absorption import absorption_steps, interpolate_absorption, step_transport
+from .transport.absorption import (
+    absorption_steps,
+    albedo_relative_stderr,
+    interpolate_absorption,
+    step_transport,
+)
 from .transport.brdf import INCIDENCE_RESOLUTIONS, YarnBRDF, yarn_brdf, yarn_brdf_to_tolerance
-from .transport.cylinder import ALBEDO_FLOOR
+from .transport.cylinder import counted_wavelengths
 
 TRANSPORT_DEFAULTS = bounds.TRANSPORT_DEFAULTS
 BAKE_DEFAULTS = {"illuminant": DEFAULT_ILLUMINANT, "observer": DEFAULT_OBSERVER}
@@ -499,10 +504,6 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
 # ---- dye series: any dye amount of a range from one simulation (precompute/transport/absorption.py) ----
 
 
-def _with_dye(medium: MediumParameters, weight_percent: float) -> MediumParameters:
-    return dataclasses.replace(medium, dye=dataclasses.replace(medium.dye, weight_percent=float(weight_percent)))
-
-
 def check_dye_series(configuration: BakeConfiguration, dye_series) -> tuple[float, float]:
     """The dye range (low, high) in % of fibre weight, checked: a dyed medium whose dye amount lies in it."""
     dye = configuration.medium.dye
@@ -537,8 +538,8 @@ def _simulate_series(configuration: BakeConfiguration, inputs: dict, key: str, d
     def write(folder: pathlib.Path) -> None:
         settings = configuration.transport
         start = time.perf_counter()
-        reference = medium_optics(_with_dye(configuration.medium, dye_range[0]))
-        largest = medium_optics(_with_dye(configuration.medium, dye_range[1]))
+        reference = medium_optics(configuration.medium.with_dye(dye_range[0]))
+        largest = medium_optics(configuration.medium.with_dye(dye_range[1]))
         steps = absorption_steps(reference.mu_a, largest.mu_a)
         geometry = YarnGeometry(configuration.medium.yarn.radius_mm, reference.boundary_index)
         grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
@@ -600,11 +601,9 @@ def _reweighted_spectral(configuration: BakeConfiguration, inputs: dict, key: st
             return interpolate_absorption(values, arrays["mu_a"], arrays["absorption_steps"], optics.mu_a,
                                           wavelengths)
 
-        n = arrays["paths_per_cell"][:, None].astype(float)
         exit_fraction = at_dye(arrays["exit_fraction_steps"])
-        variance = np.maximum(at_dye(arrays["exit_second_moment_steps"]) - exit_fraction**2, 0.0) / (n - 1)
-        albedo_rel_stderr = np.divide(np.sqrt(variance), exit_fraction, out=np.zeros_like(exit_fraction),
-                                      where=exit_fraction > 0)
+        albedo_rel_stderr = albedo_relative_stderr(exit_fraction, at_dye(arrays["exit_second_moment_steps"]),
+                                                   arrays["paths_per_cell"])
         unscattered = at_dye(arrays["unscattered_fraction_steps"])
         rho = at_dye(arrays["rho_steps"])
         # ρ's error: the least dye's, scaled with ρ and with how much the albedo's relative error grew
@@ -616,7 +615,7 @@ def _reweighted_spectral(configuration: BakeConfiguration, inputs: dict, key: st
         incidence_grid = AngularGrid("sphere", series["incidence_resolution"])
         exit_grid = AngularGrid("hemisphere", series["exit_resolution"])
         brdf = YarnBRDF(wavelengths, incidence_grid, exit_grid, rho, rho_stderr)
-        counted = exit_fraction >= ALBEDO_FLOOR * exit_fraction.max(axis=1, keepdims=True)
+        counted = counted_wavelengths(exit_fraction)
         record = {
             **inputs,
             "key": key,

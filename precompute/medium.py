@@ -390,6 +390,10 @@ class MediumParameters:
         """Fraction of the yarn volume taken by particles of every species."""
         return float(sum(p.volume_fraction for p in self.particles))
 
+    def with_dye(self, weight_percent: float) -> MediumParameters:
+        """The same medium with another dye amount, % of fibre weight (a dyed medium)."""
+        return dataclasses.replace(self, dye=dataclasses.replace(self.dye, weight_percent=float(weight_percent)))
+
     def to_dict(self) -> dict:
         """A plain, JSON-serialisable description (for headers, hashes and reports)."""
 

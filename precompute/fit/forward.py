@@ -15,7 +15,6 @@ Views are the measured-data CSV's ``(θi, φi, θo, φo)`` (``Measurement.angles
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import pathlib
 from collections.abc import Callable, Sequence
@@ -216,8 +215,7 @@ class DyeSeriesForwardModel(ForwardModel):
         identity = canonical_json(undyed)
         if self._series is not None and self._series[0] == identity:
             return self._series[1]
-        low, high = (medium_optics(dataclasses.replace(medium, dye=dataclasses.replace(medium.dye, weight_percent=w)))
-                     for w in self.dye_range)
+        low, high = (medium_optics(medium.with_dye(w)) for w in self.dye_range)
         geometry, grids, settings = _yarn_and_grids(config, medium, low, self.seed,
                                                     paths_per_cell(self.relative_error))
         steps = absorption_steps(low.mu_a, high.mu_a)

@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ._kernels import interpolate_steps
-from .cylinder import YarnTransport
+from .cylinder import YarnTransport, relative_stderr
 
 #: Absorption (1/mm) below which the steps are uniform in μa rather than geometric: a change of
 #: μa by it alters a path of 1 mm (five 0.2 mm yarn crossings) by 10 %.
@@ -111,18 +111,30 @@ def interpolate_absorption(values: np.ndarray, reference_mu_a, steps: np.ndarray
     return out
 
 
+def albedo_relative_stderr(exit_fraction: np.ndarray, exit_second_moment: np.ndarray,
+                           paths_per_cell: np.ndarray) -> np.ndarray:
+    """Relative standard error (n_in, L) of the hemispherical albedo from its per-path mean and mean
+    square (n_in, L), as a simulation reports it (:func:`.cylinder.relative_stderr`)."""
+    n = paths_per_cell[:, None].astype(float)
+    return relative_stderr(exit_fraction * n, exit_second_moment * n, paths_per_cell)
+
+
+def _at_absorption(transport: YarnTransport, axial: np.ndarray, exit_fraction: np.ndarray,
+                   unscattered: np.ndarray, **more) -> YarnTransport:
+    """``transport`` with the axial BSSRDF and the shares of the flux of another absorption."""
+    return dataclasses.replace(
+        transport, bssrdf=None, axial_sum=axial, exit_fraction=exit_fraction, unscattered_fraction=unscattered,
+        absorbed_fraction=1.0 - transport.specular - exit_fraction - unscattered - transport.lost_fraction,
+        decayed=None, **more,
+    )
+
+
 def step_transport(transport: YarnTransport, step: int) -> YarnTransport:
     """``transport`` at its decayed exits' step ``step``: the axial BSSRDF and the shares of the flux
     (without standard errors: ``bssrdf_axial_second_moment`` is the reference's)."""
     decayed = transport.decayed
-    exit_fraction = decayed.exit_fraction[..., step]
-    unscattered = decayed.unscattered_fraction[..., step]
-    return dataclasses.replace(
-        transport, bssrdf=None, axial_sum=decayed.axial_bssrdf[..., step], exit_fraction=exit_fraction,
-        unscattered_fraction=unscattered,
-        absorbed_fraction=1.0 - transport.specular - exit_fraction - unscattered - transport.lost_fraction,
-        decayed=None,
-    )
+    return _at_absorption(transport, decayed.axial_bssrdf[..., step], decayed.exit_fraction[..., step],
+                          decayed.unscattered_fraction[..., step])
 
 
 def reweighted_transport(transport: YarnTransport, mu_a) -> YarnTransport:
@@ -142,12 +154,9 @@ def reweighted_transport(transport: YarnTransport, mu_a) -> YarnTransport:
         return interpolate_absorption(values, decayed.reference_mu_a, decayed.extra_mu_a, mu_a,
                                       transport.wavelengths_nm)
 
-    n = transport.paths_per_cell[:, None].astype(float)
     exit_fraction = interpolate(decayed.exit_fraction)
-    second = interpolate(decayed.exit_second_moment)
-    variance = np.maximum(second - exit_fraction**2, 0.0) / (n - 1)
-    albedo_rel_stderr = np.divide(np.sqrt(variance), exit_fraction, out=np.zeros_like(exit_fraction),
-                                  where=exit_fraction > 0)
+    albedo_rel_stderr = albedo_relative_stderr(exit_fraction, interpolate(decayed.exit_second_moment),
+                                               transport.paths_per_cell)
     unscattered = interpolate(decayed.unscattered_fraction)
     axial = interpolate(decayed.axial_bssrdf)  # (n_in, n_around, n_out, L) float32
     # the reference's per-bin relative variance v, grown as the albedo's relative error grew (g):
@@ -161,14 +170,5 @@ def reweighted_transport(transport: YarnTransport, mu_a) -> YarnTransport:
     axial_second *= transport.bssrdf_axial_second_moment
     axial_second *= growth_squared
     axial_second += axial * axial * (1 - growth_squared)
-    return dataclasses.replace(
-        transport,
-        bssrdf=None,
-        axial_sum=axial,
-        bssrdf_axial_second_moment=axial_second,
-        exit_fraction=exit_fraction,
-        unscattered_fraction=unscattered,
-        absorbed_fraction=1.0 - transport.specular - exit_fraction - unscattered - transport.lost_fraction,
-        albedo_rel_stderr=albedo_rel_stderr,
-        decayed=None,
-    )
+    return _at_absorption(transport, axial, exit_fraction, unscattered, bssrdf_axial_second_moment=axial_second,
+                          albedo_rel_stderr=albedo_rel_stderr)

@@ -199,7 +199,7 @@ class YarnTransport:
 
     def counted_albedo_rel_stderr(self) -> np.ndarray:
         """``albedo_rel_stderr`` where the error target applies (see ALBEDO_FLOOR), 0 elsewhere."""
-        return np.where(_counted(self.exit_fraction), self.albedo_rel_stderr, 0.0)
+        return np.where(counted_wavelengths(self.exit_fraction), self.albedo_rel_stderr, 0.0)
 
 
 def mean_cos_per_cell(grid: AngularGrid, subsamples: int = 64) -> np.ndarray:
@@ -364,7 +364,7 @@ def _paths_needed(v0: np.ndarray, v1: np.ndarray, n0: np.ndarray, target: float)
     return np.max((v1 + root) / (2 * target**2), axis=1)
 
 
-def _relative_stderr(total: np.ndarray, total_sq: np.ndarray, paths: np.ndarray) -> np.ndarray:
+def relative_stderr(total: np.ndarray, total_sq: np.ndarray, paths: np.ndarray) -> np.ndarray:
     """Relative standard error of the mean of per-path values with sums ``total``, ``total_sq``."""
     n = paths[:, None].astype(float)
     mean = total / n
@@ -372,7 +372,7 @@ def _relative_stderr(total: np.ndarray, total_sq: np.ndarray, paths: np.ndarray)
     return np.divide(np.sqrt(variance), mean, out=np.zeros_like(mean), where=mean > 0)
 
 
-def _counted(exit_sum: np.ndarray) -> np.ndarray:
+def counted_wavelengths(exit_sum: np.ndarray) -> np.ndarray:
     """Wavelengths whose albedo the error target applies to, per cell."""
     return exit_sum >= ALBEDO_FLOOR * exit_sum.max(axis=1, keepdims=True)
 
@@ -451,10 +451,10 @@ class _YarnRun:
 
     def relative_stderr(self) -> np.ndarray:
         """Relative standard error of every cell's hemispherical albedo, (n_in, L)."""
-        return _relative_stderr(self.exit_sum, self.exit_sq, self.paths)
+        return relative_stderr(self.exit_sum, self.exit_sq, self.paths)
 
     def worst_counted_error(self) -> np.ndarray:
-        return np.max(np.where(_counted(self.exit_sum), self.relative_stderr(), 0.0), axis=1)
+        return np.max(np.where(counted_wavelengths(self.exit_sum), self.relative_stderr(), 0.0), axis=1)
 
     def trace_to_target(self, target: float, max_paths: int, progress) -> None:
         """Rounds of paths until every cell's albedo error is at most ``target`` at every counted
@@ -472,7 +472,7 @@ class _YarnRun:
         self.trace_round(_split(np.full(self.n_in, FIRST_ROUND_PATHS)), progress, 0, total_guess)
         if not np.any(self.worst_counted_error() > target):
             return
-        counted = _counted(self.exit_sum)
+        counted = counted_wavelengths(self.exit_sum)
         n0 = self.paths[:, None].astype(float)
         mean = self.exit_sum / n0
         v0 = np.where(counted, self.relative_stderr() ** 2, 0.0) * n0

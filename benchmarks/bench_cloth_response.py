@@ -39,9 +39,9 @@ def main() -> None:
     import bpy
 
     from clothlight.validation.response import TableLayout
-    from clothlight.validation.response_render import measure_response
-    from clothlight.validation.rig import RigSettings
-    from clothlight.validation.run import run_validation
+    from clothlight.blender.validation.response_render import measure_response
+    from clothlight.blender.validation.rig import RigSettings
+    from clothlight.blender.validation.run import run_validation
     from clothlight.yarn_tables import yarn_tables_from_bake
     from precompute import ballistic
 

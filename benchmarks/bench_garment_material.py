@@ -20,11 +20,11 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 import bpy
 import numpy as np
 
-from clothlight.garment.drape import draped_cloth
-from clothlight.garment.material import build_garment_material, cloth_tables_from_bake
+from clothlight.blender.garment.drape import draped_cloth
+from clothlight.blender.garment.material import build_garment_material, cloth_tables_from_bake
 from clothlight.garment.tables import SUMMARY_FILE
-from clothlight.materials import GENERAL_MODE
-from clothlight.measurement_render import configure_measurement_render, render_to_array
+from clothlight.blender.materials import GENERAL_MODE
+from clothlight.blender.measurement_render import configure_measurement_render, render_to_array
 from render_cost import light_and_camera, principled_with_sheen, print_render_cost, read_rgb
 
 REPO = pathlib.Path(__file__).resolve().parents[1]

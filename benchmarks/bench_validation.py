@@ -35,8 +35,8 @@ def cached_red_cotton_bake() -> pathlib.Path | None:
 def main() -> None:
     import bpy
 
-    from clothlight.validation.rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES, RigSettings
-    from clothlight.validation.run import run_validation
+    from clothlight.blender.validation.rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES, RigSettings
+    from clothlight.blender.validation.run import run_validation
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--resolution", type=int, default=DEFAULT_RESOLUTION)

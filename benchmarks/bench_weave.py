@@ -62,7 +62,7 @@ def main():
     except ImportError:
         print("  bpy not importable: Blender object not timed")
     else:
-        from clothlight.sample_object import build_sample_object
+        from clothlight.blender.sample_object import build_sample_object
 
         bpy.ops.wm.read_homefile(use_empty=True)
         blender_seconds, obj = timed(lambda: build_sample_object(params))

@@ -9,9 +9,9 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 import bpy
 
-from clothlight.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun
-from clothlight.measurement_render import configure_measurement_render
-from clothlight.sample_object import build_sample_object
+from clothlight.blender.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun
+from clothlight.blender.measurement_render import configure_measurement_render
+from clothlight.blender.sample_object import build_sample_object
 from clothlight.weave import WeaveParameters
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.bake import bake

@@ -1,7 +1,7 @@
 """The allowed ranges of the add-on's render settings: the validation sweep (``python -m
-clothlight.validate``, the Validation panel, :class:`clothlight.validation.rig.RigSettings`) and the
+clothlight.validate``, the Validation panel, :class:`clothlight.blender.validation.rig.RigSettings`) and the
 cloth gonioreflectometer (``python -m clothlight.garment bake``,
-:class:`clothlight.garment.measure.GoniometerSettings`), as :class:`precompute.bounds.Bound` data
+:class:`clothlight.blender.garment.measure.GoniometerSettings`), as :class:`precompute.bounds.Bound` data
 (the yarn bake's are in ``precompute/bounds.py``).  The command lines parse with
 :meth:`~precompute.bounds.Bound.argument`, the settings check with :meth:`~precompute.bounds.Bound.check`.
 

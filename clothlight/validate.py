@@ -1,7 +1,7 @@
 """``python -m clothlight.validate``: the virtual gonioreflectometer with Blender as a Python module.
 
 The same arguments run in a real Blender through ``blender -b -P scripts/validate_blender.py -- …``,
-and both call :func:`clothlight.validation.run.run_validation`, as the add-on's operator does.
+and both call :func:`clothlight.blender.validation.run.run_validation`, as the add-on's operator does.
 
 Examples::
 
@@ -130,11 +130,10 @@ def stdout_to_stderr():
 
 
 def _sweep(args, interrupt) -> dict:
-    import bpy
-
+    from .blender import scene_files
+    from .blender.validation.rig import RigSettings
+    from .blender.validation.run import run_validation
     from .validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, ParameterError
-    from .validation.rig import RigSettings
-    from .validation.run import run_validation
 
     interrupt.check()
     settings = RigSettings(incidences_deg=tuple(args.incidences or DEFAULT_INCIDENCES_DEG),
@@ -148,20 +147,17 @@ def _sweep(args, interrupt) -> dict:
         interrupt.check()  # after a render: the sweep removes its rig on the way out
 
     if args.blend:
-        try:
-            bpy.ops.wm.open_mainfile(filepath=str(pathlib.Path(args.blend).resolve()))
-        except RuntimeError as error:
-            reason = str(error).strip().splitlines()[-1] if str(error).strip() else "Blender cannot open it"
-            raise ParameterError("--blend", args.blend, f"a .blend file Blender can open ({reason})") from None
+        reason = scene_files.open_blend_file(args.blend)
+        if reason is not None:
+            raise ParameterError("--blend", args.blend, f"a .blend file Blender can open ({reason})")
     elif not args.object:
-        bpy.ops.wm.read_homefile(use_empty=True)
+        scene_files.open_empty_file()
     interrupt.check()
     sample = None
     if args.object:
-        sample = bpy.data.objects.get(args.object)
+        sample = scene_files.object_named(args.object)
         if sample is None:
-            raise ParameterError("--object", args.object,
-                                 f"an object of the open file: {sorted(bpy.data.objects.keys())}")
+            raise ParameterError("--object", args.object, f"an object of the open file: {scene_files.object_names()}")
     try:
         with stdout_to_stderr() if args.json else contextlib.nullcontext():
             return run_validation(sample, args.out, materials=args.material, tables_dir=args.tables,

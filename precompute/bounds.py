@@ -2,7 +2,7 @@
 
 The Python API (:mod:`precompute.medium`, :mod:`precompute.bake`), the command line (``python -m
 precompute``: each option parses with :meth:`Bound.argument`, which also takes the ``2e4`` notation
-its help prints) and the add-on's panel (``clothlight/properties.py``: ``min``/``max`` from
+its help prints) and the add-on's panel (``clothlight/blender/properties.py``: ``min``/``max`` from
 :meth:`Bound.limits`) all read these, so they refuse the same values with the same message: the
 parameter, the value and the range (:class:`~precompute.errors.ParameterError`).  The add-on's own
 bounds (validation renders, the cloth gonioreflectometer) are in ``clothlight/render_bounds.py``,

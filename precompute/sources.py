@@ -20,7 +20,7 @@ everything else (NumPy, bpy, the standard library) is left out.
 
 OSL: a string literal in one of those modules that names a shader of ``root/osl`` (``"cloth_yarn"``
 or ``"cloth_yarn.osl"``) adds that shader, and every header it ``#include``\\ s from ``osl/``, as
-:func:`clothlight.osl_shaders.inline_includes` inlines them.  So a shader must be named by a
+:func:`clothlight.blender.osl_shaders.inline_includes` inlines them.  So a shader must be named by a
 literal in the module that builds it, as every ClothLight material does.
 """
 

@@ -40,15 +40,15 @@ if str(REPO_ROOT) not in sys.path:  # a development script: the installed extens
 import bpy  # noqa: E402
 from mathutils import Vector  # noqa: E402
 
-from clothlight.garment.bake import bake_cloth  # noqa: E402
-from clothlight.garment.drape import draped_cloth  # noqa: E402
-from clothlight.garment.material import apply_garment_material, cloth_tables_from_bake  # noqa: E402
+from clothlight.blender.garment.bake import bake_cloth  # noqa: E402
+from clothlight.blender.garment.drape import draped_cloth  # noqa: E402
+from clothlight.blender.garment.material import apply_garment_material, cloth_tables_from_bake  # noqa: E402
 from clothlight.jobs import BakeJob, preset_request  # noqa: E402
-from clothlight.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
-from clothlight.render_setup import use_cycles_osl_on_cpu  # noqa: E402
-from clothlight.sample_object import build_sample_object  # noqa: E402
-from clothlight.sun_link import SUN_PROPERTY  # noqa: E402
-from clothlight.validation.rig import RigSettings, build_rig  # noqa: E402
+from clothlight.blender.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
+from clothlight.blender.render_setup import use_cycles_osl_on_cpu  # noqa: E402
+from clothlight.blender.sample_object import build_sample_object  # noqa: E402
+from clothlight.blender.sun_link import SUN_PROPERTY  # noqa: E402
+from clothlight.blender.validation.rig import RigSettings, build_rig  # noqa: E402
 from clothlight.weave import WeaveParameters  # noqa: E402
 from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
 

@@ -31,15 +31,12 @@ import tempfile
 
 import pytest
 
-from tests.helpers import build_extension_zip
+from tests.helpers import BLENDER_ONLY, build_extension_zip
 
 if "BLENDER_USER_RESOURCES" not in os.environ:
     _user_resources = tempfile.mkdtemp(prefix="clothlight-blender-user-")
     os.environ["BLENDER_USER_RESOURCES"] = _user_resources
     atexit.register(shutil.rmtree, _user_resources, ignore_errors=True)
-
-#: Modules that only Blender provides.
-BLENDER_ONLY = ("bpy", "mathutils", "bmesh", "bpy_extras", "bl_ui", "bl_operators", "addon_utils", "gpu")
 
 
 class _WithoutBlender(importlib.abc.MetaPathFinder):
@@ -56,7 +53,7 @@ if os.environ.get("CLOTHLIGHT_TESTS_WITHOUT_BPY"):
 RENDER_MODULES = {"test_addon_operators", "test_cloth_response_render", "test_cycles_closures", "test_example_blends",
                   "test_garment", "test_grids", "test_osl_render", "test_validation_rig", "test_yarn_shader"}
 #: Test modules that bake tables, build the extension zip or render for minutes.
-SLOW_MODULES = {"test_addon_operators", "test_bake_cli", "test_bake_dye_series", "test_extension"}
+SLOW_MODULES = {"test_addon_operators", "test_bake_cli", "test_bake_dye_series", "test_distributed", "test_extension"}
 #: Fixtures that bake (yarn or cloth) or build the extension zip: a test that uses one is slow.
 SLOW_FIXTURES = {"extension_zip", "red_cotton_cloth", "transport_runs"}
 #: Single tests of otherwise quick modules that bake in a child process, run Monte-Carlo transport

@@ -15,6 +15,8 @@ import OpenEXR
 from precompute.cook_torrance import cook_torrance_between as _cook_torrance_between
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
+#: Modules that only Blender provides.
+BLENDER_ONLY = ("bpy", "mathutils", "bmesh", "bpy_extras", "bl_ui", "bl_operators", "addon_utils", "gpu")
 
 # -- vectors and files ----------------------------------------------------------------------------
 
@@ -102,7 +104,7 @@ def empty_render_scene(*, resolution: int, samples: int, bounces: int | None = N
     ``bounces`` bounces when given."""
     import bpy
 
-    from clothlight.measurement_render import configure_measurement_render
+    from clothlight.blender.measurement_render import configure_measurement_render
 
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
@@ -118,7 +120,7 @@ def script_material(name: str, shader: str, source: str | None = None):
     or ``source``); returns the material and its script node."""
     import bpy
 
-    from clothlight.osl_shaders import add_script_node
+    from clothlight.blender.osl_shaders import add_script_node
 
     material = bpy.data.materials.new(name)
     tree = material.node_tree

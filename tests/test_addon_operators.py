@@ -41,8 +41,9 @@ def addon(extension_zip):
     assert EXTENSION_MODULE in sys.modules and EXTENSION_MODULE in bpy.context.preferences.addons
     import importlib
 
-    yield {name: importlib.import_module(f"{ADDON}.{name}")
-           for name in ("operators", "jobs", "properties", "preferences")}
+    yield {name: importlib.import_module(f"{ADDON}.{module}")
+           for name, module in (("operators", "blender.operators"), ("jobs", "jobs"),
+                                ("properties", "blender.properties"), ("preferences", "blender.preferences"))}
     import addon_utils
 
     addon_utils.disable(EXTENSION_MODULE)
@@ -188,8 +189,8 @@ def test_apply_material_uses_the_prebaked_tables_follows_the_sun_and_leaves_no_o
 
 
 def test_apply_garment_material_puts_a_cloth_bake_on_meshes_with_uvs_only(addon, scene, tmp_path_factory):
-    from clothlight.garment.bake import bake_cloth
-    from clothlight.garment.measure import GoniometerSettings
+    from clothlight.blender.garment.bake import bake_cloth
+    from clothlight.blender.garment.measure import GoniometerSettings
 
     yarn = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
     cloth, _ = bake_cloth(yarn, GoniometerSettings(incidence_resolution=3, exit_resolution=2, pixels_per_patch=6,
@@ -450,7 +451,7 @@ def test_validate_measures_the_sample_with_its_material_and_removes_its_rig(addo
     results = json.loads((tmp_path / "results.json").read_text())
     assert set(results["materials"]) == {"yarn", "baseline"}
     after = {(type(b).__name__, b.name) for c in (bpy.data.objects, bpy.data.meshes, bpy.data.scenes) for b in c}
-    # The sweep plot is loaded as an image for the Image Editor (clothlight/validation/operator.py).
+    # The sweep plot is loaded as an image for the Image Editor (clothlight/blender/validation/operator.py).
     assert after == before and not unused_blocks() - {("Image", "ClothLight Validation")}
 
 
@@ -458,7 +459,7 @@ def test_validate_measures_the_sample_with_its_material_and_removes_its_rig(addo
 
 
 def _shipped(subdir: str) -> list[pathlib.Path]:
-    root = pathlib.Path(sys.modules[ADDON].__file__).parent / "presets" / subdir
+    root = pathlib.Path(sys.modules[ADDON].__file__).parent / "blender" / "presets" / subdir
     return sorted(root.glob("*.py"))
 
 

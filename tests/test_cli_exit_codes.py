@@ -495,7 +495,7 @@ def test_the_bake_refuses_grids_beyond_memory_with_the_estimate(monkeypatch):
 @pytest.mark.blender
 def test_the_panel_reads_the_same_bounds():
     pytest.importorskip("bpy")
-    from clothlight import properties
+    from clothlight.blender import properties
 
     def limits(name):  # the annotation as Blender reads it at registration (a string: postponed evaluation)
         annotation = properties.ClothLightMediumSettings.__annotations__[name]
@@ -515,7 +515,7 @@ def test_the_panel_reads_the_same_bounds():
         annotation = properties.ClothLightWeaveSettings.__annotations__[name]
         keywords = (eval(annotation, vars(properties)) if isinstance(annotation, str) else annotation).keywords
         assert (keywords["min"], keywords["max"]) == (bound.low, bound.high), name
-    from clothlight.validation.operator import CLOTHLIGHT_OT_validate
+    from clothlight.blender.validation.operator import CLOTHLIGHT_OT_validate
 
     for name, bound in (("resolution", render_bounds.VALIDATION_RESOLUTION),
                         ("samples", render_bounds.VALIDATION_SAMPLES)):

@@ -13,9 +13,9 @@ from tests.helpers import write_yarn_table_folder
 
 bpy = pytest.importorskip("bpy")
 
-from clothlight.validation.response_render import measure_response  # noqa: E402
-from clothlight.validation.rig import RigSettings  # noqa: E402
-from clothlight.validation.run import run_validation  # noqa: E402
+from clothlight.blender.validation.response_render import measure_response  # noqa: E402
+from clothlight.blender.validation.rig import RigSettings  # noqa: E402
+from clothlight.blender.validation.run import run_validation  # noqa: E402
 
 SHIPPED_TABLES = "example_blends/tables/paper_2008"
 INCIDENCES = (0.0, 45.0)

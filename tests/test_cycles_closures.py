@@ -38,7 +38,7 @@ shader closure_probe(int Kind = 0, float R1 = 0.2, float R2 = 0.5, float Alpha =
 def render_closure(tmp_path, kind, view, light, r1=0.2, r2=0.5, alpha=0.3):
     import bpy
 
-    from clothlight.measurement_render import render_to_array
+    from clothlight.blender.measurement_render import render_to_array
 
     scene = empty_render_scene(resolution=4, samples=1, bounces=0)
     bpy.ops.mesh.primitive_plane_add(size=40.0)

@@ -33,19 +33,19 @@ from tests.helpers import add_sun_and_camera, cook_torrance_between, empty_rende
 
 bpy = pytest.importorskip("bpy")
 
-from clothlight.garment.bake import bake_cloth  # noqa: E402
-from clothlight.garment.material import (  # noqa: E402
+from clothlight.blender.garment.bake import bake_cloth  # noqa: E402
+from clothlight.blender.garment.material import (  # noqa: E402
     ClothTableFiles,
     apply_garment_material,
     build_garment_material,
     cloth_tables_from_bake,
 )
-from clothlight.garment.measure import GoniometerSettings  # noqa: E402
-from clothlight.materials import GENERAL_MODE, SUN_MODE, sync_sun  # noqa: E402
-from clothlight.measurement_render import render_to_array  # noqa: E402
+from clothlight.blender.garment.measure import GoniometerSettings  # noqa: E402
+from clothlight.blender.materials import GENERAL_MODE, SUN_MODE, sync_sun  # noqa: E402
+from clothlight.blender.measurement_render import render_to_array  # noqa: E402
 from clothlight.validation.framing import ParameterError  # noqa: E402
-from clothlight.validation.rig import RigSettings  # noqa: E402
-from clothlight.validation.run import ValidationRun, run_validation  # noqa: E402
+from clothlight.blender.validation.rig import RigSettings  # noqa: E402
+from clothlight.blender.validation.run import ValidationRun, run_validation  # noqa: E402
 
 pytestmark = pytest.mark.blender
 
@@ -361,7 +361,7 @@ def test_specular_part_is_the_cook_torrance_term_times_its_visibility(red_cotton
     Cook–Torrance term about the cloth normal (the same at every point of the cloth) times the
     fraction of the patch where it shines, which is part of what yarn covers; on either side, in
     that side's frame (its normal toward its viewers)."""
-    from clothlight.garment.bake import load_measurement
+    from clothlight.blender.garment.bake import load_measurement
     from clothlight.garment.tables import SPECULAR_KEYS
 
     folder, settings, cache = red_cotton_cloth

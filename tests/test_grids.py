@@ -69,7 +69,7 @@ shader map_probe(int Sphere = 1, output closure color BSDF = 0)
 @pytest.mark.blender
 @pytest.mark.parametrize("domain", ["hemisphere", "sphere"])
 def test_osl_header_maps_match_python(bpy, tmp_path, domain):
-    from clothlight.measurement_render import render_to_array
+    from clothlight.blender.measurement_render import render_to_array
     from tests.helpers import add_camera, empty_render_scene, script_material
 
     size = 24

@@ -14,7 +14,7 @@ from tests.helpers import add_camera, add_sun, direction, empty_render_scene, sc
 
 bpy = pytest.importorskip("bpy")
 
-from clothlight.measurement_render import render_to_array  # noqa: E402
+from clothlight.blender.measurement_render import render_to_array  # noqa: E402
 
 SUN_IRRADIANCE = 3.0  # W/m²
 

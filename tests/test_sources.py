@@ -22,12 +22,13 @@ REPO = bake_module.PROJECT_ROOT
 OLD_TABLE_SOURCES = {"precompute/color.py", "precompute/tables.py", "precompute/table_layout.py",
                      "precompute/closure_fit.py", "precompute/bake.py"}
 OLD_MEASUREMENT_SOURCES = {
-    "clothlight/garment/goniometry.py", "clothlight/garment/measure.py", "clothlight/materials.py",
-    "clothlight/measurement_render.py", "clothlight/weave/geometry.py", "osl/cloth_yarn.osl", "osl/clothlight.h",
+    "clothlight/garment/goniometry.py", "clothlight/blender/garment/measure.py",
+    "clothlight/blender/materials.py", "clothlight/blender/measurement_render.py", "clothlight/weave/geometry.py",
+    "osl/cloth_yarn.osl", "osl/clothlight.h",
 }
 #: Files no stage of the yarn bake runs: editing them must not cost a bake.
-NOT_IN_THE_BAKE = ("precompute/plots.py", "precompute/cli/bake.py", "precompute/__main__.py", "clothlight/ui.py",
-                   "osl/cloth_garment.osl")
+NOT_IN_THE_BAKE = ("precompute/plots.py", "precompute/cli/bake.py", "precompute/__main__.py",
+                   "clothlight/blender/ui.py", "osl/cloth_garment.osl")
 
 
 @pytest.fixture
@@ -176,30 +177,31 @@ def test_imports_are_read_as_python_resolves_them():
 
 
 def test_the_garment_measurement_covers_the_rig_and_the_shaders_the_old_list_missed(bpy):
-    from clothlight.garment import bake as garment_bake
+    from clothlight.blender.garment import bake as garment_bake
 
     measurement = set(stage_sources(REPO, **garment_bake.MEASUREMENT_SOURCES))
-    rig = {"clothlight/sample_object.py", "clothlight/validation/rig.py", "clothlight/weave/centerline.py",
-           "clothlight/weave/params.py", "clothlight/osl_shaders.py"}
+    rig = {"clothlight/blender/sample_object.py", "clothlight/blender/validation/rig.py",
+           "clothlight/weave/centerline.py", "clothlight/weave/params.py", "clothlight/blender/osl_shaders.py"}
     assert rig <= measurement and not rig & OLD_MEASUREMENT_SOURCES
     assert OLD_MEASUREMENT_SOURCES < measurement
     assert {"osl/cloth_yarn.osl", "osl/clothlight.h"} <= measurement and "osl/cloth_garment.osl" not in measurement
     assert "clothlight/garment/tables.py" not in measurement  # a new fit re-renders nothing
     tables = set(stage_sources(REPO, **garment_bake.TABLE_SOURCES))
-    assert {"clothlight/garment/tables.py", "clothlight/garment/detail.py", "precompute/cycles_closures.py"} <= tables
+    assert {"clothlight/garment/tables.py", "clothlight/blender/garment/detail.py",
+            "precompute/cycles_closures.py"} <= tables
 
 
 def test_what_the_measurement_runs_of_the_garment_bake_comes_from_its_modules(bpy):
-    from clothlight.garment import bake as garment_bake
+    from clothlight.blender.garment import bake as garment_bake
 
     measurement = set(stage_sources(REPO, **garment_bake.MEASUREMENT_SOURCES))
-    used = modules_called_from("clothlight/garment/bake.py", ["measure", "save_measurement"])
-    assert "clothlight.garment.measure" in used
+    used = modules_called_from("clothlight/blender/garment/bake.py", ["measure", "save_measurement"])
+    assert "clothlight.blender.garment.measure" in used
     assert {module_file(REPO, m).relative_to(REPO).as_posix() for m in used} <= measurement
 
 
 def test_every_file_of_the_garment_measurement_changes_its_digest(bpy, tree):
-    from clothlight.garment import bake as garment_bake
+    from clothlight.blender.garment import bake as garment_bake
 
     definition = garment_bake.MEASUREMENT_SOURCES
     before = stage_digest(tree, **definition)
@@ -209,5 +211,5 @@ def test_every_file_of_the_garment_measurement_changes_its_digest(bpy, tree):
         assert stage_digest(tree, **definition) != before, relative
         (tree / relative).write_bytes(original)
     _touch(tree / "osl" / "cloth_garment.osl")
-    _touch(tree / "clothlight" / "ui.py")
+    _touch(tree / "clothlight" / "blender" / "ui.py")
     assert stage_digest(tree, **definition) == before

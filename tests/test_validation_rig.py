@@ -28,15 +28,15 @@ from tests.helpers import cook_torrance_between, write_yarn_table_folder
 
 bpy = pytest.importorskip("bpy")
 
-from clothlight.materials import (  # noqa: E402
+from clothlight.blender.materials import (  # noqa: E402
     GENERAL_MODE,
     SUN_MODE,
     build_baseline_material,
     build_yarn_material,
     shader_node,
 )
-from clothlight.validation.rig import RIG_SCENE, RigSettings, build_rig, calibration_plane  # noqa: E402
-from clothlight.validation.run import ValidationCancelled, ValidationRun, run_validation  # noqa: E402
+from clothlight.blender.validation.rig import RIG_SCENE, RigSettings, build_rig, calibration_plane  # noqa: E402
+from clothlight.blender.validation.run import ValidationCancelled, ValidationRun, run_validation  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SYNTHETIC_CSV = REPO / "clothlight" / "validation" / "data" / "synthetic_red_cotton.csv"
@@ -193,7 +193,7 @@ def test_woven_views_see_no_sample_edge_and_the_mask_is_the_cloth(tmp_path, monk
         np.testing.assert_allclose(a.brdf_rgb, b.brdf_rgb, rtol=1e-4)
         assert a.cloth_pixels == b.cloth_pixels
         assert 0.5 * 32**2 < a.cloth_pixels < 32**2  # mostly yarn, with gaps between yarns
-    monkeypatch.setattr("clothlight.validation.rig.check_patch", lambda *args: None)
+    monkeypatch.setattr("clothlight.blender.validation.rig.check_patch", lambda *args: None)
     _, edged = measure_woven(12, 5.5, tmp_path)
     _, reference = measure_woven(20, 5.5, tmp_path)
     assert max(abs(a.brdf_rgb[0] / b.brdf_rgb[0] - 1.0) for a, b in zip(edged, reference)) > 1e-3
@@ -302,7 +302,7 @@ def test_a_run_stepped_like_the_modal_operator_can_be_closed_midway(tmp_path):
 
 @pytest.fixture
 def operator_registered():
-    from clothlight.validation.operator import CLOTHLIGHT_OT_validate, register, unregister
+    from clothlight.blender.validation.operator import CLOTHLIGHT_OT_validate, register, unregister
 
     registered = hasattr(bpy.types, CLOTHLIGHT_OT_validate.__name__)
     if not registered:
@@ -361,7 +361,7 @@ def bounces_per_material(run):
 
 @pytest.mark.blender
 def test_light_between_yarns_only_adds_and_the_bounces_end_with_the_scene_material(tmp_path):
-    from clothlight.validation.rig import SCENE_BOUNCES
+    from clothlight.blender.validation.rig import SCENE_BOUNCES
 
     fresh_file()
     settings = RigSettings(incidences_deg=(0.0, 60.0), views_deg=(0.0, 60.0), resolution=32, samples=4)

@@ -13,7 +13,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="clothli
 bpy = pytest.importorskip("bpy")
 
 from clothlight.mesh_attributes import CLOTH_NORMAL, IS_WARP, YARN_ID, YARN_TANGENT, YARN_UV  # noqa: E402
-from clothlight.sample_object import WEAVE_PROPERTY, build_sample_object  # noqa: E402
+from clothlight.blender.sample_object import WEAVE_PROPERTY, build_sample_object  # noqa: E402
 from clothlight.weave import WeaveParameterError, WeaveParameters, build_woven_mesh  # noqa: E402
 
 pytestmark = pytest.mark.blender

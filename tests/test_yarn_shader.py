@@ -27,8 +27,8 @@ from tests.helpers import add_sun_and_camera, direction, empty_render_scene, uni
 
 bpy = pytest.importorskip("bpy")
 
-from clothlight.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, shader_node, sync_sun  # noqa: E402
-from clothlight.measurement_render import configure_measurement_render, render_to_array  # noqa: E402
+from clothlight.blender.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, shader_node, sync_sun  # noqa: E402
+from clothlight.blender.measurement_render import configure_measurement_render, render_to_array  # noqa: E402
 from clothlight.mesh_attributes import CLOTH_NORMAL, YARN_TANGENT  # noqa: E402
 from clothlight.yarn_tables import YarnTableFiles  # noqa: E402
 
@@ -228,7 +228,7 @@ def test_the_specular_is_the_same_on_both_faces_of_the_cloth(tmp_path, synthetic
 @pytest.mark.parametrize("mode", [SUN_MODE, GENERAL_MODE])
 def test_the_yarn_material_is_no_light_to_sample(synthetic_tables, mode):
     # Cycles cannot tell whether an OSL shader emits; sampling every triangle of the cloth as a
-    # light made the general mode 1.7x slower, for no light (clothlight.materials).
+    # light made the general mode 1.7x slower, for no light (clothlight.blender.materials).
     bpy.ops.wm.read_homefile(use_empty=True)
     configure_measurement_render(bpy.context.scene, resolution=(8, 8), samples=1)
     material = build_yarn_material(synthetic_tables[0], mode=mode)

@@ -69,16 +69,15 @@ def build_parser():
 def _measure(args, interrupt):
     """The cloth bake's folder in the cache (measured now, or found), whether it was measured, and
     the summary reader."""
-    import bpy
-
-    from .bake import bake_cloth, read_summary
-    from .measure import GoniometerSettings
+    from ..blender.garment.bake import bake_cloth, read_summary
+    from ..blender.garment.measure import GoniometerSettings
+    from ..blender.scene_files import open_empty_file
 
     interrupt.check()
     settings = GoniometerSettings(incidence_resolution=args.incidence_resolution,
                                   exit_resolution=args.exit_resolution,
                                   pixels_per_patch=args.pixels_per_patch, samples=args.samples)
-    bpy.ops.wm.read_homefile(use_empty=True)
+    open_empty_file()
     interrupt.check()
     start = time.perf_counter()
     progress_shown = []

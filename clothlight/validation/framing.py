@@ -50,7 +50,7 @@ DEFAULT_MATERIALS = ("yarn", "baseline")
 #: Materials that read the yarn tables.
 YARN_MATERIALS = ("yarn", "yarn_general", "yarn_scene")
 #: Materials rendered with full path tracing (light bounces between yarns); every other one is
-#: rendered with direct light only (:meth:`clothlight.validation.rig.Rig.use_path_tracing`).
+#: rendered with direct light only (:meth:`clothlight.blender.validation.rig.Rig.use_path_tracing`).
 PATH_TRACED_MATERIALS = ("yarn_scene",)
 #: Materials that read a cloth bake, swept on a flat patch in place of the sample.
 GARMENT_MATERIALS = ("garment", "garment_general")

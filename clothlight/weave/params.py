@@ -35,7 +35,7 @@ CROSSING_CLEARANCE = 0.02
 
 _Bound = import_precompute("bounds").Bound
 ParameterError = import_precompute("errors").ParameterError
-#: The integer settings' ranges, read by the API (below) and the Weave panel (clothlight/properties.py).
+#: The integer settings' ranges, read by the API (below) and the Weave panel (clothlight/blender/properties.py).
 COUNT_BOUNDS = {
     "warp_count": _Bound("warp_count", 1, 1000, integer=True),
     "weft_count": _Bound("weft_count", 1, 1000, integer=True),

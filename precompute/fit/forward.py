@@ -38,7 +38,7 @@ FIT_INCIDENCE_RESOLUTION = 21
 #: Paths per incidence cell at a relative error of 5 %; the budget grows as 1 / error².
 PATHS_AT_FIVE_PERCENT = 1000
 #: The §6.1 colour swatches the model also gives, after the measured views: normal view, lit from the
-#: front and from straight behind, (θi, θv, φv) in degrees (clothlight.validation.run's swatches).
+#: front and from straight behind, (θi, θv, φv) in degrees (clothlight.blender.validation.run's swatches).
 SWATCH_VIEWS = ((0.0, 0.0, 0.0), (180.0, 0.0, 0.0))
 #: Sample azimuths the response averages over, degrees (module docstring).
 SAMPLE_AZIMUTHS_DEG = (0.0, 90.0)
@@ -89,7 +89,7 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
         "resolution": RESPONSE_RESOLUTION,
         "supersampling": RESPONSE_SUPERSAMPLING,
         "seed": int(seed),
-        "code_digest": stage_digest(PROJECT_ROOT, ["clothlight.validation.response_render"]),
+        "code_digest": stage_digest(PROJECT_ROOT, ["clothlight.blender.validation.response_render"]),
     }
     cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
     key = cache_key(inputs)
@@ -97,7 +97,7 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
     if folder is None:
 
         def write(staging: pathlib.Path) -> None:
-            from clothlight.validation.response_render import measure_response
+            from clothlight.blender.validation.response_render import measure_response
             from clothlight.yarn_tables import yarn_tables_from_bake
 
             # Any tables: the lookup directions do not depend on the medium.

@@ -1,7 +1,7 @@
 """Sun-mode materials follow their sun: moving, rotating, dimming or animating it updates the shader.
 
 A sun-mode yarn material evaluates the BRDF for one parallel beam whose direction and irradiance
-are shader inputs (:func:`clothlight.materials.sync_sun`).  Apply Material records the sun object
+are shader inputs (:func:`clothlight.blender.materials.sync_sun`).  Apply Material records the sun object
 in the material's ``clothlight_sun`` custom property (an ID pointer, so renaming the lamp keeps
 the link); these handlers copy the lamp's state into every such material whenever the scene
 changes or the frame moves.

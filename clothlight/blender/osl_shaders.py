@@ -11,7 +11,7 @@ from __future__ import annotations
 import pathlib
 import re
 
-OSL_DIR = pathlib.Path(__file__).resolve().parents[1] / "osl"
+OSL_DIR = pathlib.Path(__file__).resolve().parents[2] / "osl"
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 
 

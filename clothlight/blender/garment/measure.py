@@ -4,7 +4,7 @@ per view (layout and calibration: :mod:`.goniometry`).
 A scene of its own (nothing of the user's is touched): a woven sample large enough for the
 regions and their shadow rays, wearing the sun-mode yarn material with the sun direction read
 from a face attribute, and one orthographic camera.  Render settings are the validation rig's
-(:func:`clothlight.measurement_render.configure_measurement_render`), with Cycles' box filter of
+(:func:`clothlight.blender.measurement_render.configure_measurement_render`), with Cycles' box filter of
 one pixel so that a pixel holds the mean radiance over its square, as the calibration assumes.
 """
 
@@ -28,7 +28,7 @@ from ..measurement_render import (
     remove_data_blocks,
     render_passes_to_arrays,
 )
-from ..render_bounds import (
+from ...render_bounds import (
     DEFAULT_GONIO_EXIT_RESOLUTION,
     DEFAULT_GONIO_INCIDENCE_RESOLUTION,
     DEFAULT_GONIO_PIXELS_PER_PATCH,
@@ -43,8 +43,8 @@ from ..render_bounds import (
 )
 from ..sample_object import build_sample_object, weave_record
 from ..validation.rig import VALIDATION_WEAVE, sample_bounds
-from ..weave import WeaveParameters
-from .goniometry import (
+from ...weave import WeaveParameters
+from ...garment.goniometry import (
     SIDES,
     ParameterError,
     exit_directions,

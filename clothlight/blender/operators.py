@@ -20,7 +20,7 @@ import traceback
 import bpy
 
 from . import preferences
-from .jobs import (
+from ..jobs import (
     BakeCancelled,
     BakeFailed,
     BakeJob,
@@ -37,14 +37,14 @@ from .materials import (
     sync_sun,
     yarn_tables_folder,
 )
-from .mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
-from .prebaked import PREBAKED_DIR, REQUEST_FILE, prebaked_tables, user_copy  # noqa: F401 - the panel's names
+from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
+from ..prebaked import PREBAKED_DIR, REQUEST_FILE, prebaked_tables, user_copy  # noqa: F401 - the panel's names
 from .properties import ParameterError, millimetre_scale
 from .render_setup import use_cycles_osl_on_cpu
 from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
 from .sun_link import SUN_PROPERTY
-from .weave import WeaveParameterError
-from .yarn_tables import yarn_tables_from_bake
+from ..weave import WeaveParameterError
+from ..yarn_tables import yarn_tables_from_bake
 
 
 def _unexpected(operator, error: Exception, what: str):

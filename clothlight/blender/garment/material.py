@@ -2,11 +2,11 @@
 
 Two modes, as for the yarn material:
 
-* :data:`~clothlight.materials.GENERAL_MODE` (any lighting, what artists render with): the
+* :data:`~clothlight.blender.materials.GENERAL_MODE` (any lighting, what artists render with): the
   closure mixture of ``lobes.exr`` as plain Cycles nodes — diffuse, translucent, hair
   transmission and Beckmann gloss closures weighted by image lookups at the view direction, plus a
   transparent closure for the open weave.  No OSL: it renders with Cycles' SVM on the CPU or any GPU.
-* :data:`~clothlight.materials.SUN_MODE` (validation): ``osl/cloth_garment.osl`` evaluates the
+* :data:`~clothlight.blender.materials.SUN_MODE` (validation): ``osl/cloth_garment.osl`` evaluates the
   measured ρ for the scene's sun exactly (needs Cycles OSL on the CPU).
 
 The warp follows the mesh's UV tangent (u along the warp); the front is the side the mesh's
@@ -22,8 +22,8 @@ import bpy
 
 from ..materials import GENERAL_MODE, SUN_MODE, configure_cycles_material
 from ..osl_shaders import add_script_node
-from .goniometry import SIDES
-from .tables import (
+from ...garment.goniometry import SIDES
+from ...garment.tables import (
     BRDF_FILES,
     LOBE_FILE,
     LOBE_TILES,
@@ -76,7 +76,7 @@ def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garm
                            weave_repeats_per_uv: float | None = None):
     """The garment material reading ``tables`` in ``mode`` (module docstring); ``uv_map``: the UV
     map whose tangent is the warp (empty: the active one).  Sun mode: set the sun with
-    :func:`clothlight.materials.sync_sun`.
+    :func:`clothlight.blender.materials.sync_sun`.
 
     ``open_weave=False`` (general mode) leaves out the transparent closure of the open weave: the
     light through the gaps is lost, but camera and shadow rays stop at the cloth, which renders

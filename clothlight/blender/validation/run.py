@@ -26,9 +26,9 @@ import numpy as np
 
 from ..garment.material import build_garment_material, cloth_tables_from_bake
 from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
-from ..mesh_attributes import YARN_TANGENT
-from ..yarn_tables import yarn_tables_from_bake
-from .framing import (
+from ...mesh_attributes import YARN_TANGENT
+from ...yarn_tables import yarn_tables_from_bake
+from ...validation.framing import (
     DEFAULT_MATERIALS,
     GARMENT_MATERIALS,
     MATERIALS,
@@ -36,9 +36,9 @@ from .framing import (
     YARN_MATERIALS,
     ParameterError,
 )
-from .measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
-from .measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
-from .report import swatch_exposure, write_report, write_swatch_png
+from ...validation.measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
+from ...validation.measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
+from ...validation.report import swatch_exposure, write_report, write_swatch_png
 from .rig import RigSettings, build_rig, calibration_plane
 
 MATERIAL_LABELS = {
@@ -79,7 +79,7 @@ class ValidationRun:
     ----------
     sample
         A ClothLight sample object (copied, never changed), WeaveParameters, or None for
-        :data:`clothlight.validation.rig.VALIDATION_WEAVE` (see :func:`.rig.build_rig`).
+        :data:`clothlight.blender.validation.rig.VALIDATION_WEAVE` (see :func:`.rig.build_rig`).
     out_dir
         Folder for the outputs (created).
     materials

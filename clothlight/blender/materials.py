@@ -12,8 +12,8 @@ import pathlib
 
 import bpy
 
-from .addon import import_precompute
-from .mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
+from ..addon import import_precompute
+from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from .osl_shaders import add_script_node
 
 _ballistic = import_precompute("ballistic")

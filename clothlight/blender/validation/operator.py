@@ -20,12 +20,12 @@ from typing import TYPE_CHECKING
 
 import bpy
 
-from ..addon import import_precompute
-from ..mesh_attributes import CLOTH_NORMAL
-from ..render_bounds import VALIDATION_RESOLUTION, VALIDATION_SAMPLES
-from ..weave import WeaveParameterError
-from .framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, MATERIALS
-from .measured_data import MeasurementFormatError
+from ...addon import import_precompute
+from ...mesh_attributes import CLOTH_NORMAL
+from ...render_bounds import VALIDATION_RESOLUTION, VALIDATION_SAMPLES
+from ...weave import WeaveParameterError
+from ...validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, MATERIALS
+from ...validation.measured_data import MeasurementFormatError
 from .rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES, RigSettings
 
 if TYPE_CHECKING:

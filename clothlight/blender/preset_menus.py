@@ -1,6 +1,6 @@
 """Weave and medium presets through Blender's preset system.
 
-Shipped presets are Python files in ``clothlight/presets/<subdir>/`` (registered with
+Shipped presets are Python files in ``clothlight/blender/presets/<subdir>/`` (registered with
 :func:`bpy.utils.register_preset_path`, read-only because they sit in the extension); presets a
 user adds with the ➕ button go where Blender keeps every user preset
 (``<user scripts>/presets/<subdir>/``).  A medium preset sets the base medium first, which loads

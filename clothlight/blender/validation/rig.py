@@ -9,7 +9,7 @@ Object mask: the rig scene holds nothing the camera can see but the sample, the 
 transparent and there is no world, so alpha > 0 marks exactly the cloth pixels (alpha is the
 sample's coverage of the pixel) and the background contributes neither light nor alpha.
 
-Render settings (:func:`clothlight.measurement_render.configure_measurement_render`): Cycles
+Render settings (:func:`clothlight.blender.measurement_render.configure_measurement_render`): Cycles
 on the CPU with OSL, no denoising, no adaptive sampling, a fixed seed, "Standard" view transform,
 32-bit float EXR read back from disk.  The materials run in sun mode: they evaluate the BRDF for
 the sun exactly and emit the reflected radiance, shadowed by other yarns, so the rig needs no
@@ -31,8 +31,8 @@ from mathutils import Matrix, Vector
 
 from ..materials import shader_node, sync_sun
 from ..measurement_render import configure_measurement_render, remove_data_blocks, render_to_array
-from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
-from ..render_bounds import (
+from ...mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
+from ...render_bounds import (
     DEFAULT_VALIDATION_RESOLUTION,
     DEFAULT_VALIDATION_SAMPLES,
     VALIDATION_PATCH_MM,
@@ -42,8 +42,8 @@ from ..render_bounds import (
     check_render_memory,
 )
 from ..sample_object import build_sample_object
-from ..weave import WeaveParameters
-from .framing import (
+from ...weave import WeaveParameters
+from ...validation.framing import (
     DEFAULT_INCIDENCES_DEG,
     DEFAULT_VIEWS_DEG,
     ParameterError,
@@ -55,7 +55,7 @@ from .framing import (
     toward_camera,
     toward_sun,
 )
-from .measure import ViewMeasurement, measure_view
+from ...validation.measure import ViewMeasurement, measure_view
 
 #: The sample a validation builds when given none: the default plain weave, large enough that a
 #: 2 mm patch (two repeats) keeps its edges out of every default view (see ``framing``).

@@ -17,12 +17,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..addon import import_precompute
-from ..yarn_tables import yarn_tables_from_bake
-from .goniometry import SIDES
+from ...addon import import_precompute
+from ...yarn_tables import yarn_tables_from_bake
+from ...garment.goniometry import SIDES
 from .detail import render_weave_detail
 from .measure import ClothMeasurement, GoniometerSettings, _sample_weave, measure_cloth
-from .tables import DETAIL_FILE, SUMMARY_FILE, write_cloth_summary, write_cloth_tables
+from ...garment.tables import DETAIL_FILE, SUMMARY_FILE, write_cloth_summary, write_cloth_tables
 
 cache = import_precompute("cache")
 sources = import_precompute("sources")
@@ -31,15 +31,15 @@ precompute_tables = import_precompute("tables")
 MEASUREMENT_NAMESPACE = "cloth_measurement"
 TABLES_NAMESPACE = "cloth_tables"
 MEASUREMENT_FILE = "measurement.npz"
-_ROOT = pathlib.Path(__file__).resolve().parents[2]
+_ROOT = pathlib.Path(__file__).resolve().parents[3]
 #: The code of each stage, digested into its key (``precompute.sources``): the modules it runs and
 #: every project module they import, transitively, with the OSL shaders they compile.  The
 #: measurement runs :mod:`.measure` on the yarn tables :mod:`clothlight.yarn_tables` finds, and of
 #: this file what stores it, without the fit this file imports (tests/test_sources.py checks that
 #: what it calls here comes from those modules).
-MEASUREMENT_SOURCES = {"entries": ("clothlight.garment.measure", "clothlight.yarn_tables"),
-                       "files": ("clothlight/garment/bake.py",)}
-TABLE_SOURCES = {"entries": ("clothlight.garment.bake",)}
+MEASUREMENT_SOURCES = {"entries": ("clothlight.blender.garment.measure", "clothlight.yarn_tables"),
+                       "files": ("clothlight/blender/garment/bake.py",)}
+TABLE_SOURCES = {"entries": ("clothlight.blender.garment.bake",)}
 
 
 def measurement_inputs(yarn_tables, settings: GoniometerSettings) -> dict:

@@ -13,7 +13,7 @@ import os
 
 import bpy
 
-from .addon import EXTENSION_PACKAGE, import_precompute
+from ..addon import EXTENSION_PACKAGE, import_precompute
 
 
 class ClothLightPreferences(bpy.types.AddonPreferences):

@@ -19,10 +19,10 @@ import bpy
 import numpy as np
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
-from .addon import import_precompute
-from .jobs import BakeRequest, preset_request, typed_number
-from .weave import BUILT_IN, WeaveParameterError, WeaveParameters
-from .weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
+from ..addon import import_precompute
+from ..jobs import BakeRequest, preset_request, typed_number
+from ..weave import BUILT_IN, WeaveParameterError, WeaveParameters
+from ..weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
 
 _medium = import_precompute("medium")
 #: The allowed ranges, one definition shared with the bake's API and command line (precompute/bounds.py).
@@ -137,7 +137,7 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
         if self.pattern == "CUSTOM":
             return parse_draft(self.custom_draft)
         if self.pattern == "WIF":
-            from .weave import read_wif
+            from ..weave import read_wif
 
             if not self.wif_path:
                 raise WeaveParameterError("WIF file", "", "the path of a .wif weaving draft")

@@ -21,8 +21,8 @@ from mathutils import Matrix
 
 from ..materials import SUN_MODE, build_yarn_material, shader_node, sync_sun
 from ..measurement_render import render_to_array
-from .framing import ParameterError, largest_patch_mm, pixel_aspect
-from .response import ClothResponse, ResponseView
+from ...validation.framing import ParameterError, largest_patch_mm, pixel_aspect
+from ...validation.response import ClothResponse, ResponseView
 from .rig import RigSettings, SampleBounds, build_rig
 
 #: The shader's lookup outputs (0.5 + 0.5 w, the incidence black where another yarn shadows).

@@ -13,8 +13,8 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from .mesh_attributes import CLOTH_NORMAL, IS_WARP, YARN_ID, YARN_TANGENT, YARN_UV
-from .weave import WeaveParameterError, WeaveParameters, build_woven_mesh
+from ..mesh_attributes import CLOTH_NORMAL, IS_WARP, YARN_ID, YARN_TANGENT, YARN_UV
+from ..weave import WeaveParameterError, WeaveParameters, build_woven_mesh
 
 DEFAULT_NAME = "ClothLight Sample"
 #: Custom property of a sample object: the parameters it was built from.

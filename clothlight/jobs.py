@@ -60,6 +60,16 @@ def missing_bake_dependencies() -> list[str]:
     return [dist for module, dist in BAKE_DEPENDENCIES.items() if importlib.util.find_spec(module) is None]
 
 
+def bake_unavailable_reason(missing: list[str] | None = None) -> str | None:
+    """Why Bake Tables cannot run in this Python, or None: the ``missing`` distributions (by
+    default :func:`missing_bake_dependencies`) in one sentence the panel shows."""
+    missing = missing_bake_dependencies() if missing is None else missing
+    if not missing:
+        return None
+    return (f"Bake unavailable: {', '.join(missing)} not installed (this build of the extension bundles no "
+            "wheels for this platform). Pre-baked tables of the shipped presets still work")
+
+
 def typed_number(value: float) -> float:
     """A float as typed: Blender stores float properties in single precision (0.14 → 0.14000000059604645),
     and a bake's cache key hashes its inputs, so the digits beyond single precision are dropped."""

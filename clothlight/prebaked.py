@@ -74,3 +74,27 @@ def user_copy(folder: str | pathlib.Path, cache_dir: str | pathlib.Path) -> path
             shutil.copyfile(folder / name, staging / name)
 
     return table_folder.replace_folder(copy, write, hashes, option="the bake cache folder")
+
+
+def tables_for_request(request: BakeRequest, *, tables_dir: str | pathlib.Path | None, tables_request: str,
+                       cache_dir: str | pathlib.Path,
+                       bake_unavailable: str | None = None) -> tuple[pathlib.Path, str | None]:
+    """The table folder a material made from the panel's ``request`` reads, and a warning (or None).
+
+    ``tables_dir`` (absolute), set by Bake Tables or by hand, wins; ``tables_request`` is the JSON
+    of the request it was baked from ("" for a folder chosen by hand): another request than the
+    panel's gets a warning.  Otherwise the pre-baked tables of an unchanged shipped preset, through
+    their copy in ``cache_dir`` (:func:`user_copy`), never the extension's own folder, which an
+    update replaces.  Without either, LookupError saying what to do (``bake_unavailable``: why
+    the bake cannot run here, when it cannot).
+    """
+    if tables_dir:
+        warning = None
+        if tables_request and tables_request != request.to_json():
+            warning = "The tables were baked from other settings than the panel's: bake again to use them"
+        return pathlib.Path(tables_dir), warning
+    shipped = prebaked_tables(request)
+    if shipped is not None:
+        return user_copy(shipped, cache_dir), None
+    raise LookupError("No tables for these settings yet: " + (bake_unavailable or "press Bake Tables"))
+

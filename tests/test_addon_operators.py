@@ -42,7 +42,7 @@ def addon(extension_zip):
     import importlib
 
     yield {name: importlib.import_module(f"{ADDON}.{module}")
-           for name, module in (("operators", "blender.operators"), ("jobs", "jobs"),
+           for name, module in (("operators", "blender.operators"), ("jobs", "jobs"), ("prebaked", "prebaked"),
                                 ("properties", "blender.properties"), ("preferences", "blender.preferences"))}
     import addon_utils
 
@@ -160,7 +160,7 @@ def test_apply_material_uses_the_prebaked_tables_follows_the_sun_and_leaves_no_o
     assert bpy.ops.clothlight.apply_material() == {"FINISHED"}
     general = sample.active_material
     general_name = general.name
-    prebaked = addon["operators"].PREBAKED_DIR / PREBAKED_PRESET
+    prebaked = addon["prebaked"].PREBAKED_DIR / PREBAKED_PRESET
     table = pathlib.Path(shader_inputs(general)["Table"].default_value)
     # The shipped tables' copy in the user cache (an update replaces the extension's folder):
     # tests/test_addon_footprint.py follows it through a saved file.
@@ -426,8 +426,7 @@ def test_the_bundled_wheels_and_blenders_numpy_alone_can_bake(addon, tmp_path):
 
 def test_without_bake_dependencies_bake_is_refused_with_the_reason_and_prebaked_tables_still_work(
         addon, scene, monkeypatch):
-    operators = addon["operators"]
-    monkeypatch.setattr(operators, "missing_bake_dependencies", lambda: ["numba", "llvmlite"])
+    monkeypatch.setattr(addon["jobs"], "missing_bake_dependencies", lambda: ["numba", "llvmlite"])
     assert not bpy.ops.clothlight.bake_tables.poll()
     tiny(scene.clothlight.medium)
     bpy.ops.clothlight.build_sample()

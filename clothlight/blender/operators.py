@@ -25,7 +25,7 @@ from ..jobs import (
     BakeFailed,
     BakeJob,
     BakeRequest,
-    missing_bake_dependencies,
+    bake_unavailable_reason,
     preset_request,
 )
 from .materials import (
@@ -38,7 +38,7 @@ from .materials import (
     yarn_tables_folder,
 )
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
-from ..prebaked import PREBAKED_DIR, REQUEST_FILE, prebaked_tables, user_copy  # noqa: F401 - the panel's names
+from ..prebaked import tables_for_request
 from .properties import ParameterError, millimetre_scale
 from .render_setup import use_cycles_osl_on_cpu
 from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
@@ -57,34 +57,13 @@ def _unexpected(operator, error: Exception, what: str):
 # -- tables -------------------------------------------------------------------------------------
 
 
-def bake_unavailable_reason() -> str | None:
-    """Why Bake Tables cannot run in this Blender, or None."""
-    missing = missing_bake_dependencies()
-    if not missing:
-        return None
-    return (f"Bake unavailable: {', '.join(missing)} not installed (this build of the extension bundles no "
-            "wheels for this platform). Pre-baked tables of the shipped presets still work")
-
-
 def tables_for(medium) -> tuple[pathlib.Path, str | None]:
-    """The table folder Apply Material uses for ``medium`` settings, and a warning (or None).
-
-    The folder in ``medium.tables_dir`` (set by Bake Tables or by hand), else the pre-baked tables
-    of an unchanged shipped preset — their copy in the bake cache (:func:`.prebaked.user_copy`),
-    never the extension's own folder, which an update replaces.  Raises LookupError when there are
-    none.
-    """
-    request = medium.request()
-    if medium.tables_dir:
-        warning = None
-        if medium.tables_request and medium.tables_request != request.to_json():
-            warning = "The tables were baked from other settings than the panel's: bake again to use them"
-        return pathlib.Path(bpy.path.abspath(medium.tables_dir)), warning
-    shipped = prebaked_tables(request)
-    if shipped is not None:
-        return user_copy(shipped, preferences.cache_directory()), None
-    reason = bake_unavailable_reason()
-    raise LookupError("No tables for these settings yet: " + (reason if reason else "press Bake Tables"))
+    """The table folder Apply Material uses for ``medium`` settings, and a warning (or None):
+    :func:`.prebaked.tables_for_request` with the panel's values."""
+    return tables_for_request(medium.request(),
+                              tables_dir=bpy.path.abspath(medium.tables_dir) if medium.tables_dir else None,
+                              tables_request=medium.tables_request, cache_dir=preferences.cache_directory(),
+                              bake_unavailable=bake_unavailable_reason())
 
 
 def _short_hash(text: str) -> str:

@@ -14,6 +14,7 @@ import os
 import bpy
 
 from ..addon import EXTENSION_PACKAGE, import_precompute
+from ..jobs import bake_unavailable_reason
 
 
 class ClothLightPreferences(bpy.types.AddonPreferences):
@@ -36,8 +37,6 @@ class ClothLightPreferences(bpy.types.AddonPreferences):
     )
 
     def draw(self, context):
-        from .operators import bake_unavailable_reason
-
         layout = self.layout
         layout.use_property_split = True
         layout.prop(self, "cache_dir")

@@ -10,6 +10,8 @@ from __future__ import annotations
 import bpy
 
 from . import operators
+from ..jobs import bake_unavailable_reason
+from ..prebaked import prebaked_tables
 from .garment.operator import BAKE_COMMAND
 from .materials import shader_node
 from .preset_menus import CLOTHLIGHT_PT_medium_presets, CLOTHLIGHT_PT_weave_presets
@@ -117,14 +119,14 @@ class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
             row.progress(factor=job.progress, type="BAR", text=f"Baking: {job.progress:.0%}")
             row.operator("clothlight.cancel_bake", text="", icon="CANCEL")
         else:
-            reason = operators.bake_unavailable_reason()
+            reason = bake_unavailable_reason()
             layout.operator("clothlight.bake_tables", icon="RENDER_STILL")
             if reason:
                 layout.label(text="Bake unavailable here: pre-baked presets only", icon="ERROR")
         layout.prop(medium, "tables_dir")
         if medium.tables_dir and medium.tables_request and medium.tables_request != medium.request().to_json():
             layout.label(text="Settings changed since the bake", icon="ERROR")
-        elif not medium.tables_dir and operators.prebaked_tables(medium.request()) is not None:
+        elif not medium.tables_dir and prebaked_tables(medium.request()) is not None:
             layout.label(text="Shipped tables for these settings", icon="CHECKMARK")
 
 

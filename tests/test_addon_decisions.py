@@ -1,0 +1,57 @@
+"""What the add-on decides without Blender: which tables a material reads, why a bake cannot run."""
+
+from __future__ import annotations
+
+import pathlib
+
+import pytest
+
+from clothlight import jobs, prebaked
+from clothlight.jobs import BakeRequest
+
+
+def test_a_baked_folder_wins_and_is_flagged_when_baked_from_other_settings(tmp_path):
+    panel = BakeRequest(preset="red_cotton")
+    other = BakeRequest(preset="red_cotton", overrides=(("dye.weight_percent", 1.0),))
+    folder, warning = prebaked.tables_for_request(panel, tables_dir=tmp_path, tables_request=panel.to_json(),
+                                                  cache_dir=tmp_path / "cache")
+    assert folder == tmp_path and warning is None
+    _, warning = prebaked.tables_for_request(panel, tables_dir=tmp_path, tables_request=other.to_json(),
+                                             cache_dir=tmp_path / "cache")
+    assert "bake again" in warning
+    _, warning = prebaked.tables_for_request(panel, tables_dir=tmp_path, tables_request="",
+                                             cache_dir=tmp_path / "cache")
+    assert warning is None  # a folder chosen by hand: no request to compare
+
+
+def test_an_unchanged_shipped_preset_reads_its_copy_of_the_prebaked_tables(tmp_path, monkeypatch):
+    shipped = tmp_path / "prebaked"
+    request = BakeRequest(preset="red_cotton")
+    (shipped / "red_cotton").mkdir(parents=True)
+    (shipped / "red_cotton" / prebaked.REQUEST_FILE).write_text(request.to_json())
+    copies = []
+    monkeypatch.setattr(prebaked, "PREBAKED_DIR", shipped)
+
+    def user_copy(folder, cache_dir):
+        copies.append((folder, cache_dir))
+        return pathlib.Path(cache_dir) / "copy"
+
+    monkeypatch.setattr(prebaked, "user_copy", user_copy)
+    folder, warning = prebaked.tables_for_request(request, tables_dir=None, tables_request="", cache_dir=tmp_path)
+    assert (folder, warning) == (tmp_path / "copy", None)
+    assert copies == [(shipped / "red_cotton", tmp_path)]
+    changed = BakeRequest(preset="red_cotton", overrides=(("dye.weight_percent", 1.0),))
+    with pytest.raises(LookupError, match="press Bake Tables"):
+        prebaked.tables_for_request(changed, tables_dir=None, tables_request="", cache_dir=tmp_path)
+    reason = jobs.bake_unavailable_reason(["numba"])
+    with pytest.raises(LookupError, match="Bake unavailable: numba not installed"):
+        prebaked.tables_for_request(changed, tables_dir=None, tables_request="", cache_dir=tmp_path,
+                                    bake_unavailable=reason)
+
+
+def test_a_bake_is_unavailable_only_when_a_dependency_is_missing(monkeypatch):
+    assert jobs.bake_unavailable_reason([]) is None
+    reason = jobs.bake_unavailable_reason(["numba", "llvmlite"])
+    assert reason.startswith("Bake unavailable: numba, llvmlite not installed") and "Pre-baked" in reason
+    monkeypatch.setattr(jobs, "missing_bake_dependencies", lambda: ["scipy"])
+    assert "scipy" in jobs.bake_unavailable_reason()

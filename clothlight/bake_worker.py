@@ -50,6 +50,7 @@ def _main(argv) -> int:
     parser.add_argument("--request", required=True, help="a BakeRequest as JSON")
     parser.add_argument("--cache-dir", required=True)
     parser.add_argument("--threads", type=int)
+    parser.add_argument("--scheduler", help="a dask scheduler's address (default: this process's threads)")
     args = parser.parse_args(argv)
     # A process started in the background of a shell inherits SIGINT ignored, and then
     # interrupt_main() raises nothing: the cancel would be lost.
@@ -70,7 +71,7 @@ def _main(argv) -> int:
 
         try:
             result = bake_module.bake(**request.bake_arguments(), threads=args.threads, cache_dir=args.cache_dir,
-                                      progress=progress)
+                                      progress=progress, scheduler=args.scheduler)
         except InputError as error:
             _emit(event="error", message=str(error), bad_input=True)
             return _exit_codes.BAD_INPUT

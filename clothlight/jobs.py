@@ -204,6 +204,10 @@ class BakeJob:
         The bake cache's folder (the add-on's preference, by default its extension user folder).
     threads
         CPU threads of the transport; None: all.
+    scheduler
+        The address of a dask cluster (``tcp://HOST:PORT``, docs/distributed.md) whose workers run
+        the transport; None: the child's own threads (Blender's Python has no dask, and on one
+        machine the threads use every core already).
     numba_cache_dir
         Where numba keeps compiled kernels: numba writes next to a module by default, and an
         extension must not write into its own folder.
@@ -214,11 +218,12 @@ class BakeJob:
         imports of numba and SciPy stay quick from the second bake on.  None: Python's default.
     """
 
-    def __init__(self, request: BakeRequest, *, cache_dir, threads: int | None = None,
+    def __init__(self, request: BakeRequest, *, cache_dir, threads: int | None = None, scheduler: str | None = None,
                  numba_cache_dir=None, bytecode_cache_dir=None):
         self.request = request
         self.cache_dir = pathlib.Path(cache_dir)
         self.threads = threads
+        self.scheduler = scheduler or None
         self.numba_cache_dir = numba_cache_dir
         self.bytecode_cache_dir = bytecode_cache_dir
         self.progress = 0.0
@@ -235,7 +240,9 @@ class BakeJob:
     def command(self) -> list[str]:
         command = [sys.executable, "-m", WORKER_MODULE, "--request", self.request.to_json(),
                    "--cache-dir", str(self.cache_dir)]
-        if self.threads:
+        if self.scheduler:
+            command += ["--scheduler", self.scheduler]
+        elif self.threads:
             command += ["--threads", str(int(self.threads))]
         return command
 

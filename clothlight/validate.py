@@ -73,6 +73,12 @@ def build_parser():
     parser.add_argument("--samples", type=VALIDATION_SAMPLES.argument("--samples"), default=DEFAULT_SAMPLES,
                         help=f"Cycles samples per pixel, {VALIDATION_SAMPLES.allowed()} (default {DEFAULT_SAMPLES})")
     parser.add_argument("--seed", type=VALIDATION_SEED.argument("--seed"), default=0, help="Cycles seed (default 0)")
+    parser.add_argument("--scheduler", metavar="local|tcp://HOST:PORT|none",
+                        help="where the renders run: 'local', a worker per core of this machine; a scheduler "
+                             "address, a cluster started with `dask scheduler` / `dask worker` "
+                             "(docs/distributed.md); 'none', this process (default: 'local' where dask is "
+                             "installed and the sample is built here, else 'none': a --blend or --object sample "
+                             "renders here). The results are the same wherever they rendered")
     parser.add_argument("--patch-mm", type=VALIDATION_PATCH_MM.argument("--patch-mm"),
                         help=f"side of the framed patch, {VALIDATION_PATCH_MM.allowed()} (default: largest that fits)")
     parser.add_argument("--no-swatches", action="store_true", help="skip the front/back-lit colour swatches")
@@ -89,6 +95,14 @@ def check_arguments(args) -> None:
 
     outputs = import_precompute("outputs")
     outputs.check_writable_folder(args.out, "--out", what="an output folder for the report and renders")
+    distributed = import_precompute("distributed")
+    if args.scheduler is None:
+        args.scheduler = None if (args.blend or args.object) else distributed.default_scheduler()
+    else:
+        args.scheduler = distributed.check_scheduler(args.scheduler)
+        if args.scheduler is not None and (args.blend or args.object):
+            raise ParameterError("--scheduler", args.scheduler, "'none' with --blend or --object: a cluster's "
+                                 "workers build the sample from a weave")
     if args.blend is not None:
         blend = pathlib.Path(args.blend)
         if not blend.is_file():
@@ -160,9 +174,9 @@ def _sweep(args, interrupt) -> dict:
             raise ParameterError("--object", args.object, f"an object of the open file: {scene_files.object_names()}")
     try:
         with stdout_to_stderr() if args.json else contextlib.nullcontext():
-            return run_validation(sample, args.out, materials=args.material, tables_dir=args.tables,
-                                  cloth_dir=args.cloth_tables, measured_csv=args.measured, settings=settings,
-                                  swatches=not args.no_swatches, progress=progress)
+            return run_validation(sample, args.out, scheduler=args.scheduler, materials=args.material,
+                                  tables_dir=args.tables, cloth_dir=args.cloth_tables, measured_csv=args.measured,
+                                  settings=settings, swatches=not args.no_swatches, progress=progress)
     finally:
         if progress_shown:
             print(file=sys.stderr)  # end the progress line: what follows starts on its own

@@ -50,6 +50,7 @@ preset reuses the simulation of its medium.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import json
@@ -78,6 +79,7 @@ from .color import (
     spectral_weights,
     white_balance_factors,
 )
+from .distributed import LOCAL, check_scheduler, open_executor
 from .errors import ParameterError
 from .fit.parameters import FIT_TABLE, specular_from_config
 from .grids import AngularGrid
@@ -454,7 +456,7 @@ def _paths_record(transport) -> dict:
     }
 
 
-def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads, progress) -> Callable:
+def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads, progress, executor) -> Callable:
     """The writer of a spectral cache entry: optics → transport → yarn BRDF → spectral.npz."""
 
     def write(folder: pathlib.Path) -> None:
@@ -472,7 +474,7 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
         transport = simulate_yarn(
             optics, geometry, grids,
             paths_per_cell=settings["paths_per_cell"], target_rel_stderr=settings["target_rel_stderr"],
-            seed=settings["seed"], threads=threads, progress=transport_progress,
+            seed=settings["seed"], threads=threads, progress=transport_progress, executor=executor,
         )
         brdf_start = time.perf_counter()
         n_i = settings["incidence_resolution"]
@@ -530,7 +532,7 @@ def series_inputs(configuration: BakeConfiguration, dye_range: tuple[float, floa
 
 
 def _simulate_series(configuration: BakeConfiguration, inputs: dict, key: str, dye_range, threads,
-                     progress) -> Callable:
+                     progress, executor) -> Callable:
     """The writer of a dye series: one transport at the least dye with its exits tallied at the
     absorption steps up to the most (:func:`precompute.transport.absorption.absorption_steps`), and
     eq. (5) at every step on the incidence grid the least-dyed yarn needs."""
@@ -548,7 +550,7 @@ def _simulate_series(configuration: BakeConfiguration, inputs: dict, key: str, d
             reference, geometry, grids,
             paths_per_cell=settings["paths_per_cell"], target_rel_stderr=settings["target_rel_stderr"],
             seed=settings["seed"], threads=threads, extra_absorption_per_mm=steps,
-            progress=None if progress is None else (lambda fraction: progress(0.8 * fraction)),
+            progress=None if progress is None else (lambda fraction: progress(0.8 * fraction)), executor=executor,
         )
         brdf_start = time.perf_counter()
         n_i = settings["incidence_resolution"]
@@ -788,6 +790,7 @@ def bake(
     cache_dir: str | pathlib.Path | None = None,
     progress: Callable[[float], None] | None = None,
     dye_series: tuple[float, float] | None = None,
+    scheduler: str | None = None,
 ) -> BakeResult:
     """Bake (or find in the cache) the tables of a yarn.
 
@@ -804,7 +807,8 @@ def bake(
         Override the ``[transport]`` seed and path budget (paths per incidence
         cell, or the relative standard error of every cell's albedo).
     threads
-        CPU threads of the transport (default: all); the result does not depend on it.
+        CPU threads of the transport (default: all); with ``scheduler="local"`` its worker processes.
+        The result does not depend on it.
     cache_dir
         Cache folder (default :func:`precompute.cache.default_cache_dir`).
     progress
@@ -814,9 +818,17 @@ def bake(
         is made once for the range (at the least dye, its exits tallied at the absorption steps up to
         the most; cached) and the tables at any dye amount in it are read from it in seconds
         (:mod:`precompute.transport.absorption`), instead of a simulation per amount.
+    scheduler
+        Where the transport runs (:mod:`precompute.distributed`): None (default) in this process,
+        ``"local"`` on a LocalCluster of this machine's cores, ``"tcp://HOST:PORT"`` on that cluster.
+        The tables and every cache key are the same wherever it ran; the cluster is reached (and its
+        workers' code checked) only when there is something to simulate, before anything is written.
     """
     started = time.perf_counter()
+    scheduler = check_scheduler(scheduler, "scheduler")
     if threads is not None:
+        if scheduler not in (None, LOCAL):
+            raise ParameterError("threads", threads, f"unset with the cluster {scheduler} (its workers' threads count)")
         _integer("threads", threads, 1, numba.config.NUMBA_NUM_THREADS)
     configuration = bake_configuration(
         preset_or_params, overrides, seed=seed, paths_per_cell=paths_per_cell, target_rel_stderr=target_rel_stderr
@@ -841,14 +853,17 @@ def bake(
         if spectral_folder is None and dye_series is not None:
             series_folder = lookup(cache_dir, series_folder_name, series_key)
             if series_folder is None:
-                simulate = _simulate_series(configuration, series_in, series_key, dye_range, threads, progress)
-                series_folder, _ = store(cache_dir, series_folder_name, series_key, series_in, simulate)
+                with _transport_executor(scheduler, threads) as executor:
+                    simulate = _simulate_series(configuration, series_in, series_key, dye_range, threads, progress,
+                                                executor)
+                    series_folder, _ = store(cache_dir, series_folder_name, series_key, series_in, simulate)
                 simulated = True
             reweight = _reweighted_spectral(configuration, spectral_in, spectral_key, series_folder)
             spectral_folder, _ = store(cache_dir, "spectral", spectral_key, spectral_in, reweight)
         elif spectral_folder is None:
-            simulate = _simulate(configuration, spectral_in, spectral_key, threads, progress)
-            spectral_folder, _ = store(cache_dir, "spectral", spectral_key, spectral_in, simulate)
+            with _transport_executor(scheduler, threads) as executor:
+                simulate = _simulate(configuration, spectral_in, spectral_key, threads, progress, executor)
+                spectral_folder, _ = store(cache_dir, "spectral", spectral_key, spectral_in, simulate)
             simulated = True
         write_tables = _tables(configuration, tables_in, tables_key, spectral_folder)
         folder, _ = store(cache_dir, "tables", tables_key, tables_in, write_tables)
@@ -864,6 +879,13 @@ def bake(
         call_seconds=time.perf_counter() - started,
     )
     return BakeResult(folder, cache_hit, simulated, summary)
+
+
+def _transport_executor(scheduler: str | None, threads: int | None):
+    """A ``with`` context giving the transport's executor on ``scheduler``, checked (None: this process)."""
+    if scheduler is None:
+        return contextlib.nullcontext()
+    return open_executor(scheduler, code=SPECTRAL_SOURCES, workers=threads if scheduler == LOCAL else None)
 
 
 def export_bake(result: BakeResult, out_dir: str | pathlib.Path) -> dict:

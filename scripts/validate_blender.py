@@ -18,5 +18,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from clothlight.validate import main
 
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-sys.exit(main(argv))
+# Guarded: a local cluster's workers are spawned processes that import this script again.
+if __name__ == "__main__":
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    sys.exit(main(argv))

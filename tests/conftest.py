@@ -53,7 +53,9 @@ if os.environ.get("CLOTHLIGHT_TESTS_WITHOUT_BPY"):
 RENDER_MODULES = {"test_addon_operators", "test_cloth_response_render", "test_cycles_closures", "test_example_blends",
                   "test_garment", "test_grids", "test_osl_render", "test_validation_rig", "test_yarn_shader"}
 #: Test modules that bake tables, build the extension zip or render for minutes.
-SLOW_MODULES = {"test_addon_operators", "test_bake_cli", "test_bake_dye_series", "test_distributed", "test_extension"}
+SLOW_MODULES = {"test_addon_operators", "test_bake_cli", "test_bake_dye_series", "test_distributed",
+                "test_distributed_fit", "test_distributed_garment", "test_distributed_jobs",
+                "test_distributed_validation", "test_extension", "test_fit_dye_series"}
 #: Fixtures that bake (yarn or cloth) or build the extension zip: a test that uses one is slow.
 SLOW_FIXTURES = {"extension_zip", "red_cotton_cloth", "transport_runs"}
 #: Single tests of otherwise quick modules that bake in a child process, run Monte-Carlo transport

@@ -55,3 +55,12 @@ def test_a_bake_is_unavailable_only_when_a_dependency_is_missing(monkeypatch):
     assert reason.startswith("Bake unavailable: numba, llvmlite not installed") and "Pre-baked" in reason
     monkeypatch.setattr(jobs, "missing_bake_dependencies", lambda: ["scipy"])
     assert "scipy" in jobs.bake_unavailable_reason()
+
+
+def test_a_bake_job_sends_the_preferences_scheduler_to_its_child(tmp_path):
+    request = BakeRequest(preset="red_cotton")
+    on_cluster = jobs.BakeJob(request, cache_dir=tmp_path, threads=4, scheduler="tcp://farm:8786").command()
+    assert on_cluster[on_cluster.index("--scheduler") + 1] == "tcp://farm:8786"
+    assert "--threads" not in on_cluster  # the cluster's workers have their own threads
+    here = jobs.BakeJob(request, cache_dir=tmp_path, threads=4, scheduler="").command()
+    assert "--scheduler" not in here and here[here.index("--threads") + 1] == "4"

@@ -11,6 +11,7 @@ processes.  Nothing here bakes or renders, but the one Ctrl-C-during-a-sweep tes
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -65,6 +66,8 @@ def no_work(monkeypatch):
     import precompute.cli.slab
 
     monkeypatch.setattr(precompute.bake, "lookup", lambda *args, **kwargs: None)
+    # no cluster either: the command line's default scheduler would start one before the simulation
+    monkeypatch.setattr(precompute.bake, "_transport_executor", lambda *args: contextlib.nullcontext())
     monkeypatch.setattr(precompute.bake, "_simulate", lambda configuration, *args: _started(
         configuration=configuration)())
     monkeypatch.setattr(precompute.cli.slab, "simulate_hg_slab", _started(command="slab"))
@@ -321,12 +324,17 @@ def test_a_real_ctrl_c_among_the_start_up_imports_exits_130(tmp_path):
 
 @pytest.mark.blender
 @pytest.mark.render
-def test_ctrl_c_during_a_validation_sweep_stops_it_with_130(tmp_path):
+@pytest.mark.parametrize("scheduler", ["none", "local"])
+def test_ctrl_c_during_a_validation_sweep_stops_it_with_130(tmp_path, scheduler):
     """Blender prints and swallows a KeyboardInterrupt raised inside Cycles' render engine: the sweep
-    holds the Ctrl-C and stops after the render under way, removing its rig."""
+    holds the Ctrl-C and stops after the render under way, removing its rig; on a local cluster,
+    after the task under way, its other tasks cancelled."""
     pytest.importorskip("bpy")
+    if scheduler == "local":
+        pytest.importorskip("distributed")
     code, err = _interrupt_when([sys.executable, "-m", "clothlight.validate", "--out", str(tmp_path / "v"),
-                                 "--material", "baseline", "--resolution", "16", "--samples", "4"], r"\[1/", delay=0.2)
+                                 "--material", "baseline", "--resolution", "16", "--samples", "4",
+                                 "--scheduler", scheduler], r"\[\d+/", delay=0.2)
     assert code == 130, err[-2000:]
     assert err.rstrip().endswith("interrupted") and "Traceback" not in err and "KeyboardInterrupt" not in err
     assert not (tmp_path / "v" / "results.json").exists()

@@ -1,6 +1,6 @@
 """``python -m precompute fit``: exit codes (0 done, 2 bad input, 130 interrupted, 1 internal) and an
---out folder written as a whole.  In-process, with the synthetic forward model standing in for
-``precompute.fit.forward`` (put in sys.modules, where the command's lazy import finds it)."""
+--out folder written as a whole.  In-process (``--scheduler none``), with the synthetic forward model
+standing in for ``precompute.fit.forward`` (put in sys.modules, where the command's lazy import finds it)."""
 
 from __future__ import annotations
 
@@ -48,7 +48,7 @@ def inputs(tmp_path):
 def fit(inputs, out, *extra):
     return precompute_cli.main(["fit", "--measured", str(inputs["measured"]), "--config", str(inputs["config"]),
                                 "--free", "void_fraction,dye_weight_percent", "--budget-evaluations", "30",
-                                "--out", str(out), *extra])
+                                "--scheduler", "none", "--out", str(out), *extra])
 
 
 def test_a_fit_writes_its_folder_and_a_preset_the_bake_accepts(inputs, tmp_path, fake_forward, capsys):

@@ -111,3 +111,12 @@ def remove_data_blocks(blocks) -> None:
             collections[block.id_type].remove(block)
         except ReferenceError:
             pass
+
+
+def worker_threads() -> int:
+    """The threads of the dask worker running the current task: what its Cycles renders use (a
+    worker runs one task at a time, precompute.distributed)."""
+    from distributed import get_worker
+
+    return max(1, get_worker().state.nthreads)
+

@@ -259,6 +259,7 @@ def _job_for(context, request: BakeRequest) -> BakeJob:
     prefs = preferences.preferences(context)
     threads = prefs.threads if prefs is not None and prefs.threads > 0 else None
     return BakeJob(request, cache_dir=preferences.cache_directory(context), threads=threads,
+                   scheduler=prefs.scheduler.strip() if prefs is not None else None,
                    numba_cache_dir=preferences.numba_cache_directory(),
                    bytecode_cache_dir=preferences.bytecode_cache_directory())
 

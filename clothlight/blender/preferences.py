@@ -36,12 +36,21 @@ class ClothLightPreferences(bpy.types.AddonPreferences):
         soft_max=os.cpu_count() or 1,
     )
 
+    scheduler: bpy.props.StringProperty(
+        name="Dask Scheduler",
+        description="Address of a dask cluster (tcp://HOST:PORT, started with `dask scheduler` and `dask worker` "
+                    "from the same ClothLight) whose workers run the bakes' transport; the bake's Python needs "
+                    "dask and distributed. Blank: this machine's cores",
+        default="",
+    )
+
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
         layout.prop(self, "cache_dir")
         layout.label(text=f"In use: {cache_directory(context)}", icon="FILE_FOLDER")
         layout.prop(self, "threads")
+        layout.prop(self, "scheduler")
         reason = bake_unavailable_reason()
         if reason:
             layout.label(text=reason, icon="ERROR")

@@ -61,6 +61,13 @@ def build_parser():
                            f"(default {pixels})")
     bake.add_argument("--samples", type=GONIO_SAMPLES.argument("--samples"), default=samples,
                       help=f"Cycles samples per pixel, {GONIO_SAMPLES.allowed()} (default {samples})")
+    distributed = import_precompute("distributed")
+    default_scheduler = distributed.default_scheduler() or distributed.NO_SCHEDULER
+    bake.add_argument("--scheduler", default=default_scheduler, metavar="local|tcp://HOST:PORT|none",
+                      help=f"where the renders run: {distributed.LOCAL!r}, a worker per core of this machine; a "
+                           "scheduler address, a cluster started with `dask scheduler` / `dask worker` "
+                           f"(docs/distributed.md); {distributed.NO_SCHEDULER!r}, this process (default: "
+                           f"{default_scheduler}). The tables are the same wherever they rendered")
     bake.add_argument("--cache-dir", help="cache folder (default: the user cache)")
     bake.add_argument("--json", action="store_true", help="print summary.json on stdout")
     return parser
@@ -90,7 +97,8 @@ def _measure(args, interrupt):
         interrupt.check()  # after a render: the cache keeps nothing of an unfinished measurement
 
     try:
-        folder, measured = bake_cloth(args.tables, settings, cache_dir=args.cache_dir, progress=progress)
+        folder, measured = bake_cloth(args.tables, settings, cache_dir=args.cache_dir, progress=progress,
+                                      scheduler=args.scheduler)
     finally:
         if progress_shown:
             print(file=sys.stderr)  # end the progress line: what follows starts on its own
@@ -113,6 +121,7 @@ def _main(argv) -> int:
     table_folder.check_output_folder(args.out, CLOTH_FOLDER_FILES)
     if args.cache_dir is not None:
         outputs.check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
+    args.scheduler = import_precompute("distributed").check_scheduler(args.scheduler)
     if not pathlib.Path(args.tables).is_dir():
         raise ParameterError("--tables", args.tables, "an existing yarn bake folder (python -m precompute bake --out)")
 

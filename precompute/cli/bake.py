@@ -12,6 +12,7 @@ import sys
 
 from .. import bounds
 from ..bake import bake, export_bake
+from ..distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
 from ..medium import DEFAULT_PRESET, preset_names
 from ..outputs import check_writable_folder
 from ..table_folder import YARN_FOLDER_FILES, check_output_folder
@@ -47,7 +48,13 @@ def add_parser(subparsers) -> None:
                         help="simulate once for this dye range (%% of fibre weight, holding the preset's amount; "
                         "cached) and read the tables at any amount in it in seconds: a later bake with another "
                         "dye.weight_percent in the range and the same --dye-series simulates nothing")
-    parser.add_argument("--threads", type=int, help="CPU threads (default: all); results do not depend on it")
+    parser.add_argument("--threads", type=int, help="CPU threads, with --scheduler local its worker processes "
+                        "(default: all); results do not depend on it")
+    parser.add_argument("--scheduler", default=default_scheduler() or NO_SCHEDULER, metavar="local|tcp://HOST:PORT|none",
+                        help=f"where the transport runs: {LOCAL!r}, a cluster of this machine's cores; a scheduler "
+                        "address, a cluster started with `dask scheduler` / `dask worker` (docs/distributed.md); "
+                        f"{NO_SCHEDULER!r}, this process (default: {default_scheduler() or NO_SCHEDULER}). The tables "
+                        "are the same wherever it ran")
     parser.add_argument("--cache-dir", type=pathlib.Path, help="cache folder (default: the user cache folder)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
     parser.set_defaults(func=run)
@@ -60,6 +67,7 @@ def run(args) -> int:
         check_output_folder(args.out, YARN_FOLDER_FILES)  # before the bake, not after it
     if args.cache_dir is not None:
         check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
+    scheduler = check_scheduler(args.scheduler)
     bars = []  # opened at the first progress report, so input errors print no bar
 
     def progress(fraction: float) -> None:
@@ -71,7 +79,7 @@ def run(args) -> int:
     try:
         result = bake(args.config or args.preset, args.overrides, seed=args.seed, paths_per_cell=args.paths,
                       target_rel_stderr=args.target_error, threads=args.threads, cache_dir=args.cache_dir,
-                      progress=progress, dye_series=args.dye_series)
+                      progress=progress, dye_series=args.dye_series, scheduler=scheduler)
     finally:
         for bar in bars:
             bar.close()

@@ -8,12 +8,14 @@ Exit codes: precompute/exit_codes.py (0 done, 2 bad input, 130 interrupted: noth
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import pathlib
 import sys
 
 from .. import bounds
+from ..distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler, open_executor
 from ..errors import ParameterError
 from ..medium import DEFAULT_PRESET, preset_names
 
@@ -55,6 +57,12 @@ def add_parser(subparsers) -> None:
                         help="for a fit whose only free medium parameter is dye_weight_percent: one transport for "
                              "its whole range, every candidate read from it in about a second and without "
                              "Monte-Carlo noise between candidates (docs/fitting.md)")
+    parser.add_argument("--scheduler", default=default_scheduler() or NO_SCHEDULER, metavar="local|tcp://HOST:PORT|none",
+                        help=f"where each generation's candidates are evaluated: {LOCAL!r}, a worker per core of "
+                        "this machine; a scheduler address, a cluster started with `dask scheduler` / `dask worker` "
+                        f"(docs/distributed.md); {NO_SCHEDULER!r}, this process, one after the other (default: "
+                        f"{default_scheduler() or NO_SCHEDULER}; with --dye-series always this process, where "
+                        "a candidate is a read of one series). The fit is the same wherever it ran")
     parser.add_argument("--cache-dir", type=pathlib.Path, help="cache folder of the forward model's cloth response")
     parser.add_argument("--json", action="store_true", help="print fit.json's summary on stdout")
     parser.set_defaults(func=run)
@@ -65,7 +73,7 @@ def run(args) -> int:
 
     from ..fit import Budget, check_fit_folder, fit_medium, load_measurement, parse_free, split_views
     from ..fit.objective import Objective, parse_target_ratios
-    from ..fit.optimise import check_budget
+    from ..fit.optimise import FIT_CODE, check_budget
     from ..fit.parameters import FIT_TABLE, initial_values, specular_from_config
     from ..fit.report import fit_summary, write_fit_folder
     from ..medium import load_preset_config, medium_from_dict
@@ -93,6 +101,7 @@ def run(args) -> int:
     if args.max_back_front is not None and not (math.isfinite(args.max_back_front) and args.max_back_front > 0):
         raise ParameterError("--max-back-front", args.max_back_front, "a ratio > 0")
     check_fit_folder(args.out)
+    scheduler = None if args.dye_series else check_scheduler(args.scheduler)
     if args.cache_dir is not None:
         check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
 
@@ -113,10 +122,13 @@ def run(args) -> int:
         b.update(max(0, state.evaluations - b.n))
 
     try:
-        forward_model = _build_forward_model(views, medium_config, base_dir, args, building)
-        result = fit_medium(measurement, config, base_dir, free=[p.name for p in free], forward_model=forward_model,
-                            seed=args.seed, budget=budget, target_ratios=ratios, progress=searching,
-                            max_back_front=args.max_back_front)
+        with contextlib.ExitStack() as stack:
+            # The cluster first: an address that does not answer is refused before the cloth response.
+            executor = None if scheduler is None else stack.enter_context(open_executor(scheduler, code=FIT_CODE))
+            forward_model = _build_forward_model(views, medium_config, base_dir, args, building)
+            result = fit_medium(measurement, config, base_dir, free=[p.name for p in free],
+                                forward_model=forward_model, seed=args.seed, budget=budget, target_ratios=ratios,
+                                progress=searching, max_back_front=args.max_back_front, scheduler=executor)
     finally:
         for b in bars.values():
             b.close()

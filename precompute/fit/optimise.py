@@ -43,6 +43,8 @@ with 130 and writes nothing.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import math
 import pathlib
 import time
@@ -52,6 +54,7 @@ from typing import Protocol
 
 import numpy as np
 
+from ..distributed import ClusterExecutor, open_executor
 from ..errors import InputError, ParameterError
 from ..medium import MAX_VOLUME_FRACTION, medium_from_dict
 from .baseline import BaselineFit, fit_baseline
@@ -286,16 +289,32 @@ def check_budget(budget: Budget, n_free: int, popsize: int | None = None) -> int
     return population
 
 
+def evaluate_in_turn(evaluate: Callable, requests: Sequence[tuple], cancel: Callable[[], bool] | None = None):
+    """``(evaluate(*request), seconds)`` for each request, one after the other, as each is done;
+    ``cancel()`` is asked before each (FitCancelled)."""
+    for request in requests:
+        if cancel is not None and cancel():
+            raise FitCancelled("fit cancelled")
+        t0 = time.perf_counter()
+        value = evaluate(*request)
+        yield value, time.perf_counter() - t0
+
+
 def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], free: Sequence[FitParameter],
              start: Mapping,
              *, seed: int = 0, budget: Budget = Budget(), schedule: AccuracySchedule = AccuracySchedule(),
              popsize: int | None = None, progress: Callable[[FitProgress], None] | None = None,
-             cancel: Callable[[], bool] | None = None) -> dict:
+             cancel: Callable[[], bool] | None = None, evaluate_many: Callable = evaluate_in_turn) -> dict:
     """Minimise ``evaluate(parameters, relative_error, seed)`` over ``free`` from ``start`` (module
     docstring).  ``evaluate`` returns the objective, ``(objective, values)`` when it also fitted
     parameters of its own (the profiled specular term: ``values`` are recorded with the point), or
     :class:`Refused` for a medium the loader refuses (CMA-ES gets its penalty; no forward evaluation
     is counted).
+
+    A generation's evaluations (its candidates and the incumbent's re-evaluation) are independent:
+    ``evaluate_many(evaluate, requests, cancel)`` yields ``(value, seconds)`` for each request in
+    order (:func:`evaluate_in_turn`, or on a cluster :func:`evaluate_on_cluster`); the history is
+    the same either way.
 
     Returns ``{"best": parameters, "estimate": objective, "history": [Evaluation], "stop_reason",
     "generations", "seconds", "sigma"}``; the final, accurate evaluation is left to the caller (it
@@ -323,13 +342,8 @@ def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], fr
         key = tuple(round(float(v), 12) for v in u)
         return key, {p.name: p.from_unit(v) for p, v in zip(free, key)}
 
-    def run(point: _Point, kind: str, accuracy: float, forward_seed: int) -> float:
+    def record(point: _Point, kind: str, accuracy: float, forward_seed: int, value, seconds: float) -> float:
         nonlocal spent
-        if cancel is not None and cancel():
-            raise FitCancelled("fit cancelled")
-        t0 = time.perf_counter()
-        value = evaluate(dict(point.parameters), accuracy, forward_seed)
-        seconds = time.perf_counter() - t0
         if isinstance(value, tuple):  # (objective, the profiled parameters' values for this point)
             value, point.profiled = value[0], dict(value[1])
         if isinstance(value, Refused):
@@ -367,14 +381,15 @@ def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], fr
         t_generation = time.perf_counter()
         forward_seed = _derived_seed(seed, generation)
         solutions = es.ask()
-        values = []
-        for u in solutions:
-            key, parameters = to_parameters(u)
-            point = points.setdefault(key, _Point(key, parameters))
-            values.append(run(point, "candidate", accuracy, forward_seed))
-        if incumbent is not None and spent + reserve < budget.evaluations:
-            run(incumbent, "incumbent", accuracy, forward_seed)
-        es.tell(solutions, values)
+        # The budget check above leaves room for every candidate and the incumbent's re-evaluation.
+        batch = [(points.setdefault(key, _Point(key, parameters)), "candidate")
+                 for key, parameters in map(to_parameters, solutions)]
+        if incumbent is not None:
+            batch.append((incumbent, "incumbent"))
+        requests = [(dict(point.parameters), accuracy, forward_seed) for point, _ in batch]
+        values = [record(point, kind, accuracy, forward_seed, value, seconds)
+                  for (point, kind), (value, seconds) in zip(batch, evaluate_many(evaluate, requests, cancel))]
+        es.tell(solutions, values[:len(solutions)])
         evaluated = [p for p in points.values() if p.evaluations]
         if evaluated:
             incumbent = min(evaluated, key=lambda p: (p.estimate, p.unit))
@@ -396,7 +411,8 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
                target_ratios: str | Mapping[str, float] | None = None,
                progress: Callable[[FitProgress], None] | None = None, cancel: Callable[[], bool] | None = None,
                specular: Mapping[str, float] | None = None, schedule: AccuracySchedule | None = None,
-               popsize: int | None = None, max_back_front: float | None = None) -> FitResult:
+               popsize: int | None = None, max_back_front: float | None = None,
+               scheduler: str | ClusterExecutor | None = None) -> FitResult:
     """Fit the free parameters of a medium to a measurement (module docstring).
 
     Parameters
@@ -428,6 +444,10 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         (real cloth is darker lit from behind, the paper's Fig. 9): a forward model that gives the
         swatches (``swatch_count`` rows after the measured views) adds ``max(0, ln(ratio / max))``
         to the objective.  None: no constraint.
+    scheduler
+        Where each generation's evaluations run (:mod:`precompute.distributed`: ``"local"`` or a
+        cluster's address, or a cluster already open with ``open_executor(..., code=FIT_CODE)``;
+        None: here, one after the other); the fit is the same either way.
     """
     began = time.perf_counter()
     if isinstance(measurement, (str, pathlib.Path)):
@@ -454,35 +474,18 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
     if max_back_front is not None and not swatches:
         raise ParameterError("max_back_front", max_back_front, "a forward model that gives the §6.1 swatches")
 
-    def score(rgb: np.ndarray) -> float:
-        measured_views = rgb[:len(rgb) - swatches]
-        if max_back_front is None:
-            return objective(measured_views)
-        return objective(measured_views) + back_front_penalty(rgb[len(rgb) - swatches:], max_back_front)
-
-    def model_and_values(candidate: dict, keywords: dict, relative_error: float, forward_seed: int):
-        if not profiled:
-            return forward_model(candidate, **keywords, relative_error=relative_error, seed=forward_seed), {}
-        medium_part, specular_part = forward_model.parts(candidate, relative_error=relative_error, seed=forward_seed)
-        values = fit_profiled_specular(score, medium_part, specular_part, profiled, keywords)
-        keywords = {**keywords, **{p.path: values[p.name] for p in profiled}}
-        return medium_part + specular_part(keywords["specular_weight"], keywords["specular_slope"])[:, None], values
-
-    def evaluate(parameters: dict, relative_error: float, forward_seed: int) -> float | tuple | Refused:
-        candidate, keywords = apply(config, specular, parameters)
-        total = total_volume_fraction(candidate)
-        if total >= MAX_VOLUME_FRACTION:
-            return Refused(f"particle volume fractions sum to {total:.3g} (≥ {MAX_VOLUME_FRACTION})",
-                           total - MAX_VOLUME_FRACTION)
-        try:
-            medium_from_dict(candidate, base_dir)
-        except ParameterError as error:
-            return Refused(str(error))
-        rgb, values = model_and_values(candidate, keywords, relative_error, forward_seed)
-        return (score(rgb), values) if profiled else score(rgb)
-
-    search = minimise(evaluate, searched, {p.name: start[p.name] for p in searched}, seed=seed, budget=budget,
-                      schedule=schedule, popsize=population, progress=progress, cancel=cancel)
+    evaluate = CandidateEvaluator(config, specular, base_dir, forward_model, objective, tuple(profiled), swatches,
+                                  max_back_front)
+    score, model_and_values = evaluate.score, evaluate.model_and_values
+    with contextlib.ExitStack() as stack:
+        evaluate_many = evaluate_in_turn
+        if scheduler is not None:
+            executor = (scheduler if isinstance(scheduler, ClusterExecutor)
+                        else stack.enter_context(open_executor(scheduler, code=FIT_CODE)))
+            evaluate_many = functools.partial(evaluate_on_cluster, executor, executor.share(evaluate))
+        search = minimise(evaluate, searched, {p.name: start[p.name] for p in searched}, seed=seed, budget=budget,
+                          schedule=schedule, popsize=population, progress=progress, cancel=cancel,
+                          evaluate_many=evaluate_many)
     best = search["best"]
     history = search["history"]
     fitted_config, keywords = apply(config, specular, best)
@@ -515,6 +518,77 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
             "front_rgb": swatch_rgb[0].tolist(), "back_rgb": swatch_rgb[1].tolist(),
             "back_front_luminance": float(LUMINANCE @ swatch_rgb[1]) / float(LUMINANCE @ swatch_rgb[0]),
             "max_back_front": max_back_front})
+
+
+@dataclass
+class CandidateEvaluator:
+    """A candidate's objective: ``evaluator(parameters, relative_error, forward_seed)`` applies the
+    free parameters to the preset, refuses a medium the loader refuses (:class:`Refused`), runs the
+    forward model and scores it — with the specular term fitted per candidate where it is profiled
+    (``(objective, its values)``).  Picklable, so that a cluster's workers evaluate candidates."""
+
+    config: dict
+    specular: dict
+    base_dir: pathlib.Path
+    forward_model: ForwardModel
+    objective: Objective
+    profiled: tuple
+    swatches: int
+    max_back_front: float | None
+
+    def score(self, rgb: np.ndarray) -> float:
+        measured_views = rgb[:len(rgb) - self.swatches]
+        if self.max_back_front is None:
+            return self.objective(measured_views)
+        return self.objective(measured_views) + back_front_penalty(rgb[len(rgb) - self.swatches:],
+                                                                   self.max_back_front)
+
+    def model_and_values(self, candidate: dict, keywords: dict, relative_error: float, forward_seed: int):
+        if not self.profiled:
+            return self.forward_model(candidate, **keywords, relative_error=relative_error, seed=forward_seed), {}
+        medium_part, specular_part = self.forward_model.parts(candidate, relative_error=relative_error,
+                                                              seed=forward_seed)
+        values = fit_profiled_specular(self.score, medium_part, specular_part, self.profiled, keywords)
+        keywords = {**keywords, **{p.path: values[p.name] for p in self.profiled}}
+        return medium_part + specular_part(keywords["specular_weight"], keywords["specular_slope"])[:, None], values
+
+    def __call__(self, parameters: dict, relative_error: float, forward_seed: int) -> float | tuple | Refused:
+        candidate, keywords = apply(self.config, self.specular, parameters)
+        total = total_volume_fraction(candidate)
+        if total >= MAX_VOLUME_FRACTION:
+            return Refused(f"particle volume fractions sum to {total:.3g} (≥ {MAX_VOLUME_FRACTION})",
+                           total - MAX_VOLUME_FRACTION)
+        try:
+            medium_from_dict(candidate, self.base_dir)
+        except ParameterError as error:
+            return Refused(str(error))
+        rgb, values = self.model_and_values(candidate, keywords, relative_error, forward_seed)
+        return (self.score(rgb), values) if self.profiled else self.score(rgb)
+
+
+#: The code a fit's workers run, checked against this checkout's (precompute.distributed).
+FIT_CODE = {"entries": ("precompute.fit.optimise",)}
+
+
+def evaluate_timed(evaluate: CandidateEvaluator, parameters: dict, relative_error: float,
+                   forward_seed: int) -> tuple:
+    """A cluster task: ``(evaluate(parameters, relative_error, forward_seed), seconds)``."""
+    t0 = time.perf_counter()
+    value = evaluate(parameters, relative_error, forward_seed)
+    return value, time.perf_counter() - t0
+
+
+def evaluate_on_cluster(executor, shared_evaluate, evaluate: CandidateEvaluator, requests: Sequence[tuple],
+                        cancel: Callable[[], bool] | None = None) -> list:
+    """A generation's evaluations as tasks of ``executor`` (:func:`precompute.distributed.open_executor`),
+    with the evaluator copied to each worker once (``shared_evaluate``); ``cancel()`` stops them all
+    (FitCancelled).  ``evaluate`` is what they run, here for :func:`minimise`'s signature."""
+    try:
+        return executor.map(evaluate_timed, [(shared_evaluate, *request) for request in requests], cancel=cancel)
+    except KeyboardInterrupt:
+        if cancel is not None and cancel():
+            raise FitCancelled("fit cancelled") from None
+        raise
 
 
 #: Starting points (in the [0, 1] box) of the profiled specular fit: it is cheap, and two starts

@@ -146,11 +146,11 @@ def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, inward):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_res, cos_max, n_around,
+def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p, in_res, cos_max, n_around,
                 n_along, cell_length, out_res, table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed,
                 lost, events, decay):
     """Run incidence cell ``cell``'s tasks ``first_task + t`` of ``sizes[t]`` paths (a 0 ends the list),
-    choosing hero wavelengths with probabilities ``hero_p`` (L,)."""
+    choosing hero wavelengths with probabilities ``hero_p`` (L,), into the tallies' row ``row``."""
     n_wl = exit_sum.shape[1]
     n_decay = decay.extra_mu_a.shape[0]
     cell_decayed_exit = np.zeros((n_wl, n_decay))
@@ -212,46 +212,48 @@ def _trace_cell(cell, first_task, sizes, seed, radius, eta, medium, hero_p, in_r
                 around, along, out_cell = _exit_bins(pos, d, dpsi, n_around, n_along, cell_length, out_res)
                 for k in range(n_wl):
                     w = weights[k]
-                    table[cell, around, along, out_cell, k] += w
-                    table_sq[cell, around, out_cell, k] += w * w
+                    table[row, around, along, out_cell, k] += w
+                    table_sq[row, around, out_cell, k] += w * w
                     cell_exit[k] += w
                     cell_exit_sq[k] += w * w
                     for j in range(n_decay):
                         f = factors[k, j]
-                        decay.bssrdf[cell, around, out_cell, k, j] += f
+                        decay.bssrdf[row, around, out_cell, k, j] += f
                         cell_decayed_exit[k, j] += f
                         cell_decayed_exit_sq[k, j] += f * f
             elif status == LOST:
                 for k in range(n_wl):
                     cell_lost[k] += weights[k]
     for k in range(n_wl):
-        specular[cell, k] += cell_specular[k]
-        exit_sum[cell, k] += cell_exit[k]
-        exit_sq[cell, k] += cell_exit_sq[k]
-        unscattered[cell, k] += cell_unscattered[k]
-        absorbed[cell, k] += cell_absorbed[k]
-        lost[cell, k] += cell_lost[k]
+        specular[row, k] += cell_specular[k]
+        exit_sum[row, k] += cell_exit[k]
+        exit_sq[row, k] += cell_exit_sq[k]
+        unscattered[row, k] += cell_unscattered[k]
+        absorbed[row, k] += cell_absorbed[k]
+        lost[row, k] += cell_lost[k]
         for j in range(n_decay):
-            decay.exit_sum[cell, k, j] += cell_decayed_exit[k, j]
-            decay.exit_sq[cell, k, j] += cell_decayed_exit_sq[k, j]
-            decay.unscattered[cell, k, j] += cell_decayed_unscattered[k, j]
-    events[cell] += cell_events
+            decay.exit_sum[row, k, j] += cell_decayed_exit[k, j]
+            decay.exit_sq[row, k, j] += cell_decayed_exit_sq[k, j]
+            decay.unscattered[row, k, j] += cell_decayed_unscattered[k, j]
+    events[row] += cell_events
 
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")
-def yarn_kernel(slots, cells, task_first, task_sizes, seed, radius, eta, medium, hero_p, in_res, cos_max,
+def yarn_kernel(slots, cells, rows, task_first, task_sizes, seed, radius, eta, medium, hero_p, in_res, cos_max,
                 n_around, n_along, cell_length, out_res,
                 table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed, lost, events, decay):
     """Trace the tasks of incidence cells ``cells``: cell ``cells[i]`` runs, in order, tasks
     ``task_first[i] + t`` with ``task_sizes[i, t]`` paths (a 0 ends its list), choosing hero
-    wavelengths with the probabilities ``hero_p[cells[i]]`` (n_in, L).  Thread slot
+    wavelengths with the probabilities ``hero_p[cells[i]]`` (n_in, L), and adds to the tallies'
+    row ``rows[i]`` (the cell itself when the tallies hold every cell, its place in a block of
+    cells when they hold that block only: a distributed run's worker).  Thread slot
     ``s`` handles the cells ``i`` listed in ``slots[s]`` (−1 pads), balanced by the caller.
 
     A path starts uniformly in the source cell dA (ψ ∈ [0, 2π/n_around), z ∈ [0, cell_length))
     arriving from a direction drawn in hemisphere cell ``c`` of dA's frame with density
     ∝ cos θ (uniform in the square, kept with probability cos θ / ``cos_max[c]``), i.e. the
     flux of a uniform radiance over the cell: every path carries unit incident flux.  All
-    outputs are indexed by incidence cell and written only by that cell's iteration:
+    outputs are indexed by the cell's row and written only by that cell's iteration:
     ``table`` (n_in, n_around, n_along + 2, n_out, L) summed exit flux, ``table_sq``
     (n_in, n_around, n_out, L) summed per-path squares of the axis-summed exit flux,
     ``specular``, ``exit_sum``, ``exit_sq`` (per-path squares), ``unscattered`` (exits without a
@@ -267,7 +269,7 @@ def yarn_kernel(slots, cells, task_first, task_sizes, seed, radius, eta, medium,
         for i in slots[s]:
             if i < 0:
                 break
-            _trace_cell(cells[i], task_first[i], task_sizes[i], seed, radius, eta, medium, hero_p[cells[i]],
+            _trace_cell(cells[i], rows[i], task_first[i], task_sizes[i], seed, radius, eta, medium, hero_p[cells[i]],
                         in_res, cos_max, n_around, n_along, cell_length, out_res, table, table_sq, specular,
                         exit_sum, exit_sq, unscattered, absorbed, lost, events, decay)
 

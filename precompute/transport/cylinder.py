@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import namedtuple
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -52,6 +53,15 @@ HERO_DEFENSIVE = 0.25
 #: The error target applies at wavelengths whose hemispherical albedo is at least this share of the
 #: cell's largest: all that can show in any colour (docs/transport.md, "Error target").
 ALBEDO_FLOOR = 1e-6
+#: Blocks of incidence cells per worker of a distributed run (``simulate_yarn(executor=...)``): a
+#: block's large tallies stay on one worker from round to round, and each round is one task per
+#: block, so that a task runs for seconds against the scheduler's milliseconds (docs/distributed.md).
+BLOCKS_PER_WORKER = 4
+
+#: The large tallies of a block of incidence cells on a worker (rows: the block's cells), as
+#: ``_YarnRun`` holds them for every cell in a single-process run: ``table``, ``table_sq`` and the
+#: decayed exits' ``decay_bssrdf`` (an empty array without absorption steps), unnormalised sums.
+BlockTallies = namedtuple("BlockTallies", ["table", "table_sq", "decay_bssrdf"])
 
 
 @dataclass(frozen=True)
@@ -144,8 +154,10 @@ class YarnTransport:
     decayed : :class:`DecayedExits` or None
         The same exits tallied at more absorption (``simulate_yarn(extra_absorption_per_mm=...)``),
         from which :mod:`.absorption` reweights the tables to any absorption in between.
-    axial_sum : (n_in, n_around, n_out, L) float32 or None
-        Set, with ``bssrdf`` None, by a reweighted transport, which knows only the axial sums.
+    axial_sum : (n_in, n_around, n_out, L) float32 or float64, or None
+        Set, with ``bssrdf`` None, by a reweighted transport (float32), which knows only the axial
+        sums, and by a distributed run (float64: exactly ``bssrdf.sum(axis=2, dtype=np.float64)``
+        of the single-process run, so that only the sums travel back from the workers).
     """
 
     wavelengths_nm: np.ndarray
@@ -230,6 +242,7 @@ def simulate_yarn(
     threads: int | None = None,
     progress: Callable[[float], None] | None = None,
     extra_absorption_per_mm: np.ndarray | None = None,
+    executor=None,
 ) -> YarnTransport:
     """Trace light through a yarn from every incidence cell (module docstring; eq. 4).
 
@@ -261,6 +274,12 @@ def simulate_yarn(
     extra_absorption_per_mm
         (K, L) absorptions Δμa ≥ 0 (1/mm) added to the medium's, at which the exits are
         tallied again (``decayed`` of the result): the series :mod:`.absorption` reweights.
+    executor
+        A :class:`precompute.distributed.ClusterExecutor`: the rounds of paths run as tasks on its
+        workers, a block of incidence cells per task (BLOCKS_PER_WORKER per worker), and only the
+        axial sums of the BSSRDF come back (``bssrdf`` None, ``axial_sum`` set): bitwise the
+        single-process run's sums and shares, whatever the number of workers.  ``threads`` then
+        does not apply (each worker uses its own threads).
     """
     medium = optics if isinstance(optics, TransportMedium) else medium_from_optics(optics)
     if not isinstance(geometry, YarnGeometry):
@@ -297,7 +316,7 @@ def simulate_yarn(
                             "extra_absorption_per_mm (steps) with the grids", (len(extra), grids))
 
     start = time.perf_counter()
-    run = _YarnRun(medium, geometry, grids, seed, extra)
+    run = _YarnRun(medium, geometry, grids, seed, extra, executor)
     if hero_probabilities is not None:
         run.hero_p[:] = q / q.sum()
     with numba_threads(threads):
@@ -329,6 +348,75 @@ def _zeroed(shape, dtype) -> np.ndarray:
     out = np.empty(shape, dtype)
     out.fill(0)
     return out
+
+
+def _zeroed_block(cells: int, grids: TransportGrids, n_wl: int, n_decay: int) -> BlockTallies:
+    """Zeroed large tallies of ``cells`` incidence cells (:data:`BlockTallies`).  float32: the full
+    table is large (n_in × n_around × (n_along + 2) × n_out × L); each bin's sum carries far more
+    Monte-Carlo noise than float32 rounding."""
+    n_out = grids.angular_resolution**2
+    return BlockTallies(
+        _zeroed((cells, grids.n_around, grids.n_along + 2, n_out, n_wl), np.float32),
+        _zeroed((cells, grids.n_around, n_out, n_wl), np.float32),
+        _zeroed((cells, grids.n_around, n_out, n_wl, n_decay) if n_decay else (0, 0, 0, 0, 0), np.float32),
+    )
+
+
+def _task_sizes(cells, new_tasks: list[list[int]]) -> np.ndarray:
+    """The kernel's (cells, width + 1) task sizes of ``cells``, each row ending in 0."""
+    width = max(len(new_tasks[c]) for c in cells)
+    sizes = np.zeros((len(cells), width + 1), dtype=np.int64)
+    for i, c in enumerate(cells):
+        sizes[i, : len(new_tasks[c])] = new_tasks[c]
+    return sizes
+
+
+def _normalise_exits(table: np.ndarray, table_sq: np.ndarray, decay_bssrdf: np.ndarray, paths: np.ndarray,
+                     per_exit: np.ndarray) -> np.ndarray:
+    """Eq. (4)'s normalisation of summed exits, in place on ``table`` and ``decay_bssrdf`` (rows:
+    cells with ``paths`` paths; ``per_exit`` (n_out,): 1 / (dω_out ⟨cos θ_out⟩ A), 1/(mm² sr)); the
+    second moment, float32.  Elementwise, so a block of cells gives the rows of the whole."""
+    n = paths.astype(float)
+    norm = per_exit[None, :, None] / n[:, None, None]
+    table *= norm[:, None, None].astype(np.float32)
+    if decay_bssrdf.size:
+        decay_bssrdf *= norm[:, None, :, :, None].astype(np.float32)
+    return (table_sq * (per_exit[None, :, None] ** 2 / n[:, None, None])[:, None]).astype(np.float32)
+
+
+def _trace_block(tallies: BlockTallies | None, cells: np.ndarray, rows: np.ndarray, task_first: np.ndarray,
+                 sizes: np.ndarray, block_size: int, seed: int, geometry: YarnGeometry, grids: TransportGrids,
+                 kernel_medium, hero_p: np.ndarray, extra_mu_a: np.ndarray) -> tuple[BlockTallies, tuple]:
+    """A distributed run's task (:meth:`_YarnRun.trace_round_on_workers`): the new tasks of ``cells``
+    (rows ``rows`` of a block of ``block_size`` cells) added to a copy of the block's large tallies
+    (zeroed when None).  Returns them and the cells' small tallies of this round alone: specular,
+    exit sum and sum of squares, unscattered, absorbed, lost (cells, L), events (cells,) and the
+    decayed exit sum, sum of squares and unscattered (cells, L, K)."""
+    n_wl, n_decay = hero_p.shape[1], len(extra_mu_a)
+    if tallies is None:
+        tallies = _zeroed_block(block_size, grids, n_wl, n_decay)
+    else:
+        tallies = BlockTallies(*(np.copy(array) for array in tallies))
+    small = [np.zeros((block_size, n_wl)) for _ in range(6)] + [np.zeros(block_size, dtype=np.int64)]
+    decay = _kernels.DecayTallies(extra_mu_a, tallies.decay_bssrdf,
+                                  *(np.zeros((block_size, n_wl, n_decay)) for _ in range(3)))
+    res = grids.angular_resolution
+    _kernels.yarn_kernel(
+        _balanced_slots(sizes.sum(axis=1), numba.get_num_threads()), cells, rows, task_first, sizes, seed,
+        geometry.radius_mm, geometry.index, kernel_medium, hero_p, res, max_cos_per_cell(res), grids.n_around,
+        grids.n_along, grids.cell_length_mm(geometry.radius_mm), res, tallies.table, tallies.table_sq, *small,
+        decay,
+    )
+    return tallies, tuple(values[rows] for values in (*small, *decay[2:]))
+
+
+def _block_exits(tallies: BlockTallies, paths: np.ndarray, per_exit: np.ndarray) -> tuple:
+    """A distributed run's last task per block: its cells' axial BSSRDF (summed over the axial bins,
+    float64, as :meth:`YarnTransport.axial_bssrdf` sums), its second moment (float32) and the
+    decayed exits (float32), normalised as a single-process run normalises them."""
+    table, decay_bssrdf = np.copy(tallies.table), np.copy(tallies.decay_bssrdf)
+    second = _normalise_exits(table, tallies.table_sq, decay_bssrdf, paths, per_exit)
+    return table.sum(axis=2, dtype=np.float64), second, decay_bssrdf
 
 
 def _balanced_slots(loads: np.ndarray, threads: int) -> np.ndarray:
@@ -381,20 +469,27 @@ class _YarnRun:
     """The tallies of a yarn simulation while it runs, and the rounds of tasks that fill them."""
 
     def __init__(self, medium: TransportMedium, geometry: YarnGeometry, grids: TransportGrids, seed: int,
-                 extra_mu_a: np.ndarray):
+                 extra_mu_a: np.ndarray, executor=None):
         self.medium = medium
         self.kernel_medium = medium.kernel()
         self.geometry = geometry
         self.grids = grids
         self.seed = seed
+        self.executor = executor
         res = grids.angular_resolution
         self.n_in = self.n_out = res * res
         n_wl = len(medium.wavelengths_nm)
         self.cos_max = max_cos_per_cell(res)
-        # float32: the full table is large (n_in × n_around × (n_along + 2) × n_out × L); each bin's
-        # sum carries far more Monte-Carlo noise than float32 rounding
-        self.table = _zeroed((self.n_in, grids.n_around, grids.n_along + 2, self.n_out, n_wl), np.float32)
-        self.table_sq = _zeroed((self.n_in, grids.n_around, self.n_out, n_wl), np.float32)
+        n_decay = len(extra_mu_a)
+        if executor is None:
+            self.table, self.table_sq, decay_bssrdf = _zeroed_block(self.n_in, grids, n_wl, n_decay)
+        else:
+            # the large tallies live on the workers, per block of cells (rows: the block's cells, in order)
+            count = min(self.n_in, BLOCKS_PER_WORKER * executor.workers)
+            self.blocks = [np.arange(b, self.n_in, count) for b in range(count)]
+            self.block_tallies = [None] * count
+            self.shared_medium = executor.share(self.kernel_medium)
+            decay_bssrdf = np.zeros((0, 0, 0, 0, 0), np.float32)
         self.specular = np.zeros((self.n_in, n_wl))
         self.exit_sum = np.zeros((self.n_in, n_wl))
         self.exit_sq = np.zeros((self.n_in, n_wl))
@@ -406,17 +501,28 @@ class _YarnRun:
         self.tasks = np.zeros(self.n_in, dtype=np.int64)
         self.hero_p = np.full((self.n_in, n_wl), 1.0 / n_wl)
         self.reported = 0.0
-        n_decay = len(extra_mu_a)
         self.decay = _kernels.DecayTallies(
             np.ascontiguousarray(extra_mu_a),
-            _zeroed((self.n_in, grids.n_around, self.n_out, n_wl, n_decay) if n_decay else (0, 0, 0, 0, 0),
-                    np.float32),
+            decay_bssrdf,
             np.zeros((self.n_in, n_wl, n_decay)),
             np.zeros((self.n_in, n_wl, n_decay)),
             np.zeros((self.n_in, n_wl, n_decay)),
         )
 
     def trace_round(self, new_tasks: list[list[int]], progress, done_before: int, total: int) -> None:
+        """Run every cell's new tasks: here, or on the executor's workers."""
+        if self.executor is None:
+            self.trace_round_here(new_tasks, progress, done_before, total)
+        else:
+            self.trace_round_on_workers(new_tasks, progress, done_before, total)
+
+    def report(self, progress, done: int, total: int) -> None:
+        if progress is not None:
+            # a top-up round's estimate may be below what was reported: never go back
+            self.reported = max(self.reported, min(0.99, done / total))
+            progress(self.reported)
+
+    def trace_round_here(self, new_tasks: list[list[int]], progress, done_before: int, total: int) -> None:
         """Run every cell's new tasks, in blocks of cells (one kernel call each) for progress reports."""
         cells = [c for c in range(self.n_in) if new_tasks[c]]
         # largest workloads first: each block of cells is then spread evenly over the threads
@@ -426,13 +532,10 @@ class _YarnRun:
         done = done_before
         for first in range(0, len(cells), block):
             chunk = cells[first : first + block]
-            width = max(len(new_tasks[c]) for c in chunk)
-            sizes = np.zeros((len(chunk), width + 1), dtype=np.int64)
-            for i, c in enumerate(chunk):
-                sizes[i, : len(new_tasks[c])] = new_tasks[c]
+            sizes = _task_sizes(chunk, new_tasks)
             ids = np.array(chunk, dtype=np.int64)
             _kernels.yarn_kernel(
-                _balanced_slots(sizes.sum(axis=1), threads), ids, self.tasks[ids].copy(), sizes, self.seed,
+                _balanced_slots(sizes.sum(axis=1), threads), ids, ids, self.tasks[ids].copy(), sizes, self.seed,
                 self.geometry.radius_mm, self.geometry.index, self.kernel_medium, self.hero_p,
                 self.grids.angular_resolution,
                 self.cos_max, self.grids.n_around, self.grids.n_along,
@@ -440,14 +543,39 @@ class _YarnRun:
                 self.table_sq, self.specular, self.exit_sum, self.exit_sq, self.unscattered, self.absorbed, self.lost,
                 self.events, self.decay,
             )
-            for c in chunk:
-                self.tasks[c] += len(new_tasks[c])
-                self.paths[c] += sum(new_tasks[c])
-                done += sum(new_tasks[c])
-            if progress is not None:
-                # a top-up round's estimate may be below what was reported: never go back
-                self.reported = max(self.reported, min(0.99, done / total))
-                progress(self.reported)
+            self.count_tasks(chunk, new_tasks)
+            done += sum(sum(new_tasks[c]) for c in chunk)
+            self.report(progress, done, total)
+
+    def count_tasks(self, cells, new_tasks: list[list[int]]) -> None:
+        for c in cells:
+            self.tasks[c] += len(new_tasks[c])
+            self.paths[c] += sum(new_tasks[c])
+
+    def trace_round_on_workers(self, new_tasks: list[list[int]], progress, done_before: int, total: int) -> None:
+        """Run every cell's new tasks as one task per block of cells on the executor's workers; each
+        returns its cells' small tallies, added here as the kernel adds them (so bitwise the same),
+        and keeps its large ones on its worker for the next round."""
+        work = [(b, block[[bool(new_tasks[c]) for c in block]]) for b, block in enumerate(self.blocks)]
+        work = [(b, cells) for b, cells in work if len(cells)]
+        items = [(self.block_tallies[b], cells, cells // len(self.blocks), self.tasks[cells].copy(),
+                  _task_sizes(cells, new_tasks), len(self.blocks[b]), self.seed, self.geometry, self.grids,
+                  self.shared_medium, self.hero_p, self.decay.extra_mu_a) for b, cells in work]
+        paths = [sum(sum(new_tasks[c]) for c in cells) for _, cells in work]
+        done = [done_before]
+
+        def task_done(i: int) -> None:
+            done[0] += paths[i]
+            self.report(progress, done[0], total)
+
+        outcome = self.executor.map(_trace_block, items, keep=True, progress=task_done)
+        for (b, cells), (tallies, small) in zip(work, outcome):
+            self.block_tallies[b] = tallies
+            for total_of_cells, added in zip((self.specular, self.exit_sum, self.exit_sq, self.unscattered,
+                                               self.absorbed, self.lost, self.events, self.decay.exit_sum,
+                                               self.decay.exit_sq, self.decay.unscattered), small):
+                total_of_cells[cells] += added
+            self.count_tasks(cells, new_tasks)
 
     def relative_stderr(self) -> np.ndarray:
         """Relative standard error of every cell's hemispherical albedo, (n_in, L)."""
@@ -497,21 +625,38 @@ class _YarnRun:
             self.trace_round(_split(extra), progress, int(self.paths.sum()), int(self.paths.sum() + extra.sum()))
             need = self.paths * (self.worst_counted_error() / target) ** 2 * ROUND_MARGIN
 
+    def exits_from_workers(self, per_exit: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The axial BSSRDF (float64), its second moment and the decayed exits of every cell,
+        normalised on the workers (:func:`_block_exits`) and put together here."""
+        items = [(self.block_tallies[b], self.paths[block], per_exit) for b, block in enumerate(self.blocks)]
+        parts = self.executor.map(_block_exits, items)
+        gathered = []
+        for values in zip(*parts):
+            if not values[0].size:  # no absorption steps
+                gathered.append(values[0])
+                continue
+            whole = np.empty((self.n_in, *values[0].shape[1:]), values[0].dtype)
+            for block, value in zip(self.blocks, values):
+                whole[block] = value
+            gathered.append(whole)
+        return tuple(gathered)
+
     def result(self, target: float | None, seconds: float) -> YarnTransport:
         grids = self.grids
-        n = self.paths.astype(float)
         exit_grid = AngularGrid("hemisphere", grids.angular_resolution)
         area = grids.cell_length_mm(self.geometry.radius_mm) ** 2
         # eq. (4) with the exit cell's area: 1 / (F_in · dω_out · ⟨cos θ_out⟩ · A_dB), F_in = paths
         per_exit = 1.0 / (exit_grid.cell_solid_angle * mean_cos_per_cell(exit_grid) * area)
-        norm = per_exit[None, :, None] / n[:, None, None]
-        bssrdf = self.table
-        bssrdf *= norm[:, None, None].astype(np.float32)
-        second = (self.table_sq * (per_exit[None, :, None] ** 2 / n[:, None, None])[:, None]).astype(np.float32)
+        n = self.paths.astype(float)
+        if self.executor is None:
+            bssrdf, axial_sum = self.table, None
+            second = _normalise_exits(bssrdf, self.table_sq, self.decay.bssrdf, self.paths, per_exit)
+            decayed_bssrdf = self.decay.bssrdf
+        else:
+            bssrdf = None
+            axial_sum, second, decayed_bssrdf = self.exits_from_workers(per_exit)
         decayed = None
         if len(self.decay.extra_mu_a):
-            decayed_bssrdf = self.decay.bssrdf
-            decayed_bssrdf *= norm[:, None, :, :, None].astype(np.float32)
             decayed = DecayedExits(
                 reference_mu_a=self.medium.mu_a.copy(),
                 extra_mu_a=self.decay.extra_mu_a.copy(),
@@ -538,4 +683,5 @@ class _YarnRun:
             events=int(self.events.sum()),
             wall_seconds=seconds,
             decayed=decayed,
+            axial_sum=axial_sum,
         )

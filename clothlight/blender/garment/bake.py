@@ -79,9 +79,11 @@ def load_measurement(path) -> ClothMeasurement:
 
 
 def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(), *, cache_dir=None,
-               progress: Callable[[int, int, str], None] | None = None) -> tuple[pathlib.Path, bool]:
+               progress: Callable[[int, int, str], None] | None = None,
+               scheduler: str | None = None) -> tuple[pathlib.Path, bool]:
     """The folder of the cloth tables for the yarn bake ``yarn_bake_dir`` and ``settings``; and
-    whether this call rendered the measurement (False: it was in the cache)."""
+    whether this call rendered the measurement (False: it was in the cache).  ``scheduler``: where
+    the measurement's renders run (:func:`.measure.measure_cloth`); the tables do not depend on it."""
     tables = yarn_tables_from_bake(yarn_bake_dir)
     cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else cache.default_cache_dir()
     measured_in = measurement_inputs(tables, settings)
@@ -92,7 +94,8 @@ def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(
         def measure(target: pathlib.Path) -> None:
             with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
                 save_measurement(target / MEASUREMENT_FILE,
-                                 measure_cloth(tables, settings, render_dir=renders, progress=progress))
+                                 measure_cloth(tables, settings, render_dir=renders, progress=progress,
+                                               scheduler=scheduler, table_folder=yarn_bake_dir))
 
         measured_folder, _ = cache.store(cache_dir, MEASUREMENT_NAMESPACE, measured_key, measured_in, measure)
     tables_in = {"measurement": measured_key, "code_digest": sources.stage_digest(_ROOT, **TABLE_SOURCES)}

@@ -10,6 +10,7 @@ one pixel so that a pixel holds the mean radiance over its square, as the calibr
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import pathlib
@@ -27,6 +28,7 @@ from ..measurement_render import (
     configure_measurement_render,
     remove_data_blocks,
     render_passes_to_arrays,
+    worker_threads,
 )
 from ...render_bounds import (
     DEFAULT_GONIO_EXIT_RESOLUTION,
@@ -151,105 +153,236 @@ def _half_thickness(weave: WeaveParameters) -> tuple[float, float, float]:
         bpy.data.collections.remove(collection)
 
 
+class _GoniometerScene:
+    """The measurement's scene (sample, yarn material driven per face, camera), built for one yarn
+    and ``settings`` and removed by :meth:`close`: :meth:`render_view` measures one exit cell."""
+
+    def __init__(self, tables, settings: GoniometerSettings):
+        weave = _sample_weave(settings)
+        self.n_i, self.n_o = n_i, n_o = settings.incidence_resolution, settings.exit_resolution
+        self.pixels_per_patch = settings.pixels_per_patch
+        self.half_thickness, spacing, repeat = _half_thickness(weave)
+        view_tilt = max(max_tilt(exit_directions(n_o, side)) for side in SIDES)
+        light_tilt = max(max_tilt(incidence_directions(n_i, side)) for side in SIDES)
+        self.patch_mm = settings.patch_repeats * repeat
+        least_cos = min(abs(d[2]) for side in SIDES for d in exit_directions(n_o, side))
+        pixel_mm = self.patch_mm * least_cos / settings.pixels_per_patch
+        layout = plan_regions(n_i * n_i, self.patch_mm, self.half_thickness, view_tilt, margin_mm=2.0 * pixel_mm)
+        # The largest image of the sweep (the most grazing view is the widest), before any render.
+        largest = max(view.width * view.height for view in (view_of(d, layout, settings.pixels_per_patch)
+                                                            for side in SIDES for d in exit_directions(n_o, side)))
+        check_render_memory(largest, "exit_resolution, incidence_resolution, pixels_per_patch, patch_repeats",
+                            (n_o, n_i, settings.pixels_per_patch, settings.patch_repeats))
+        half_size = required_sample_half_size_mm(layout, self.half_thickness, view_tilt, light_tilt,
+                                                 edge_band_mm=spacing)
+        # Whole repeats keep the sample symmetric about its centre, where the layout is centred.
+        yarns = int(math.ceil(2.0 * half_size / repeat)) * int(round(repeat / spacing))
+        weave = dataclasses.replace(weave, warp_count=yarns, weft_count=yarns)
+
+        self.scene = scene = bpy.data.scenes.new(SCENE_NAME)
+        self._created = [scene]
+        try:
+            sample = build_sample_object(weave, name=f"{SCENE_NAME} Sample", collection=scene.collection)
+            self._created += [sample.data, sample]
+            self.bounds = sample_bounds(sample)
+            self.layout = dataclasses.replace(layout, center=self.bounds.center)
+            configure_measurement_render(scene, resolution=(16, 16), samples=settings.samples, seed=settings.seed,
+                                         pixel_average=True)
+            # The specular marks are diffuse closures that must stay dark: no world, no lamp, and
+            # the yarns' emission neither sampled as light (configure_cycles_material) nor seen by
+            # diffuse rays.
+            scene.cycles.max_bounces = 0
+            scene.world = None
+            scene.render.use_persistent_data = True
+            scene.view_layers[0].use_pass_diffuse_color = True
+            with bpy.context.temp_override(scene=scene):
+                material = build_yarn_material(tables, name=f"{SCENE_NAME} Yarn", mode=SUN_MODE)
+            self._created.append(material)
+            shader = shader_node(material)
+            shader.inputs["MarkSpecular"].default_value = 1
+            # Even with no bounce Cycles follows a diffuse closure's sampled ray to find emitting
+            # surfaces; hidden from diffuse rays, the yarns' emission cannot light the marks.
+            sample.visible_diffuse = False
+            self.specular_parameters = {"weight": shader.inputs["SpecularWeight"].default_value,
+                                        "slope": shader.inputs["Slope"].default_value,
+                                        "ior": shader.inputs["IOR"].default_value}
+            _drive_sun_from_attribute(material)
+            sample.data.materials.clear()
+            sample.data.materials.append(material)
+            self._sample = sample
+            self._attribute = sample.data.attributes.new(SUN_DIRECTION_ATTRIBUTE, "FLOAT_VECTOR", "FACE")
+            centers = np.empty(3 * len(sample.data.polygons))
+            sample.data.polygons.foreach_get("center", centers)
+            region = self.layout.region_of(centers.reshape(-1, 3)[:, :2])
+            # Faces outside the regions are never measured; any sun will do for them.
+            self._region = np.where((region >= 0) & (region < n_i * n_i), region, 0)
+            self._side = None
+            self._distance = 10.0 + 2.0 * half_size
+            self._camera = add_orthographic_camera(scene, f"{SCENE_NAME} Camera", clip_end=2.0 * self._distance)
+            self._created += [self._camera.data, self._camera]
+            self._warm_up()
+        except BaseException:
+            self.close()
+            raise
+
+    def _warm_up(self) -> None:
+        """Render once, a few pixels: the first render of a new scene differs from every later one
+        of the same view (by ~1 % of ρ in a few pixels: Cycles sets up its OSL shading then), so a
+        view measures the same whichever views a scene rendered before it, and on whichever worker."""
+        import tempfile
+
+        render = self.scene.render
+        render.resolution_x = render.resolution_y = 4
+        with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as folder:
+            render_passes_to_arrays(self.scene, pathlib.Path(folder) / "warm_up.exr")
+
+    def render_view(self, side: str, exit_cell: int, render_path) -> dict:
+        """Exit cell ``exit_cell`` of ``side`` under all suns: ρ (N_i², 3), the specular term and its
+        visibility (N_i²,) and the coverage (a float), rendered to ``render_path``."""
+        n_i = self.n_i
+        if side != self._side:
+            suns = incidence_directions(n_i, side)
+            self._attribute.data.foreach_set("vector", suns[self._region].astype(np.float32).ravel())
+            self._sample.data.update()
+            self._side = side
+        view = view_of(exit_directions(self.n_o, side)[exit_cell], self.layout, self.pixels_per_patch)
+        self._camera.matrix_world = Matrix(view.camera_matrix(self._distance).tolist())
+        self._camera.data.ortho_scale = view.ortho_scale
+        self.scene.render.resolution_x, self.scene.render.resolution_y = view.width, view.height
+        passes = render_passes_to_arrays(self.scene, render_path)
+        pixels = passes["Combined"]
+        index, weight = patch_weights(view, self.layout)
+        patch, cover = patch_rho(pixels, index, weight, view, self.layout, sun_irradiance=1.0)
+        marks = np.concatenate([passes["Diffuse Color"][..., :2], pixels[..., 3:]], axis=-1)
+        marked, _ = patch_rho(marks, index, weight, view, self.layout, sun_irradiance=1.0)
+        return {"rho": patch[: n_i * n_i], "visibility": marked[: n_i * n_i, 0],
+                "specular": marked[: n_i * n_i, 1], "coverage": float(np.mean(cover[: n_i * n_i]))}
+
+    def close(self) -> None:
+        remove_data_blocks(self._created)
+        self._created = []
+
+
+def _views(settings: GoniometerSettings) -> list[tuple[str, int]]:
+    """Every (side, exit cell) the measurement renders, in order."""
+    return [(side, cell) for side in SIDES for cell in range(settings.exit_resolution ** 2)]
+
+
 def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *, render_dir,
-                  progress: Callable[[int, int, str], None] | None = None) -> ClothMeasurement:
+                  progress: Callable[[int, int, str], None] | None = None, scheduler=None,
+                  table_folder=None) -> ClothMeasurement:
     """Measure the cloth BSDF of ``settings.weave`` made of the yarn of ``tables`` (a
     :class:`clothlight.yarn_tables.YarnTableFiles`); renders go to ``render_dir``.
 
-    ``progress(done, total, what)`` is called after every render (2 N_o² of them)."""
-    weave = _sample_weave(settings)
+    ``progress(done, total, what)`` is called after every render (2 N_o² of them).  ``scheduler``
+    (:mod:`precompute.distributed`: ``"local"``, a cluster's address or a cluster already open with
+    ``open_executor(..., code=CLUSTER_CODE)``; None renders here) spreads
+    the renders over workers, one view a task, each worker rendering in a scene of its own built
+    from the yarn bake ``table_folder`` (whose files reach each worker once); the result is the
+    same wherever the views rendered."""
+    views = _views(settings)
     n_i, n_o = settings.incidence_resolution, settings.exit_resolution
-    half_thickness, spacing, repeat = _half_thickness(weave)
-    view_tilt = max(max_tilt(exit_directions(n_o, side)) for side in SIDES)
-    light_tilt = max(max_tilt(incidence_directions(n_i, side)) for side in SIDES)
-    patch_mm = settings.patch_repeats * repeat
-    least_cos = min(abs(d[2]) for side in SIDES for d in exit_directions(n_o, side))
-    pixel_mm = patch_mm * least_cos / settings.pixels_per_patch
-    layout = plan_regions(n_i * n_i, patch_mm, half_thickness, view_tilt, margin_mm=2.0 * pixel_mm)
-    # The largest image of the sweep (the most grazing view is the widest), before any render.
-    largest = max(view.width * view.height for view in (view_of(d, layout, settings.pixels_per_patch)
-                                                        for side in SIDES for d in exit_directions(n_o, side)))
-    check_render_memory(largest, "exit_resolution, incidence_resolution, pixels_per_patch, patch_repeats",
-                        (n_o, n_i, settings.pixels_per_patch, settings.patch_repeats))
-    half_size = required_sample_half_size_mm(layout, half_thickness, view_tilt, light_tilt, edge_band_mm=spacing)
-    # Whole repeats keep the sample symmetric about its centre, where the layout is centred.
-    yarns = int(math.ceil(2.0 * half_size / repeat)) * int(round(repeat / spacing))
-    weave = dataclasses.replace(weave, warp_count=yarns, weft_count=yarns)
-
-    scene = bpy.data.scenes.new(SCENE_NAME)
-    created = [scene]
-    try:
-        sample = build_sample_object(weave, name=f"{SCENE_NAME} Sample", collection=scene.collection)
-        created += [sample.data, sample]
-        bounds = sample_bounds(sample)
-        layout = dataclasses.replace(layout, center=bounds.center)
-        configure_measurement_render(scene, resolution=(16, 16), samples=settings.samples, seed=settings.seed,
-                                     pixel_average=True)
-        # The specular marks are diffuse closures that must stay dark: no world, no lamp, and
-        # the yarns' emission neither sampled as light (configure_cycles_material) nor seen by
-        # diffuse rays.
-        scene.cycles.max_bounces = 0
-        scene.world = None
-        scene.render.use_persistent_data = True
-        scene.view_layers[0].use_pass_diffuse_color = True
-        with bpy.context.temp_override(scene=scene):
-            material = build_yarn_material(tables, name=f"{SCENE_NAME} Yarn", mode=SUN_MODE)
-        created.append(material)
-        shader = shader_node(material)
-        shader.inputs["MarkSpecular"].default_value = 1
-        # Even with no bounce Cycles follows a diffuse closure's sampled ray to find emitting
-        # surfaces; hidden from diffuse rays, the yarns' emission cannot light the marks.
-        sample.visible_diffuse = False
-        specular_parameters = {"weight": shader.inputs["SpecularWeight"].default_value,
-                               "slope": shader.inputs["Slope"].default_value, "ior": shader.inputs["IOR"].default_value}
-        _drive_sun_from_attribute(material)
-        sample.data.materials.clear()
-        sample.data.materials.append(material)
-        attribute = sample.data.attributes.new(SUN_DIRECTION_ATTRIBUTE, "FLOAT_VECTOR", "FACE")
-        centers = np.empty(3 * len(sample.data.polygons))
-        sample.data.polygons.foreach_get("center", centers)
-        region = layout.region_of(centers.reshape(-1, 3)[:, :2])
-        # Faces outside the regions are never measured; any sun will do for them.
-        region = np.where((region >= 0) & (region < n_i * n_i), region, 0)
-
-        distance = 10.0 + 2.0 * half_size
-        camera = add_orthographic_camera(scene, f"{SCENE_NAME} Camera", clip_end=2.0 * distance)
-        created += [camera.data, camera]
-
-        rho, specular, visibility, coverage = {}, {}, {}, {}
-        total, done = 2 * n_o * n_o, 0
-        start = time.perf_counter()
-        for side in SIDES:
-            suns = incidence_directions(n_i, side)
-            attribute.data.foreach_set("vector", suns[region].astype(np.float32).ravel())
-            sample.data.update()
-            rho[side] = np.zeros((n_i * n_i, n_o * n_o, 3))
-            specular[side] = np.zeros((n_i * n_i, n_o * n_o))
-            visibility[side] = np.zeros((n_i * n_i, n_o * n_o))
-            coverage[side] = np.zeros(n_o * n_o)
-            for exit_cell, toward_camera in enumerate(exit_directions(n_o, side)):
-                view = view_of(toward_camera, layout, settings.pixels_per_patch)
-                camera.matrix_world = Matrix(view.camera_matrix(distance).tolist())
-                camera.data.ortho_scale = view.ortho_scale
-                scene.render.resolution_x, scene.render.resolution_y = view.width, view.height
-                passes = render_passes_to_arrays(scene, pathlib.Path(render_dir) / f"{side}_exit{exit_cell:03d}.exr")
-                pixels = passes["Combined"]
-                index, weight = patch_weights(view, layout)
-                patch, cover = patch_rho(pixels, index, weight, view, layout, sun_irradiance=1.0)
-                marks = np.concatenate([passes["Diffuse Color"][..., :2], pixels[..., 3:]], axis=-1)
-                marked, _ = patch_rho(marks, index, weight, view, layout, sun_irradiance=1.0)
-                rho[side][:, exit_cell] = patch[: n_i * n_i]
-                visibility[side][:, exit_cell] = marked[: n_i * n_i, 0]
-                specular[side][:, exit_cell] = marked[: n_i * n_i, 1]
-                coverage[side][exit_cell] = float(np.mean(cover[: n_i * n_i]))
-                done += 1
+    start = time.perf_counter()
+    if scheduler is None:
+        measured = []
+        scene = _GoniometerScene(tables, settings)
+        try:
+            for done, (side, cell) in enumerate(views, start=1):
+                measured.append(scene.render_view(side, cell, pathlib.Path(render_dir) / f"{side}_exit{cell:03d}.exr"))
                 if progress is not None:
-                    progress(done, total, f"{side}: exit cell {exit_cell + 1} of {n_o * n_o}")
-        return ClothMeasurement(rho, specular, visibility, specular_parameters, coverage, patch_mm,
-                                (2 * bounds.half_size[0], 2 * bounds.half_size[1]), half_thickness,
-                                time.perf_counter() - start)
-    finally:
-        remove_data_blocks(created)
+                    progress(done, len(views), f"{side}: exit cell {cell + 1} of {n_o * n_o}")
+            shape = _scene_shape(scene)
+        finally:
+            scene.close()
+    else:
+        measured, shape = _measure_on_cluster(table_folder, settings, views, scheduler, progress)
+    rho = {side: np.zeros((n_i * n_i, n_o * n_o, 3)) for side in SIDES}
+    specular = {side: np.zeros((n_i * n_i, n_o * n_o)) for side in SIDES}
+    visibility = {side: np.zeros((n_i * n_i, n_o * n_o)) for side in SIDES}
+    coverage = {side: np.zeros(n_o * n_o) for side in SIDES}
+    for (side, cell), view in zip(views, measured):
+        rho[side][:, cell] = view["rho"]
+        visibility[side][:, cell] = view["visibility"]
+        specular[side][:, cell] = view["specular"]
+        coverage[side][cell] = view["coverage"]
+    return ClothMeasurement(rho, specular, visibility, shape["specular_parameters"], coverage, shape["patch_mm"],
+                            shape["sample_size_mm"], shape["half_thickness_mm"], time.perf_counter() - start)
+
+
+def _scene_shape(scene: _GoniometerScene) -> dict:
+    """What a measurement records of its scene besides the views."""
+    return {"specular_parameters": scene.specular_parameters, "patch_mm": scene.patch_mm,
+            "sample_size_mm": (2 * scene.bounds.half_size[0], 2 * scene.bounds.half_size[1]),
+            "half_thickness_mm": scene.half_thickness}
+
+
+# -- on a cluster --------------------------------------------------------------------------------
+
+#: The code a measurement's workers run, checked against this checkout's (precompute.distributed).
+CLUSTER_CODE = {"entries": ("clothlight.blender.garment.measure",)}
+#: A worker process's scene: (the yarn files' digest, the settings' repr) → (scene, its table folder).
+_worker_scene: dict = {}
+
+
+def measure_views(table_files: dict, settings: GoniometerSettings, views: tuple) -> tuple[dict, list[dict]]:
+    """A cluster task: ``views`` ((side, exit cell), ...) measured in this worker's scene for the
+    yarn whose bake folder holds ``table_files`` ({name: the file's bytes as a uint8 array}); with
+    the scene's shape.
+
+    The scene is built on a worker's first task and kept for the next ones; Cycles renders with
+    the worker's threads."""
+    import hashlib
+    import tempfile
+
+    from ...yarn_tables import yarn_tables_from_bake
+
+    digest = hashlib.sha256(b"".join(name.encode() + hashlib.sha256(data.tobytes()).digest()
+                                     for name, data in sorted(table_files.items()))).hexdigest()
+    key = (digest, repr(settings))
+    if key not in _worker_scene:
+        for scene, folder in _worker_scene.values():
+            scene.close()
+            folder.cleanup()
+        _worker_scene.clear()
+        folder = tempfile.TemporaryDirectory(prefix="clothlight-gonio-tables-")
+        for name, data in table_files.items():
+            (pathlib.Path(folder.name) / name).write_bytes(data.tobytes())
+        _worker_scene[key] = (_GoniometerScene(yarn_tables_from_bake(folder.name), settings), folder)
+    scene = _worker_scene[key][0]
+    scene.scene.render.threads_mode = "FIXED"
+    scene.scene.render.threads = worker_threads()
+    with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
+        measured = [scene.render_view(side, cell, pathlib.Path(renders) / f"{side}_exit{cell:03d}.exr")
+                    for side, cell in views]
+    return _scene_shape(scene), measured
+
+
+def _measure_on_cluster(table_folder, settings: GoniometerSettings, views, scheduler,
+                        progress) -> tuple[list[dict], dict]:
+    from ...addon import import_precompute
+
+    if table_folder is None:
+        raise ParameterError("table_folder", table_folder, "the yarn bake's folder when a scheduler is given")
+    distributed = import_precompute("distributed")
+    table_files = {path.name: np.frombuffer(path.read_bytes(), np.uint8)
+                   for path in sorted(pathlib.Path(table_folder).iterdir()) if path.is_file()}
+    done = []
+
+    def task_done(index: int) -> None:
+        done.append(index)
+        if progress is not None:
+            side, cell = views[index]
+            progress(len(done), len(views), f"{side}: exit cell {cell + 1} of {settings.exit_resolution ** 2}")
+
+    with contextlib.ExitStack() as stack:
+        executor = (scheduler if isinstance(scheduler, distributed.ClusterExecutor)
+                    else stack.enter_context(distributed.open_executor(scheduler, code=CLUSTER_CODE)))
+        shared = executor.share(table_files)
+        results = executor.map(measure_views, [(shared, settings, (view,)) for view in views], progress=task_done)
+    shapes = [shape for shape, _ in results]
+    if any(shape != shapes[0] for shape in shapes):
+        raise RuntimeError("the workers built different measurement scenes: is their Blender the same?")
+    return [measured for _, views_measured in results for measured in views_measured], shapes[0]
 
 
 def _drive_sun_from_attribute(material) -> None:

@@ -39,6 +39,8 @@ from ...validation.framing import (
 from ...validation.measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
 from ...validation.measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
 from ...validation.report import swatch_exposure, write_report, write_swatch_png
+from ..measurement_render import worker_threads
+from ...weave import WeaveParameters
 from .rig import RigSettings, build_rig, calibration_plane
 
 MATERIAL_LABELS = {
@@ -157,39 +159,25 @@ class ValidationRun:
             done = 0
             for kind in self.materials:
                 material_start = time.perf_counter()
-                # Script nodes compile through the context scene's render engine: make it the rig's.
-                with bpy.context.temp_override(scene=rig.scene):
-                    material = self._build_material(kind)
-                created.append(material)
-                if kind in GARMENT_MATERIALS and rig.sample.name != GARMENT_PATCH:
-                    rig.replace_sample(garment_patch(rig))
-                rig.use_material(material)
-                rig.use_path_tracing(kind in PATH_TRACED_MATERIALS)
+                created.append(self._dress(rig, kind))
                 views = []
                 for theta_i in self.settings.incidences_deg:
                     rig.set_incidence(theta_i)
                     for theta_v in self.settings.views_deg:
                         rig.set_view(theta_v)
-                        render = self.out_dir / "renders" / kind / f"i{theta_i:+05.1f}_v{theta_v:+05.1f}.exr"
-                        views.append(rig.measure(render))
+                        views.append(rig.measure(self._render_path(kind, theta_i, theta_v)))
                         done += 1
                         yield Progress(done, self.total, f"{kind}: θi = {theta_i:g}°, θv = {theta_v:g}°")
                 curves[kind] = views
                 if self.swatches:
-                    swatches[kind], images = {}, {}
+                    images = {}
                     rig.set_view(0.0)
                     for side, theta_i in SWATCH_INCIDENCES_DEG.items():
                         rig.set_incidence(theta_i)
-                        images[side] = rig.render(self.out_dir / "renders" / kind / f"swatch_{side}.exr")
-                        mean = images[side][..., :3].astype(np.float64).mean(axis=(0, 1)) / self.settings.sun_irradiance
-                        swatches[kind][side] = {"theta_i_deg": theta_i, "mean_rgb_per_irradiance": mean.tolist(),
-                                                "ratios": channel_ratios(mean)}
+                        images[side] = rig.render(self._render_path(kind, swatch=side))
                         done += 1
                         yield Progress(done, self.total, f"{kind}: swatch lit from the {side}")
-                    exposure = swatch_exposure(*images.values())
-                    for side, pixels in images.items():
-                        png = write_swatch_png(pixels, self.out_dir / "swatches" / f"{kind}_{side}.png", exposure)
-                        swatches[kind][side]["png"] = str(png.relative_to(self.out_dir))
+                    swatches[kind] = self._swatch_entries(kind, images)
                 seconds[kind] = time.perf_counter() - material_start
             self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
             self.results["files"] = write_report(self.results, self.out_dir)
@@ -200,6 +188,99 @@ class ValidationRun:
                     bpy.data.materials.remove(material)
                 except ReferenceError:  # already removed, e.g. by the user while the sweep ran
                     pass
+
+    def _render_path(self, kind: str, theta_i: float = 0.0, theta_v: float = 0.0, swatch: str | None = None):
+        name = f"swatch_{swatch}.exr" if swatch else f"i{theta_i:+05.1f}_v{theta_v:+05.1f}.exr"
+        return self.out_dir / "renders" / kind / name
+
+    def _swatch_entries(self, kind: str, images: dict) -> dict:
+        """The §6.1 swatches of ``kind`` from their renders ({side: pixels}): mean colour, ratios, PNG."""
+        entries = {}
+        exposure = swatch_exposure(*images.values())
+        for side, pixels in images.items():
+            mean = pixels[..., :3].astype(np.float64).mean(axis=(0, 1)) / self.settings.sun_irradiance
+            png = write_swatch_png(pixels, self.out_dir / "swatches" / f"{kind}_{side}.png", exposure)
+            entries[side] = {"theta_i_deg": SWATCH_INCIDENCES_DEG[side], "mean_rgb_per_irradiance": mean.tolist(),
+                             "ratios": channel_ratios(mean), "png": str(png.relative_to(self.out_dir))}
+        return entries
+
+    def _dress(self, rig, kind: str, material=None):
+        """Put the material of ``kind`` (built unless given) on ``rig``, with its light paths; the
+        material.  Garment materials are swept on a flat patch in place of the sample."""
+        if material is None:
+            # Script nodes compile through the context scene's render engine: make it the rig's.
+            with bpy.context.temp_override(scene=rig.scene):
+                material = self._build_material(kind)
+        if kind in GARMENT_MATERIALS and rig.sample.name != GARMENT_PATCH:
+            rig.replace_sample(garment_patch(rig))
+        rig.use_material(material)
+        rig.use_path_tracing(kind in PATH_TRACED_MATERIALS)
+        return material
+
+    def run_on_cluster(self, scheduler: str, progress: Callable[[int, int, str], None] | None = None,
+                       cancel: Callable[[], bool] | None = None) -> dict:
+        """The sweep with its renders as tasks of a dask cluster (``scheduler``: ``"local"`` or an
+        address, :mod:`precompute.distributed`): one task per material and incidence (all its views)
+        and per swatch, each worker rendering in a rig of its own.  The same results and files as
+        :meth:`steps` (the renders come back as their EXR files); the sample must be a weave (or
+        None), which every worker builds.  ``progress`` after every task; ``cancel()`` stops them all
+        (ValidationCancelled)."""
+        from ...addon import import_precompute
+
+        if self.sample is not None and not isinstance(self.sample, WeaveParameters):
+            raise ParameterError("scheduler", scheduler, "no scheduler for a sample object: a cluster's workers "
+                                                         "build the sample from a weave")
+        start = time.perf_counter()
+        inputs = {"sample": self.sample, "settings": self.settings, "materials": self.materials,
+                  "tables": _folder_files(self.tables.brdf_path.parent) if self.tables else None,
+                  "cloth": _folder_files(self.cloth_tables.lobe_path.parent) if self.cloth_tables else None}
+        tasks = [(kind, theta_i, tuple(self.settings.views_deg), None)
+                 for kind in self.materials for theta_i in self.settings.incidences_deg]
+        if self.swatches:
+            tasks += [(kind, theta_i, (0.0,), side) for kind in self.materials
+                      for side, theta_i in SWATCH_INCIDENCES_DEG.items()]
+        done = []
+
+        def task_done(index: int) -> None:
+            kind, theta_i, views, side = tasks[index]
+            done.append(len(views))
+            if progress is not None:
+                what = f"swatch lit from the {side}" if side else f"θi = {theta_i:g}°, all views"
+                progress(sum(done), self.total, f"{kind}: {what}")
+
+        rig = build_rig(self.sample, self.settings)
+        try:
+            if set(GARMENT_MATERIALS) & set(self.materials):
+                rig.replace_sample(garment_patch(rig))  # as the last material of steps() leaves it
+            distributed = import_precompute("distributed")
+            with distributed.open_executor(scheduler, code=SWEEP_CODE) as executor:
+                shared = executor.share(inputs)
+                try:
+                    results = executor.map(render_sweep_task, [(shared, *task) for task in tasks],
+                                           progress=task_done, cancel=cancel)
+                except KeyboardInterrupt:
+                    if cancel is not None and cancel():
+                        raise ValidationCancelled("validation cancelled; nothing was written") from None
+                    raise
+            curves = {kind: [] for kind in self.materials}
+            images = {kind: {} for kind in self.materials}
+            seconds = dict.fromkeys(self.materials, 0.0)
+            for (kind, theta_i, views, side), (measured, files, task_seconds) in zip(tasks, results):
+                seconds[kind] += task_seconds
+                for theta_v, exr in zip(views, files):
+                    path = self._render_path(kind, theta_i, theta_v, swatch=side)
+                    path.parent.mkdir(parents=True, exist_ok=True)
+                    path.write_bytes(exr.tobytes())
+                if side:
+                    images[kind][side] = measured
+                else:
+                    curves[kind] += measured
+            swatches = {kind: self._swatch_entries(kind, images[kind]) for kind in self.materials if images[kind]}
+            self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
+            self.results["files"] = write_report(self.results, self.out_dir)
+        finally:
+            rig.remove()
+        return self.results
 
     def _build_material(self, kind: str):
         if kind == "yarn":
@@ -410,16 +491,84 @@ def interreflection(scene_views, direct_views, scene_swatches=None, direct_swatc
     return result
 
 
+# -- on a cluster --------------------------------------------------------------------------------
+
+#: The code a sweep's workers run, checked against this checkout's (precompute.distributed).
+SWEEP_CODE = {"entries": ("clothlight.blender.validation.run",)}
+#: A worker process's rigs: (the inputs' digest, whether the garment patch is swept) → _WorkerSweep.
+_worker_sweeps: dict = {}
+
+
+def _folder_files(folder) -> dict:
+    """{name: the file's bytes as a uint8 array} of a bake folder's files (a task's payload)."""
+    return {path.name: np.frombuffer(path.read_bytes(), np.uint8)
+            for path in sorted(pathlib.Path(folder).iterdir()) if path.is_file()}
+
+
+@dataclass
+class _WorkerSweep:
+    run: ValidationRun
+    rig: object
+    materials: dict
+    folder: object  # the TemporaryDirectory holding the tables and the renders
+
+
+def _worker_sweep(inputs: dict, garment: bool) -> _WorkerSweep:
+    """This worker's rig for ``inputs`` (built on its first task), with the tables written to disk."""
+    import hashlib
+    import pickle
+    import tempfile
+
+    key = (hashlib.sha256(pickle.dumps(inputs)).hexdigest(), garment)
+    if key not in _worker_sweeps:
+        folder = tempfile.TemporaryDirectory(prefix="clothlight-sweep-")
+        root = pathlib.Path(folder.name)
+        for name in ("tables", "cloth"):
+            for file, data in (inputs[name] or {}).items():
+                (root / name).mkdir(exist_ok=True)
+                (root / name / file).write_bytes(data.tobytes())
+        run = ValidationRun(inputs["sample"], root / "out", materials=inputs["materials"],
+                            tables_dir=root / "tables" if inputs["tables"] else None,
+                            cloth_dir=root / "cloth" if inputs["cloth"] else None, settings=inputs["settings"])
+        rig = build_rig(run.sample, run.settings)
+        rig.scene.render.threads_mode = "FIXED"
+        rig.scene.render.threads = worker_threads()
+        _worker_sweeps[key] = _WorkerSweep(run, rig, {}, folder)
+    return _worker_sweeps[key]
+
+
+def render_sweep_task(inputs: dict, kind: str, theta_i: float, views_deg: tuple, swatch: str | None) -> tuple:
+    """A cluster task: the sweep's renders of material ``kind`` at incidence ``theta_i`` — every
+    view of ``views_deg`` measured (a list of ViewMeasurement), or the ``swatch`` side's pixels —
+    with each render's EXR file (uint8 arrays) and the task's seconds."""
+    start = time.perf_counter()
+    sweep = _worker_sweep(inputs, kind in GARMENT_MATERIALS)
+    rig = sweep.rig
+    sweep.materials[kind] = sweep.run._dress(rig, kind, sweep.materials.get(kind))
+    rig.set_incidence(theta_i)
+    measured, files = [], []
+    for theta_v in views_deg:
+        rig.set_view(theta_v)
+        path = sweep.run._render_path(kind, theta_i, theta_v, swatch=swatch)
+        measured.append(rig.render(path) if swatch else rig.measure(path))
+        files.append(np.frombuffer(path.read_bytes(), np.uint8))
+        path.unlink()
+    return (measured[0] if swatch else measured), files, time.perf_counter() - start
+
+
 def run_validation(sample=None, out_dir="clothlight_validation", *,
                    progress: Callable[[int, int, str], None] | None = None,
-                   cancel: Callable[[], bool] | None = None, **options) -> dict:
+                   cancel: Callable[[], bool] | None = None, scheduler: str | None = None, **options) -> dict:
     """Run a whole sweep (see :class:`ValidationRun` for ``sample``, ``out_dir`` and ``options``)
-    and return its results (also in ``out_dir/results.json``).
+    and return its results (also in ``out_dir/results.json``); with a ``scheduler``, on a cluster
+    (:meth:`ValidationRun.run_on_cluster`).
 
     ``progress(done, total, what)`` is called after every render; ``cancel()`` is asked before
     every render and, when true, the rig is removed and ValidationCancelled raised.
     """
     run = ValidationRun(sample, out_dir, **options)
+    if scheduler is not None:
+        return run.run_on_cluster(scheduler, progress=progress, cancel=cancel)
     steps = run.steps()
     try:
         while True:

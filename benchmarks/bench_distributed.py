@@ -1,5 +1,6 @@
 """The default bake on a LocalCluster of 1 and of 2 workers, side by side: speed-up, task sizes, the
-scheduler's overhead per task and the bytes moved (docs/distributed.md).
+scheduler's overhead per task and the bytes moved (docs/distributed.md); and a draft cloth BSDF
+measurement (18 views of the paper's red cotton) the same way.
 
 Each bake runs into a throw-away cache, so both simulate.  The transport's tasks are timed from
 dask's task stream (compute time of every task on its worker); the scheduler's overhead per task
@@ -8,8 +9,8 @@ submitted as the bake submits its own (a task and its two getters, ``map(..., ke
 the workers; the bytes are the NumPy arrays sent in tasks' arguments and shared values, and
 received as results (:class:`precompute.distributed.ClusterExecutor`).
 
-    python benchmarks/bench_distributed.py [--workers 1 2] [--preset red_cotton] [--set KEY=VALUE ...]
-        [--paths N] [--single-process]
+    python benchmarks/bench_distributed.py [--workers 1 2] [--job bake cloth] [--preset red_cotton]
+        [--set KEY=VALUE ...] [--paths N] [--single-process]
 
 ``--paths N``: N paths per incidence cell instead of the error target (one round);
 ``--single-process``: also the single-process bake on as many numba threads, for the machine's own
@@ -64,6 +65,52 @@ def instrumented(record: dict, opened=bake_module.open_executor):
     return open_executor
 
 
+#: The draft cloth measurement timed (N_o = 3: 18 views; a smaller incidence grid than the default's 11).
+DRAFT_CLOTH = {"incidence_resolution": 11, "exit_resolution": 4, "pixels_per_patch": 12, "samples": 4}
+
+
+def bench_cloth(worker_counts) -> None:
+    """The draft cloth measurement of the paper's red cotton on LocalClusters of ``worker_counts``."""
+    from distributed import get_task_stream
+
+    from clothlight.blender.garment.measure import CLUSTER_CODE, GoniometerSettings, measure_cloth
+    from clothlight.yarn_tables import yarn_tables_from_bake
+    from precompute.distributed import open_executor
+
+    yarn = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
+    settings = GoniometerSettings(**DRAFT_CLOTH)
+    walls = {}
+    for workers in worker_counts:
+        with tempfile.TemporaryDirectory() as renders:
+            started = time.perf_counter()
+            with open_executor("local", code=CLUSTER_CODE, workers=workers) as executor:
+                cluster_start = time.perf_counter() - started
+                with get_task_stream(executor.client) as stream:
+                    measure_cloth(yarn_tables_from_bake(yarn), settings, render_dir=renders, scheduler=executor,
+                                  table_folder=yarn)
+                walls[workers] = time.perf_counter() - started
+                tasks = sorted(sum(s["stop"] - s["start"] for s in task["startstops"] if s["action"] == "compute")
+                               for task in stream.data if task["key"].startswith("_run_task-"))
+                overhead = _overhead_per_task(executor)
+                moved = (executor.bytes_sent, executor.bytes_received)
+        print(f"cloth, {workers} worker(s): {walls[workers]:.1f} s wall (cluster start {cluster_start:.1f} s); "
+              f"{len(tasks)} tasks (one view each; a worker's first builds its scene): median "
+              f"{statistics.median(tasks):.2f} s, longest {tasks[-1]:.2f} s; scheduler overhead "
+              f"{1e3 * overhead:.1f} ms per task = {overhead / statistics.median(tasks):.2%} of the median task; "
+              f"moved {moved[0] / 1e6:.2f} MB to the workers, {moved[1] / 1e6:.2f} MB back", flush=True)
+    base = min(walls)
+    for workers, wall in walls.items():
+        if workers != base:
+            print(f"cloth speed-up {workers} workers against {base}: {walls[base] / wall:.2f}×")
+
+
+def _overhead_per_task(executor) -> float:
+    """The scheduler's wall time per trivial task on ``executor``'s cluster, times its workers."""
+    started = time.perf_counter()
+    executor.map(divmod, [(i, 1) for i in range(OVERHEAD_TASKS)])
+    return (time.perf_counter() - started) * executor.workers / OVERHEAD_TASKS
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
@@ -71,7 +118,13 @@ def main() -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=[])
     parser.add_argument("--paths", type=int)
     parser.add_argument("--single-process", action="store_true")
+    parser.add_argument("--job", nargs="+", choices=("bake", "cloth"), default=["bake", "cloth"],
+                        help="what to time: the default bake, a draft cloth measurement (default: both)")
     args = parser.parse_args()
+    if "cloth" in args.job:
+        bench_cloth(args.workers)
+    if "bake" not in args.job:
+        return
     print(f"{args.preset} {' '.join(args.overrides)}; load average before: "
           f"{' '.join(f'{x:.2f}' for x in os.getloadavg())}", flush=True)
     rows = []

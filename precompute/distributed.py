@@ -203,6 +203,25 @@ class ClusterExecutor:
         raise ClusterError(f"--scheduler {self.address}: the scheduler cancelled the job's tasks{why}")
 
 
+def folder_payload(folder) -> dict:
+    """{name: the file's bytes as a uint8 array} of the files of ``folder`` (a bake's tables): what
+    a job shares with its workers, which may not see this machine's disk (arrays, so that the bytes
+    moved count them)."""
+    import numpy as np
+
+    return {path.name: np.frombuffer(path.read_bytes(), np.uint8)
+            for path in sorted(pathlib.Path(folder).iterdir()) if path.is_file()}
+
+
+def write_payload(payload: dict, folder) -> pathlib.Path:
+    """Write the files of a :func:`folder_payload` into ``folder`` (created); the folder."""
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, data in payload.items():
+        (folder / name).write_bytes(data.tobytes())
+    return folder
+
+
 def _nbytes(value) -> int:
     """Bytes of the NumPy arrays in ``value`` (nested in tuples, lists, dicts, named tuples)."""
     if hasattr(value, "nbytes"):

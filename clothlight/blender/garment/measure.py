@@ -10,6 +10,7 @@ one pixel so that a pixel holds the mean radiance over its square, as the calibr
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import dataclasses
 import math
@@ -320,33 +321,29 @@ def _scene_shape(scene: _GoniometerScene) -> dict:
 
 #: The code a measurement's workers run, checked against this checkout's (precompute.distributed).
 CLUSTER_CODE = {"entries": ("clothlight.blender.garment.measure",)}
-#: A worker process's scene: (the yarn files' digest, the settings' repr) → (scene, its table folder).
+#: A worker process's scene: a digest of (the yarn files, the settings) → (scene, its table folder).
 _worker_scene: dict = {}
 
 
 def measure_views(table_files: dict, settings: GoniometerSettings, views: tuple) -> tuple[dict, list[dict]]:
     """A cluster task: ``views`` ((side, exit cell), ...) measured in this worker's scene for the
-    yarn whose bake folder holds ``table_files`` ({name: the file's bytes as a uint8 array}); with
+    yarn whose bake folder holds ``table_files`` (``precompute.distributed.folder_payload``); with
     the scene's shape.
 
     The scene is built on a worker's first task and kept for the next ones; Cycles renders with
     the worker's threads."""
     import hashlib
+    import pickle
     import tempfile
 
+    from ...addon import import_precompute
     from ...yarn_tables import yarn_tables_from_bake
 
-    digest = hashlib.sha256(b"".join(name.encode() + hashlib.sha256(data.tobytes()).digest()
-                                     for name, data in sorted(table_files.items()))).hexdigest()
-    key = (digest, repr(settings))
+    key = hashlib.sha256(pickle.dumps((table_files, settings))).hexdigest()
     if key not in _worker_scene:
-        for scene, folder in _worker_scene.values():
-            scene.close()
-            folder.cleanup()
-        _worker_scene.clear()
+        _close_worker_scene()
         folder = tempfile.TemporaryDirectory(prefix="clothlight-gonio-tables-")
-        for name, data in table_files.items():
-            (pathlib.Path(folder.name) / name).write_bytes(data.tobytes())
+        import_precompute("distributed").write_payload(table_files, folder.name)
         _worker_scene[key] = (_GoniometerScene(yarn_tables_from_bake(folder.name), settings), folder)
     scene = _worker_scene[key][0]
     scene.scene.render.threads_mode = "FIXED"
@@ -357,6 +354,18 @@ def measure_views(table_files: dict, settings: GoniometerSettings, views: tuple)
     return _scene_shape(scene), measured
 
 
+def _close_worker_scene() -> None:
+    for scene, folder in _worker_scene.values():
+        scene.close()
+        folder.cleanup()
+    _worker_scene.clear()
+
+
+# At a worker's exit, before Blender's data is freed: a scene kept to the end would be deleted
+# after it, and Cycles' persistent render engine prints a ReferenceError on the way out.
+atexit.register(_close_worker_scene)
+
+
 def _measure_on_cluster(table_folder, settings: GoniometerSettings, views, scheduler,
                         progress) -> tuple[list[dict], dict]:
     from ...addon import import_precompute
@@ -364,8 +373,7 @@ def _measure_on_cluster(table_folder, settings: GoniometerSettings, views, sched
     if table_folder is None:
         raise ParameterError("table_folder", table_folder, "the yarn bake's folder when a scheduler is given")
     distributed = import_precompute("distributed")
-    table_files = {path.name: np.frombuffer(path.read_bytes(), np.uint8)
-                   for path in sorted(pathlib.Path(table_folder).iterdir()) if path.is_file()}
+    table_files = distributed.folder_payload(table_folder)
     done = []
 
     def task_done(index: int) -> None:

@@ -16,6 +16,7 @@ measurement), ``swatches/*.png`` and the float renders under ``renders/``.
 
 from __future__ import annotations
 
+import atexit
 import pathlib
 import time
 from collections.abc import Callable, Iterator
@@ -231,9 +232,11 @@ class ValidationRun:
             raise ParameterError("scheduler", scheduler, "no scheduler for a sample object: a cluster's workers "
                                                          "build the sample from a weave")
         start = time.perf_counter()
+        distributed = import_precompute("distributed")
         inputs = {"sample": self.sample, "settings": self.settings, "materials": self.materials,
-                  "tables": _folder_files(self.tables.brdf_path.parent) if self.tables else None,
-                  "cloth": _folder_files(self.cloth_tables.lobe_path.parent) if self.cloth_tables else None}
+                  "tables": distributed.folder_payload(self.tables.brdf_path.parent) if self.tables else None,
+                  "cloth": (distributed.folder_payload(self.cloth_tables.lobe_path.parent) if self.cloth_tables
+                            else None)}
         tasks = [(kind, theta_i, tuple(self.settings.views_deg), None)
                  for kind in self.materials for theta_i in self.settings.incidences_deg]
         if self.swatches:
@@ -252,7 +255,6 @@ class ValidationRun:
         try:
             if set(GARMENT_MATERIALS) & set(self.materials):
                 rig.replace_sample(garment_patch(rig))  # as the last material of steps() leaves it
-            distributed = import_precompute("distributed")
             with distributed.open_executor(scheduler, code=SWEEP_CODE) as executor:
                 shared = executor.share(inputs)
                 try:
@@ -499,12 +501,6 @@ SWEEP_CODE = {"entries": ("clothlight.blender.validation.run",)}
 _worker_sweeps: dict = {}
 
 
-def _folder_files(folder) -> dict:
-    """{name: the file's bytes as a uint8 array} of a bake folder's files (a task's payload)."""
-    return {path.name: np.frombuffer(path.read_bytes(), np.uint8)
-            for path in sorted(pathlib.Path(folder).iterdir()) if path.is_file()}
-
-
 @dataclass
 class _WorkerSweep:
     run: ValidationRun
@@ -521,20 +517,33 @@ def _worker_sweep(inputs: dict, garment: bool) -> _WorkerSweep:
 
     key = (hashlib.sha256(pickle.dumps(inputs)).hexdigest(), garment)
     if key not in _worker_sweeps:
+        from ...addon import import_precompute
+
+        write_payload = import_precompute("distributed").write_payload
         folder = tempfile.TemporaryDirectory(prefix="clothlight-sweep-")
         root = pathlib.Path(folder.name)
-        for name in ("tables", "cloth"):
-            for file, data in (inputs[name] or {}).items():
-                (root / name).mkdir(exist_ok=True)
-                (root / name / file).write_bytes(data.tobytes())
         run = ValidationRun(inputs["sample"], root / "out", materials=inputs["materials"],
-                            tables_dir=root / "tables" if inputs["tables"] else None,
-                            cloth_dir=root / "cloth" if inputs["cloth"] else None, settings=inputs["settings"])
+                            tables_dir=write_payload(inputs["tables"], root / "tables") if inputs["tables"] else None,
+                            cloth_dir=write_payload(inputs["cloth"], root / "cloth") if inputs["cloth"] else None,
+                            settings=inputs["settings"])
         rig = build_rig(run.sample, run.settings)
         rig.scene.render.threads_mode = "FIXED"
         rig.scene.render.threads = worker_threads()
         _worker_sweeps[key] = _WorkerSweep(run, rig, {}, folder)
     return _worker_sweeps[key]
+
+
+def _close_worker_sweeps() -> None:
+    for sweep in _worker_sweeps.values():
+        sweep.rig.remove()
+        for material in sweep.materials.values():
+            bpy.data.materials.remove(material)
+        sweep.folder.cleanup()
+    _worker_sweeps.clear()
+
+
+# At a worker's exit, before Blender's data is freed (as the cloth measurement's workers do).
+atexit.register(_close_worker_sweeps)
 
 
 def render_sweep_task(inputs: dict, kind: str, theta_i: float, views_deg: tuple, swatch: str | None) -> tuple:

@@ -476,7 +476,6 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
 
     evaluate = CandidateEvaluator(config, specular, base_dir, forward_model, objective, tuple(profiled), swatches,
                                   max_back_front)
-    score, model_and_values = evaluate.score, evaluate.model_and_values
     with contextlib.ExitStack() as stack:
         evaluate_many = evaluate_in_turn
         if scheduler is not None:
@@ -493,11 +492,11 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         raise FitCancelled("fit cancelled")
     final_seed = _derived_seed(seed, _FINAL_TAG)
     t0 = time.perf_counter()
-    all_rgb, values = model_and_values(fitted_config, keywords, schedule.final, final_seed)
+    all_rgb, values = evaluate.model_and_values(fitted_config, keywords, schedule.final, final_seed)
     if values:  # the specular term refitted to the accurate evaluation
         best = {**best, **values}
         fitted_config, keywords = apply(config, specular, best)
-    final_objective = score(all_rgb)
+    final_objective = evaluate.score(all_rgb)
     model_rgb = objective.check(all_rgb[:len(all_rgb) - swatches])
     swatch_rgb = all_rgb[len(all_rgb) - swatches:] if swatches else None
     history.append(Evaluation(len(history), search["generations"], "final", dict(best), final_objective,

@@ -115,6 +115,7 @@ def python_sources(root: str | pathlib.Path, entries: Iterable[str]) -> list[pat
     import, transitively (with the packages' ``__init__.py`` on the way).  Sorted."""
     root = pathlib.Path(root).resolve()
     found: set[pathlib.Path] = set()
+    resolved: set[str] = set()  # names already looked up: most modules import the same few
     pending = []
     for entry in entries:
         if module_file(root, entry) is None:
@@ -122,6 +123,9 @@ def python_sources(root: str | pathlib.Path, entries: Iterable[str]) -> list[pat
         pending.append(entry)
     while pending:
         for name in _with_parents(pending.pop()):
+            if name in resolved:
+                continue
+            resolved.add(name)
             path = module_file(root, name)
             if path is None or path in found:
                 continue

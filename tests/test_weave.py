@@ -37,15 +37,19 @@ def repeat_params(name, **kwargs):
 
 
 def segments_cross_triangles(starts, ends, triangles):
-    """True where any segment (S, 3)→(S, 3) crosses any triangle (T, 3, 3) (Möller–Trumbore)."""
-    direction = (ends - starts)[:, None, :]
-    a, b, c = (triangles[None, :, k, :] for k in range(3))
+    """True where any segment (S, 3)→(S, 3) crosses any triangle (T, 3, 3) (Möller–Trumbore), tested
+    on the pairs whose bounding boxes overlap."""
+    low = np.minimum(starts, ends)[:, None, :] <= triangles.max(axis=1)[None]
+    high = np.maximum(starts, ends)[:, None, :] >= triangles.min(axis=1)[None]
+    segment, triangle = np.nonzero(np.all(low & high, axis=-1))
+    direction = ends[segment] - starts[segment]
+    a, b, c = (triangles[triangle, k, :] for k in range(3))
     e1, e2 = b - a, c - a
     p = np.cross(direction, e2)
     det = np.sum(e1 * p, axis=-1)
     ok = np.abs(det) > 1e-18
     inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    t_vec = starts[:, None, :] - a
+    t_vec = starts[segment] - a
     u = np.sum(t_vec * p, axis=-1) * inv
     q = np.cross(t_vec, e1)
     v = np.sum(direction * q, axis=-1) * inv
@@ -93,9 +97,11 @@ def depth_inside_tube(points, centerline, lateral_axis, semi_axes):
     a, b = semi_axes
     eta = points[:, lateral_axis] - centerline[0, lateral_axis]
     keep = 1 - lateral_axis
-    half = b * np.sqrt(np.clip(1.0 - (eta / a) ** 2, 0.0, None))
-    in_plane = distance_to_polyline(points[:, [keep, 2]], centerline[:, [keep, 2]])
-    return np.where(np.abs(eta) < a, half - in_plane, -np.inf)
+    depth = np.full(len(points), -np.inf)
+    within = np.abs(eta) < a  # only these can be inside; the distances of the rest cost the most
+    half = b * np.sqrt(1.0 - (eta[within] / a) ** 2)
+    depth[within] = half - distance_to_polyline(points[within][:, [keep, 2]], centerline[:, [keep, 2]])
+    return depth
 
 
 def deepest_penetration(params):
@@ -135,6 +141,20 @@ def test_every_built_in_pattern_gives_closed_yarns_that_do_not_intersect(name):
         assert tube.volume > 0                 # faces point outward
     assert not meshes_cross(mesh, params)
     assert params.minimum_gap_mm > 0
+
+
+def test_the_clearance_checks_see_a_yarn_pushed_into_another():
+    """The two checks above report a crossing once one weft is raised by its thickness (into the
+    warps it passes under)."""
+    params = repeat_params("plain")
+    mesh = build_woven_mesh(params)
+    weft = params.warp_count
+    mesh.vertices[mesh.yarn_id == weft, 2] += 2 * params.cross_section_mm[1]
+    assert meshes_cross(mesh, params)
+    points = mesh.vertices[mesh.yarn_id == weft]
+    depths = [depth_inside_tube(points, mesh.centerlines[warp], 1, params.cross_section_mm).max()
+              for warp in range(params.warp_count)]
+    assert max(depths) > 0.5 * params.cross_section_mm[1]
 
 
 @pytest.mark.parametrize("name", ["plain", "twill_3_1", "satin_8"])

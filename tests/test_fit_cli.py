@@ -13,7 +13,7 @@ import pytest
 import precompute.__main__ as precompute_cli
 from precompute.fit import report as fit_report
 from precompute.fit.parameters import PARAMETERS
-from precompute.fit.report import FIT_FOLDER_FILES
+from precompute.fit.report import FIT_FOLDER_FILES, PLOT_FILES
 from precompute.medium import load_preset
 from tests.test_fit_optimise import SyntheticForward, preset_with_voids, write_measurement
 
@@ -35,6 +35,17 @@ def fake_forward(monkeypatch):
     module.build_forward_model = build_forward_model
     monkeypatch.setitem(sys.modules, "precompute.fit.forward", module)
     return module
+
+
+@pytest.fixture
+def plots_as_text(monkeypatch):
+    """The report's figures stood in for by text files, for tests of the folder rather than of the
+    figures (the first test below draws them): matplotlib takes seconds a fit."""
+    def write_plots(result, folder):
+        for file in PLOT_FILES.values():
+            (folder / file).write_text(file)
+
+    monkeypatch.setattr(fit_report, "write_plots", write_plots)
 
 
 @pytest.fixture
@@ -103,7 +114,7 @@ def test_bad_inputs_exit_with_2_before_any_work(inputs, tmp_path, fake_forward, 
     assert not (tmp_path / "fit").exists()
 
 
-def test_dye_series_is_for_a_fit_of_the_dye_alone(inputs, tmp_path, fake_forward, capsys):
+def test_dye_series_is_for_a_fit_of_the_dye_alone(inputs, tmp_path, fake_forward, plots_as_text, capsys):
     assert fit(inputs, tmp_path / "refused", "--dye-series") == 2  # void_fraction is free too
     assert "--dye-series" in capsys.readouterr().err and not fake_forward.calls
     code = precompute_cli.main(["fit", "--measured", str(inputs["measured"]), "--config", str(inputs["config"]),
@@ -128,7 +139,7 @@ def test_a_failure_while_writing_leaves_no_partial_folder(inputs, tmp_path, fake
     assert sorted(p.name for p in tmp_path.iterdir()) == ["synthetic.csv", "with_voids.toml"]  # no staging left
 
 
-def test_a_failed_fit_keeps_the_previous_one(inputs, tmp_path, fake_forward, monkeypatch):
+def test_a_failed_fit_keeps_the_previous_one(inputs, tmp_path, fake_forward, plots_as_text, monkeypatch):
     out = tmp_path / "fit"
     assert fit(inputs, out) == 0
     before = {p.name: p.read_bytes() for p in out.iterdir()}

@@ -127,7 +127,7 @@ def python_sources(root: str | pathlib.Path, entries: Iterable[str]) -> list[pat
                 continue
             resolved.add(name)
             path = module_file(root, name)
-            if path is None or path in found:
+            if path is None:
                 continue
             found.add(path)
             module, is_package = _module_name(root, path)

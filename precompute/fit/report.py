@@ -303,7 +303,7 @@ def write_plots(result: FitResult, folder: pathlib.Path) -> dict[str, pathlib.Pa
         handles, labels = axes[0, 0].get_legend_handles_labels()
         if handles:
             figure.legend(handles, labels, loc="upper center", ncol=3, fontsize=8, frameon=False)
-        # Fixed margins in inches: tight_layout measures every log-scale tick label and took seconds.
+        # Margins set, not measured: tight_layout sizes every log-scale tick label and took seconds.
         height = figure.get_figheight()
         figure.subplots_adjust(left=0.08, right=0.98, wspace=0.22, hspace=0.5,
                                bottom=0.55 / height, top=1.0 - 0.8 / height)

@@ -2,21 +2,19 @@
 
 Checks every input first (the measurement, the preset, the free parameters, the colour targets, the
 output folder), then builds the forward model (``precompute.fit.forward.build_forward_model``, a
-cached cloth response), runs CMA-ES with progress on stderr, and writes ``--out`` as a whole.
+cached cloth response), runs CMA-ES with progress on stderr, and writes ``--out`` as a whole; the
+checks and the run are :mod:`precompute.fit.job`'s, which the add-on's fit worker runs too.
 Exit codes: precompute/exit_codes.py (0 done, 2 bad input, 130 interrupted: nothing written).
 """
 
 from __future__ import annotations
 
-import contextlib
 import json
-import math
 import pathlib
 import sys
 
 from .. import bounds
-from ..distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler, open_executor
-from ..errors import ParameterError
+from ..distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
 from ..medium import DEFAULT_PRESET, preset_names
 
 
@@ -71,39 +69,15 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from ..fit import Budget, check_fit_folder, fit_medium, load_measurement, parse_free, split_views
-    from ..fit.objective import Objective, parse_target_ratios
-    from ..fit.optimise import FIT_CODE, check_budget
-    from ..fit.parameters import FIT_TABLE, initial_values, specular_from_config
+    from ..fit.job import check_fit_inputs, run_fit
     from ..fit.report import fit_summary, write_fit_folder
-    from ..medium import load_preset_config, medium_from_dict
-    from ..outputs import check_writable_folder
 
-    # every input checked before any work
-    free = parse_free(args.free)
-    args.dye_range = None
-    if args.dye_series:
-        medium_free = [p for p in free if not p.is_specular]
-        if [p.name for p in medium_free] != ["dye_weight_percent"]:
-            raise ParameterError("--dye-series", args.free, "a fit whose only free medium parameter is "
-                                 "dye_weight_percent (the specular term may be free too)")
-        args.dye_range = (medium_free[0].low, medium_free[0].high)
-    measurement = load_measurement(args.measured)
-    config, base_dir = load_preset_config(args.config or args.preset)
-    medium_config = {key: value for key, value in config.items() if key != FIT_TABLE}
-    medium_from_dict(medium_config, base_dir)
-    initial_values(free, config, specular_from_config(config))  # the species the free parameters need
-    ratios = parse_target_ratios(args.target_ratios)
-    views = split_views(measurement)
-    Objective(measurement, views, ratios)
-    budget = Budget(evaluations=args.budget_evaluations, seconds=args.budget_seconds)
-    check_budget(budget, len(free))
-    if args.max_back_front is not None and not (math.isfinite(args.max_back_front) and args.max_back_front > 0):
-        raise ParameterError("--max-back-front", args.max_back_front, "a ratio > 0")
-    check_fit_folder(args.out)
+    # every input checked before any work (precompute.fit.job, shared with the add-on's fit worker)
+    inputs = check_fit_inputs(args.measured, args.config or args.preset, args.free, out=args.out,
+                              target_ratios=args.target_ratios, max_back_front=args.max_back_front,
+                              budget_evaluations=args.budget_evaluations, budget_seconds=args.budget_seconds,
+                              dye_series=args.dye_series, cache_dir=args.cache_dir)
     scheduler = None if args.dye_series else check_scheduler(args.scheduler)
-    if args.cache_dir is not None:
-        check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
 
     bars: dict = {}
 
@@ -122,19 +96,13 @@ def run(args) -> int:
         b.update(max(0, state.evaluations - b.n))
 
     try:
-        with contextlib.ExitStack() as stack:
-            # The cluster first: an address that does not answer is refused before the cloth response.
-            executor = None if scheduler is None else stack.enter_context(open_executor(scheduler, code=FIT_CODE))
-            forward_model = _build_forward_model(views, medium_config, base_dir, args, building)
-            result = fit_medium(measurement, config, base_dir, free=[p.name for p in free],
-                                forward_model=forward_model, seed=args.seed, budget=budget, target_ratios=ratios,
-                                progress=searching, max_back_front=args.max_back_front, scheduler=executor)
+        result = run_fit(inputs, seed=args.seed, scheduler=scheduler, building=building, searching=searching)
     finally:
         for b in bars.values():
             b.close()
-    out = write_fit_folder(result, args.out, measured_name=args.measured.name)
+    out = write_fit_folder(result, inputs.out, measured_name=inputs.measured_name)
     if args.json:
-        summary = fit_summary(result, args.measured.name)
+        summary = fit_summary(result, inputs.measured_name)
         summary.pop("views")
         summary.pop("history")
         print(json.dumps({"out": str(out), **summary}, indent=1))
@@ -151,16 +119,6 @@ def run(args) -> int:
     for hit in result.bound_hits:
         print(f"note:     {hit}")
     return 0
-
-
-def _build_forward_model(views, medium_config: dict, base_dir, args, progress):
-    """The real forward model (``precompute.fit.forward``), imported here so the rest of the fit runs
-    and is tested without it."""
-    from ..fit.forward import build_forward_model
-
-    kwargs = {"cache_dir": args.cache_dir} if args.cache_dir is not None else {}
-    return build_forward_model(views.forward_views, medium_config, base_dir, seed=args.seed, progress=progress,
-                               dye_range=args.dye_range, **kwargs)
 
 
 def _show(value) -> str:

@@ -75,6 +75,18 @@ def rig_views(measured_views: Sequence[tuple[float, float, float, float]]) -> li
     return views
 
 
+def lookup_tables_folder(root: pathlib.Path = PROJECT_ROOT) -> pathlib.Path:
+    """Tables for the cloth response's renders, which record the shader's lookup directions and so
+    take any medium's: the repository's example tables, or in the extension (which ships no
+    ``example_blends/``) the first pre-baked preset's (``prebaked/<preset>/``)."""
+    candidates = [root / "example_blends" / "tables" / "paper_2008", *sorted((root / "prebaked").glob("*"))]
+    for folder in candidates:
+        if (folder / "summary.json").is_file():
+            return folder
+    raise FileNotFoundError(f"no yarn tables to render the cloth response with: neither {candidates[0]} nor a "
+                            f"pre-baked folder in {root / 'prebaked'}")
+
+
 def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
                    progress: Callable[[int, int], None] | None = None):
     """The cloth response at ``measured_views`` and :data:`SAMPLE_AZIMUTHS_DEG`, from the cache or
@@ -101,7 +113,7 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
             from clothlight.yarn_tables import yarn_tables_from_bake
 
             # Any tables: the lookup directions do not depend on the medium.
-            tables = yarn_tables_from_bake(PROJECT_ROOT / "example_blends" / "tables" / "paper_2008")
+            tables = yarn_tables_from_bake(lookup_tables_folder())
             measure_response(tables, views, resolution=RESPONSE_RESOLUTION, supersampling=RESPONSE_SUPERSAMPLING,
                              seed=seed, progress=progress).save(staging / RESPONSE_FILE)
 

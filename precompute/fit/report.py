@@ -58,17 +58,20 @@ def check_fit_folder(out: str | os.PathLike, option: str = "--out") -> pathlib.P
     return check_output_folder(out, FIT_FOLDER_FILES, option, job="fit")
 
 
-def write_fit_folder(result: FitResult, out: str | os.PathLike, *, measured_name: str = "", option: str = "--out"
-                     ) -> pathlib.Path:
-    """Write every file of a fit (module docstring) into ``out`` as a whole; its real path."""
+def write_fit_folder(result: FitResult, out: str | os.PathLike, *, measured_name: str = "", option: str = "--out",
+                     figures: bool = True) -> pathlib.Path:
+    """Write every file of a fit (module docstring) into ``out`` as a whole; its real path.  Without
+    ``figures`` (a Python without matplotlib, as Blender's) the folder holds no plots and the report
+    says so."""
     check_fit_folder(out, option)
 
     def write(folder: pathlib.Path) -> None:
         (folder / PRESET_FILE).write_text(preset_toml(result, measured_name), encoding="utf-8")
         (folder / JSON_FILE).write_text(json.dumps(fit_summary(result, measured_name), indent=1, allow_nan=False),
                                         encoding="utf-8")
-        write_plots(result, folder)
-        (folder / REPORT_FILE).write_text(report_markdown(result, measured_name), encoding="utf-8")
+        if figures:
+            write_plots(result, folder)
+        (folder / REPORT_FILE).write_text(report_markdown(result, measured_name, figures=figures), encoding="utf-8")
 
     return replace_folder(out, write, FIT_FOLDER_FILES, option)
 
@@ -180,8 +183,8 @@ def _show(value) -> str:
     return "–" if value is None or (isinstance(value, float) and not math.isfinite(value)) else f"{value:.3g}"
 
 
-def report_markdown(result: FitResult, measured_name: str = "") -> str:
-    """``report.md`` (module docstring)."""
+def report_markdown(result: FitResult, measured_name: str = "", figures: bool = True) -> str:
+    """``report.md`` (module docstring); without ``figures``, a line in place of the figures."""
     model, base = result.metrics["model"], result.metrics["baseline"]
     held_count = int(result.views.held_out.sum())
     lines = [f"# Medium fit: {result.config.get('name', 'custom')} to {measured_name or 'a measurement'}", "",
@@ -230,6 +233,12 @@ def report_markdown(result: FitResult, measured_name: str = "") -> str:
             lines.append(f"| {key} | {target:g} | {_show(model['target_ratios'][key]['achieved'])} | "
                          f"{_show(base['target_ratios'][key]['achieved'])} |")
         lines.append("")
+    bake = f"To bake the fitted medium at full accuracy: `python -m precompute bake --config {PRESET_FILE}`."
+    if not figures:
+        lines += ["## Figures", "",
+                  "Not drawn: matplotlib is not installed in the Python that ran the fit (Blender's). `fit.json` "
+                  "holds every view's measured, model and baseline BRDF.", "", bake, ""]
+        return "\n".join(lines)
     lines += ["## Figures", "",
               "![measured, fitted medium and fitted baseline per incidence](fit.png)", "",
               "`fit.png`: per incidence θi (rows), the plane of incidence (left: signed view angle, negative on "
@@ -240,7 +249,7 @@ def report_markdown(result: FitResult, measured_name: str = "") -> str:
               "![objective per evaluation](history.png)", "",
               "`history.png`: the objective of every forward evaluation, coloured by the relative error asked of "
               "the forward model; the line is the best so far.", "",
-              f"To bake the fitted medium at full accuracy: `python -m precompute bake --config {PRESET_FILE}`.", ""]
+              bake, ""]
     return "\n".join(lines)
 
 

@@ -10,6 +10,10 @@ every entry in a private temporary folder and removes it on the way out
 not stop within :data:`CANCEL_GRACE_SECONDS` (one transport block still running) is killed; its
 temporary folder is hidden from every lookup and removed by a later bake.
 
+What runs a child and talks to it is :class:`ChildJob`, which the medium fit's job
+(:class:`clothlight.fit_job.FitJob`) shares; :func:`child_command` says what the child is: this
+Python (``-m``), or for a job that renders with bpy inside Blender, Blender itself in background mode.
+
 No Blender here: the operators (UI, modal timer) and the build script (pre-baked tables) use it.
 """
 
@@ -53,11 +57,24 @@ BAKE_DEPENDENCIES = {
 }
 
 
-def missing_bake_dependencies() -> list[str]:
-    """Distributions the bake needs that this Python cannot import (without importing them)."""
+#: What the medium fit needs beyond the bake's: its optimiser, CMA-ES (pure Python).  Its report's
+#: figures need matplotlib, which is not bundled: without it the fit folder holds no plots.
+FIT_DEPENDENCIES = {**BAKE_DEPENDENCIES, "cma": "cma"}
+#: Every distribution the extension bundles as a wheel (scripts/build_extension.py).
+BUNDLED_DEPENDENCIES = {**BAKE_DEPENDENCIES, **FIT_DEPENDENCIES}
+
+
+def missing_dependencies(dependencies: dict[str, str]) -> list[str]:
+    """Distributions of ``dependencies`` (import name → distribution name) that this Python cannot
+    import (without importing them)."""
     import importlib.util
 
-    return [dist for module, dist in BAKE_DEPENDENCIES.items() if importlib.util.find_spec(module) is None]
+    return [dist for module, dist in dependencies.items() if importlib.util.find_spec(module) is None]
+
+
+def missing_bake_dependencies() -> list[str]:
+    """Distributions the bake needs that this Python cannot import (without importing them)."""
+    return missing_dependencies(BAKE_DEPENDENCIES)
 
 
 def bake_unavailable_reason(missing: list[str] | None = None) -> str | None:
@@ -170,8 +187,9 @@ def preset_request(name: str) -> BakeRequest:
     return BakeRequest(preset=name, **fields)
 
 
-class BakeFailed(RuntimeError):
-    """The child bake stopped with an error; ``message`` is meant for the user, ``log`` for the console."""
+class JobFailed(RuntimeError):
+    """A child job stopped with an error; ``message`` is meant for the user, ``log`` for the console,
+    ``bad_input`` says it refused its input (exit code 2: the message names the parameter)."""
 
     def __init__(self, message: str, log: str = "", bad_input: bool = False):
         super().__init__(message)
@@ -179,7 +197,15 @@ class BakeFailed(RuntimeError):
         self.bad_input = bad_input
 
 
-class BakeCancelled(RuntimeError):
+class JobCancelled(RuntimeError):
+    """A child job was cancelled before it finished."""
+
+
+class BakeFailed(JobFailed):
+    """The child bake stopped with an error; ``message`` is meant for the user, ``log`` for the console."""
+
+
+class BakeCancelled(JobCancelled):
     """The bake was cancelled before it finished."""
 
 
@@ -193,21 +219,70 @@ class BakeOutcome:
     table1_ratios: dict
 
 
-class BakeJob:
-    """One bake in a child process.  ``start()``, then ``poll()`` until ``done``; or ``wait()``.
+#: What Blender runs (``--python-expr``) to start a worker module: Blender ignores PYTHONPATH and
+#: PYTHONPYCACHEPREFIX (unless ``--python-use-system-env``), so the expression takes both from the
+#: environment (:meth:`ChildJob.environment`), the bytecode folder first so that nothing is written
+#: into the extension's folder, then hands over to :func:`clothlight.worker_io.exec_in_blender`.
+BLENDER_BOOTSTRAP = (
+    "import os, sys; "
+    "sys.pycache_prefix = os.environ.get('PYTHONPYCACHEPREFIX') or sys.pycache_prefix; "
+    "sys.path[:0] = [p for p in os.environ.get('CLOTHLIGHT_CHILD_PATH', '').split(os.pathsep) if p]; "
+    "import clothlight.worker_io; clothlight.worker_io.exec_in_blender({module!r})"
+)
+
+
+def is_blender_executable(binary_path: str | None, python: str | None = None) -> bool:
+    """Whether ``binary_path`` (``bpy.app.binary_path``) is a Blender executable to start a child with:
+    an executable file that is not a Python (the ``bpy`` module, as in the tests, reports "" there)."""
+    if not binary_path:
+        return False
+    path = pathlib.Path(binary_path)
+    if not path.is_file() or not os.access(path, os.X_OK) or path.name.lower().startswith("python"):
+        return False
+    try:
+        return not (python and path.samefile(python))
+    except OSError:
+        return True
+
+
+def blender_scripts_folder() -> pathlib.Path | None:
+    """The ``scripts`` folder of the Blender this process has imported (``…/scripts/modules/bpy``), or
+    None when bpy is not imported.  ``import bpy`` puts its folders on sys.path, the first of them
+    ``scripts/modules`` with Blender's own ``bpy`` package in it, which needs Blender's ``_bpy``."""
+    file = getattr(sys.modules.get("bpy"), "__file__", None)
+    if not file:
+        return None
+    path = pathlib.Path(file).resolve()
+    if path.parent.name != "bpy" or path.parents[1].name != "modules":
+        return None
+    return path.parents[2]
+
+
+def child_command(module: str, arguments: list[str], *, blender: str | None = None,
+                  python: str | None = None) -> list[str]:
+    """The command line of the worker ``module`` with ``arguments``.
+
+    A worker that imports bpy (the fit renders its cloth response) cannot run in Blender's bundled
+    Python, which has no bpy: inside Blender (``blender`` is ``bpy.app.binary_path``, a Blender
+    executable) the child is Blender itself in background mode, without the user's settings and
+    add-ons (``--factory-startup``), running :data:`BLENDER_BOOTSTRAP`.  Otherwise — Blender as the
+    ``bpy`` module (tests, command lines), whose ``binary_path`` is not a Blender executable, or a
+    worker that needs no bpy (``blender=None``) — it is ``python -m module`` (``python``: this
+    Python by default)."""
+    python = python or sys.executable
+    if is_blender_executable(blender, python):
+        return [str(blender), "--background", "--factory-startup", "--python-expr",
+                BLENDER_BOOTSTRAP.format(module=module), "--", *arguments]
+    return [python, "-m", module, *arguments]
+
+
+class ChildJob:
+    """One job in a child process talking JSON lines (:mod:`clothlight.worker_io`): ``start()``, then
+    ``poll()`` until ``done``; or ``wait()``.  Subclasses name the worker module and its arguments
+    (:meth:`arguments`) and turn the ``done`` event into their outcome (:meth:`outcome_from`).
 
     Parameters
     ----------
-    request
-        What to bake.
-    cache_dir
-        The bake cache's folder (the add-on's preference, by default its extension user folder).
-    threads
-        CPU threads of the transport; None: all.
-    scheduler
-        The address of a dask cluster (``tcp://HOST:PORT``, docs/distributed.md) whose workers run
-        the transport; None: the child's own threads (Blender's Python has no dask, and on one
-        machine the threads use every core already).
     numba_cache_dir
         Where numba keeps compiled kernels: numba writes next to a module by default, and an
         extension must not write into its own folder.
@@ -215,43 +290,68 @@ class BakeJob:
         Where the child keeps Python bytecode (``PYTHONPYCACHEPREFIX``), for the same reason: the
         child imports the add-on's modules from the extension's folder, and Python would write
         their ``__pycache__`` there.  A prefix rather than no bytecode at all, so that the child's
-        imports of numba and SciPy stay quick from the second bake on.  None: Python's default.
+        imports of numba and SciPy stay quick from the second job on.  None: Python's default.
+    blender
+        ``bpy.app.binary_path``, for a worker that imports bpy (:func:`child_command`); None: this Python.
     """
 
-    def __init__(self, request: BakeRequest, *, cache_dir, threads: int | None = None, scheduler: str | None = None,
-                 numba_cache_dir=None, bytecode_cache_dir=None):
-        self.request = request
-        self.cache_dir = pathlib.Path(cache_dir)
-        self.threads = threads
-        self.scheduler = scheduler or None
+    #: The worker module, run as ``python -m`` (or by Blender, :func:`child_command`).
+    module = ""
+    #: Whether the worker imports bpy: then Blender's script folders stay off its import path, where
+    #: ``import bpy`` in this process put them and where a ``python -m`` child would find Blender's
+    #: inner ``bpy`` package before the ``bpy`` module (in Blender, the child adds its own).
+    imports_bpy = False
+    #: What the job is, for its messages ("bake", "fit").
+    what = "job"
+    failure = JobFailed
+    cancellation = JobCancelled
+
+    def __init__(self, *, numba_cache_dir=None, bytecode_cache_dir=None, blender: str | None = None):
         self.numba_cache_dir = numba_cache_dir
         self.bytecode_cache_dir = bytecode_cache_dir
+        self.blender = blender
         self.progress = 0.0
-        self.outcome: BakeOutcome | None = None
-        self.error: BakeFailed | BakeCancelled | None = None
+        #: What the child is doing, as its last progress event said ("" when it does not say).
+        self.stage = ""
+        self.outcome = None
+        self.error: JobFailed | JobCancelled | None = None
         self._process: subprocess.Popen | None = None
         self._events: queue.Queue = queue.Queue()
         self._stderr: list[str] = []
         self._cancel_sent: float | None = None
         self._started = 0.0
 
+    # -- what a subclass says ---------------------------------------------------------------
+
+    def arguments(self) -> list[str]:
+        """The worker's command-line arguments."""
+        raise NotImplementedError
+
+    def outcome_from(self, event: dict):
+        """The job's outcome from its ``done`` event."""
+        raise NotImplementedError
+
+    #: What the cancelled job left, for the user ("no table was written").
+    cancelled_note = "nothing was written"
+    #: What a child killed after a cancel leaves, for the user.
+    killed_note = "a later job removes what it left"
+
     # -- the child process ----------------------------------------------------------------
 
     def command(self) -> list[str]:
-        command = [sys.executable, "-m", WORKER_MODULE, "--request", self.request.to_json(),
-                   "--cache-dir", str(self.cache_dir)]
-        if self.scheduler:
-            command += ["--scheduler", self.scheduler]
-        elif self.threads:
-            command += ["--threads", str(int(self.threads))]
-        return command
+        return child_command(self.module, self.arguments(), blender=self.blender)
 
     def environment(self) -> dict:
         """The child's environment: Blender's import path (bundled wheels, numpy), numba's cache and
-        Python's bytecode folder."""
+        Python's bytecode folder (both also for a child that is Blender: :data:`BLENDER_BOOTSTRAP`)."""
         env = dict(os.environ)
-        paths = [str(PACKAGE_ROOT)] + [p for p in sys.path if p and os.path.isdir(p)]
-        env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths))
+        entries = [str(PACKAGE_ROOT)] + [p for p in sys.path if p and os.path.isdir(p)]
+        scripts = blender_scripts_folder() if self.imports_bpy else None
+        if scripts is not None:
+            entries = [p for p in entries if not pathlib.Path(p).resolve().is_relative_to(scripts)]
+        paths = os.pathsep.join(dict.fromkeys(entries))
+        env["PYTHONPATH"] = paths
+        env["CLOTHLIGHT_CHILD_PATH"] = paths
         env["PYTHONUNBUFFERED"] = "1"
         env["PYTHONIOENCODING"] = "utf-8"
         if self.numba_cache_dir is not None:
@@ -260,12 +360,14 @@ class BakeJob:
             env["PYTHONPYCACHEPREFIX"] = str(self.bytecode_cache_dir)
         return env
 
-    def start(self) -> "BakeJob":
-        if not sys.executable or not os.path.isfile(sys.executable):
-            raise BakeFailed(f"Blender's Python executable is missing ({sys.executable!r}): cannot bake")
+    def start(self):
+        command = self.command()
+        if not command[0] or not os.path.isfile(command[0]):
+            raise self.failure(f"the executable to run the {self.what} with is missing ({command[0]!r}): cannot "
+                              f"{self.what}")
         self._started = time.monotonic()
         self._process = subprocess.Popen(
-            self.command(), cwd=PACKAGE_ROOT, env=self.environment(),
+            command, cwd=PACKAGE_ROOT, env=self.environment(),
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
             text=True, encoding="utf-8", errors="replace", bufsize=1,
         )
@@ -276,9 +378,13 @@ class BakeJob:
     def _read_events(self, stream) -> None:
         for line in stream:
             try:
-                self._events.put(json.loads(line))
+                event = json.loads(line)
             except ValueError:
-                self._stderr.append(line)  # a stray print of a library: keep it for the console
+                event = None
+            if isinstance(event, dict):
+                self._events.put(event)
+            else:
+                self._stderr.append(line)  # a stray print of a library, Blender's banner: kept for the console
         self._events.put(None)
 
     def _read_log(self, stream) -> None:
@@ -320,8 +426,8 @@ class BakeJob:
         elif self._cancel_sent is not None and time.monotonic() - self._cancel_sent > CANCEL_GRACE_SECONDS:
             self._process.kill()
             self._process.wait()
-            self.error = BakeCancelled("bake cancelled (the child was killed after "
-                                       f"{CANCEL_GRACE_SECONDS:g} s; a later bake removes its temporary folder)")
+            self.error = self.cancellation(f"{self.what} cancelled (the child was killed after "
+                                        f"{CANCEL_GRACE_SECONDS:g} s; {self.killed_note})")
         if self.done:
             try:
                 self._process.wait(timeout=10)  # it exits right after its last message
@@ -334,32 +440,36 @@ class BakeJob:
         kind = event.get("event")
         if kind == "progress":
             self.progress = max(self.progress, float(event["fraction"]))
+            self.stage = str(event.get("stage", self.stage))
         elif kind == "done":
             self.progress = 1.0
-            self.outcome = BakeOutcome(
-                folder=pathlib.Path(event["folder"]), cache_hit=bool(event["cache_hit"]),
-                seconds=float(event["seconds"]), table1_ratios=event.get("table1_ratios", {}))
+            self.outcome = self.outcome_from(event)
         elif kind == "error":
-            self.error = BakeFailed(event["message"], self.log, bad_input=bool(event.get("bad_input")))
+            self.error = self.failure(event["message"], self.log, bad_input=bool(event.get("bad_input")))
         elif kind == "cancelled":
-            self.error = BakeCancelled("bake cancelled: no table was written")
+            self.error = self.cancellation(f"{self.what} cancelled: {self.cancelled_note}")
 
     def _conclude(self) -> None:
         if self.done:
             return
         code = self._process.returncode
         if code == CANCELLED_EXIT or self._cancel_sent is not None:
-            self.error = BakeCancelled("bake cancelled: no table was written")
+            self.error = self.cancellation(f"{self.what} cancelled: {self.cancelled_note}")
         else:
             tail = self.log.strip().splitlines()[-1:] or [f"exit status {code}"]
-            self.error = BakeFailed(f"bake process stopped unexpectedly: {tail[0]}", self.log)
+            self.error = self.failure(f"{self.what} process stopped unexpectedly: {tail[0]}", self.log)
+
+    @property
+    def returncode(self) -> int | None:
+        """The child's exit status once it has exited (0, 2, 130, 1: precompute/exit_codes.py)."""
+        return None if self._process is None else self._process.returncode
 
     @property
     def cancelling(self) -> bool:
         return self._cancel_sent is not None and not self.done
 
     def cancel(self) -> None:
-        """Ask the child to stop; ``poll()`` reports the end (``BakeCancelled``)."""
+        """Ask the child to stop; ``poll()`` reports the end (:attr:`cancellation`)."""
         if self._process is None or self.done or self._cancel_sent is not None:
             return
         self._cancel_sent = time.monotonic()
@@ -370,8 +480,9 @@ class BakeJob:
         except OSError:
             pass  # the child already exited: poll() picks up how
 
-    def wait(self, on_progress: Callable[[float], None] | None = None, interval: float = 0.1) -> BakeOutcome:
-        """Run to the end (background mode); Ctrl-C cancels the child too.  Raises BakeFailed/BakeCancelled."""
+    def wait(self, on_progress: Callable[[float], None] | None = None, interval: float = 0.1):
+        """Run to the end (background mode); Ctrl-C cancels the child too.  Returns the outcome;
+        raises :attr:`failure` / :attr:`cancellation`."""
         if self._process is None:
             self.start()
         reported = -1.0
@@ -389,3 +500,56 @@ class BakeJob:
         if self.error is not None:
             raise self.error
         return self.outcome
+
+
+class BakeJob(ChildJob):
+    """One bake in a child process.  ``start()``, then ``poll()`` until ``done``; or ``wait()``.
+
+    Parameters
+    ----------
+    request
+        What to bake.
+    cache_dir
+        The bake cache's folder (the add-on's preference, by default its extension user folder).
+    threads
+        CPU threads of the transport; None: all.
+    scheduler
+        The address of a dask cluster (``tcp://HOST:PORT``, docs/distributed.md) whose workers run
+        the transport; None: the child's own threads (Blender's Python has no dask, and on one
+        machine the threads use every core already).
+    numba_cache_dir, bytecode_cache_dir
+        As :class:`ChildJob`.
+    """
+
+    module = WORKER_MODULE
+    what = "bake"
+    failure = BakeFailed
+    cancellation = BakeCancelled
+    cancelled_note = "no table was written"
+    killed_note = "a later bake removes its temporary folder"
+
+    def __init__(self, request: BakeRequest, *, cache_dir, threads: int | None = None, scheduler: str | None = None,
+                 numba_cache_dir=None, bytecode_cache_dir=None):
+        super().__init__(numba_cache_dir=numba_cache_dir, bytecode_cache_dir=bytecode_cache_dir)
+        self.request = request
+        self.cache_dir = pathlib.Path(cache_dir)
+        self.threads = threads
+        self.scheduler = scheduler or None
+        self.outcome: BakeOutcome | None = None
+
+    def arguments(self) -> list[str]:
+        arguments = ["--request", self.request.to_json(), "--cache-dir", str(self.cache_dir)]
+        if self.scheduler:
+            arguments += ["--scheduler", self.scheduler]
+        elif self.threads:
+            arguments += ["--threads", str(int(self.threads))]
+        return arguments
+
+    def outcome_from(self, event: dict) -> BakeOutcome:
+        return BakeOutcome(folder=pathlib.Path(event["folder"]), cache_hit=bool(event["cache_hit"]),
+                           seconds=float(event["seconds"]), table1_ratios=event.get("table1_ratios", {}))
+
+    def start(self) -> "BakeJob":
+        if not sys.executable or not os.path.isfile(sys.executable):
+            raise BakeFailed(f"Blender's Python executable is missing ({sys.executable!r}): cannot bake")
+        return super().start()

@@ -8,9 +8,10 @@ What a zip holds, and why:
 
 * the add-on (``clothlight/``, ``osl/``, ``precompute/``), as ``blender_manifest.toml``'s
   ``[build]`` table selects;
-* **wheels** of what the in-Blender bake imports and Blender does not ship
-  (:data:`clothlight.jobs.BAKE_DEPENDENCIES`: numba, llvmlite, scipy, colour-science,
-  typing-extensions, miepython, OpenEXR, platformdirs), for CPython 3.11 and the zip's platform.
+* **wheels** of what the in-Blender bake and fit import and Blender does not ship
+  (:data:`clothlight.jobs.BUNDLED_DEPENDENCIES`: numba, llvmlite, scipy, colour-science,
+  typing-extensions, miepython, OpenEXR, platformdirs, and the fit's optimiser cma, pure Python),
+  for CPython 3.11 and the zip's platform.
   Never numpy: all extensions' wheels share one folder that comes before Blender's own
   site-packages, so a bundled numpy would replace Blender's.  Versions come from
   ``requirements.txt`` (the one place for pins); a dependency it does not pin (numba's llvmlite,
@@ -45,7 +46,7 @@ REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(REPO_ROOT) not in sys.path:  # a script in scripts/: make the repository's packages importable
     sys.path.insert(0, str(REPO_ROOT))
 
-from clothlight.jobs import BAKE_DEPENDENCIES, BakeCancelled, BakeFailed, BakeJob, preset_request  # noqa: E402
+from clothlight.jobs import BUNDLED_DEPENDENCIES, BakeCancelled, BakeFailed, BakeJob, preset_request  # noqa: E402
 
 #: pip's platform tags for each Blender platform: Blender 5.0 needs glibc 2.28 on Linux and
 #: runs on macOS 11.2+; scipy's and numba's macOS wheels need macOS 12, which is what a bake
@@ -86,7 +87,7 @@ def bundled_versions() -> tuple[dict[str, str], list[str]]:
     """Version of every bundled distribution, and notes on those requirements.txt does not pin."""
     pins = requirement_pins()
     versions, notes = {}, []
-    for dist in BAKE_DEPENDENCIES.values():
+    for dist in BUNDLED_DEPENDENCIES.values():
         if _normalise(dist) == "numpy":
             raise SystemExit("numpy must never be bundled: it would replace Blender's")
         version = pins.get(_normalise(dist))

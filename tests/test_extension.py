@@ -1,5 +1,5 @@
 """The extension zip as Blender's tool builds it: the add-on, its pre-baked tables and the wheels an
-in-Blender bake needs for linux-x64, at the versions requirements.txt pins, never numpy, and a manifest
+in-Blender bake and fit need for linux-x64, at the versions requirements.txt pins, never numpy, and a manifest
 that Blender's validator accepts.  The installed zip is driven in tests/test_addon_operators.py."""
 
 import importlib.util
@@ -13,7 +13,7 @@ import zipfile
 
 import pytest
 
-from clothlight.jobs import BAKE_DEPENDENCIES, BakeRequest, preset_request
+from clothlight.jobs import BUNDLED_DEPENDENCIES, BakeRequest, preset_request
 from tests.helpers import PREBAKED_PRESET, PREBAKED_TRANSPORT
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -52,7 +52,7 @@ def test_prebaked_tables_record_the_request_they_were_baked_from(extension_zip):
     assert request.target_rel_stderr is None and summary["transport"]["target_rel_stderr"] is None
 
 
-def test_manifest_lists_linux_wheels_of_every_bake_dependency_at_the_pinned_versions(extension_zip):
+def test_manifest_lists_linux_wheels_of_every_bake_and_fit_dependency_at_the_pinned_versions(extension_zip):
     with zipfile.ZipFile(extension_zip) as archive:
         manifest = tomllib.loads(archive.read("blender_manifest.toml").decode())
         names = set(archive.namelist())
@@ -61,8 +61,8 @@ def test_manifest_lists_linux_wheels_of_every_bake_dependency_at_the_pinned_vers
     wheels = [pathlib.PurePosixPath(w).name for w in manifest["wheels"]]
     assert all(f"wheels/{w}" in names for w in wheels)
     bundled = dict(_wheel_name_version(w) for w in wheels)
-    assert set(bundled) == {re.sub(r"[-_.]+", "-", d).lower() for d in BAKE_DEPENDENCIES.values()}
-    assert "numpy" not in bundled
+    assert set(bundled) == {re.sub(r"[-_.]+", "-", d).lower() for d in BUNDLED_DEPENDENCIES.values()}
+    assert "numpy" not in bundled and "cma" in bundled  # the fit's optimiser, a pure-Python wheel
     pins = build_extension.requirement_pins()
     for name, version in bundled.items():
         if name in pins:
@@ -99,7 +99,7 @@ def test_requirement_pins_read_names_case_and_separator_insensitively(tmp_path):
 def test_every_bundled_distribution_is_pinned_or_resolved_from_requirements():
     versions, notes = build_extension.bundled_versions()
     pins = build_extension.requirement_pins()
-    assert set(versions) == set(BAKE_DEPENDENCIES.values())
+    assert set(versions) == set(BUNDLED_DEPENDENCIES.values()) and versions["cma"] == pins["cma"]
     for dist, version in versions.items():
         pinned = pins.get(re.sub(r"[-_.]+", "-", dist).lower())
         assert version == pinned if pinned else any(dist in note for note in notes)

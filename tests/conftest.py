@@ -51,17 +51,24 @@ if os.environ.get("CLOTHLIGHT_TESTS_WITHOUT_BPY"):
 
 #: Test modules whose Blender tests render with Cycles.
 RENDER_MODULES = {"test_addon_operators", "test_cloth_response_render", "test_cycles_closures", "test_example_blends",
-                  "test_garment", "test_grids", "test_osl_render", "test_validation_rig", "test_yarn_shader"}
+                  "test_fit_job", "test_garment", "test_grids", "test_osl_render", "test_validation_rig",
+                  "test_yarn_shader"}
 #: Test modules that bake tables, build the extension zip or render for minutes.
 SLOW_MODULES = {"test_addon_operators", "test_bake_cli", "test_bake_dye_series", "test_distributed",
                 "test_distributed_fit", "test_distributed_garment", "test_distributed_jobs",
                 "test_distributed_validation", "test_extension", "test_fit_dye_series"}
 #: Fixtures that bake (yarn or cloth) or build the extension zip: a test that uses one is slow.
 SLOW_FIXTURES = {"extension_zip", "red_cotton_cloth", "transport_runs"}
-#: Single tests of otherwise quick modules that bake in a child process, run Monte-Carlo transport
-#: or a fit's optimiser for seconds (module::name).
+#: Single tests of otherwise quick modules that bake or fit in a child process, run Monte-Carlo
+#: transport or a fit's optimiser for seconds (module::name).
 SLOW_TESTS = {"test_cache::test_a_killed_bake_leaves_no_table",
               "test_cli_exit_codes::test_the_bake_worker_reports_bad_input_and_internal_errors_in_its_events",
+              "test_fit_job::test_a_fit_in_its_child_shows_progress_and_writes_the_fit_folder",
+              "test_fit_job::test_the_childs_fit_is_the_command_lines",
+              "test_fit_job::test_cancel_mid_fit_exits_130_and_leaves_no_folder",
+              "test_fit_job::test_a_preset_without_the_species_a_parameter_needs_exits_2_from_the_child",
+              "test_fit_job::test_the_fit_operator_fits_in_background_mode_and_loads_the_fitted_values",
+              "test_fit_job::test_esc_cancels_an_interactive_fit_and_nothing_is_written",
               "test_fit_optimise::test_the_back_lit_constraint_keeps_the_cloth_darker_from_behind",
               "test_fit_optimise::test_the_specular_term_is_profiled_when_the_model_splits_it_off",
               "test_cache::test_two_concurrent_bakes_of_one_key_end_with_one_valid_table",

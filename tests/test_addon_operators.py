@@ -1,7 +1,8 @@
 """The add-on as a Blender user gets it: the built zip installed into a fresh Blender user folder
 (tests/conftest.py), enabled, and driven headless — Build Sample, Bake Tables (tiny budget, in a child
-process, and cancelled), Apply Material (pre-baked and freshly baked tables), Validate (tiny),
-presets, register/unregister twice, and a .blend saved and reloaded with its settings intact."""
+process, and cancelled), Fit to Measurement (tiny), Apply Material (pre-baked and freshly baked
+tables), Validate (tiny), presets, register/unregister twice, and a .blend saved and reloaded with its
+settings intact."""
 
 import json
 import os
@@ -75,7 +76,8 @@ def test_installed_extension_registers_its_classes_and_user_folders(addon, scene
     for name in ("CLOTHLIGHT_OT_build_sample", "CLOTHLIGHT_OT_bake_tables", "CLOTHLIGHT_OT_apply_material",
                  "CLOTHLIGHT_OT_validate", "CLOTHLIGHT_OT_setup_render", "CLOTHLIGHT_PT_main",
                  "CLOTHLIGHT_PT_material_properties", "CLOTHLIGHT_OT_weave_preset_add",
-                 "CLOTHLIGHT_OT_apply_garment_material", "CLOTHLIGHT_PT_garment"):
+                 "CLOTHLIGHT_OT_apply_garment_material", "CLOTHLIGHT_PT_garment", "CLOTHLIGHT_OT_fit_medium",
+                 "CLOTHLIGHT_PT_medium_fit"):
         assert hasattr(bpy.types, name), name
     prefs = bpy.context.preferences.addons[EXTENSION_MODULE].preferences
     assert prefs.threads == 0 and prefs.cache_dir == ""
@@ -436,6 +438,26 @@ def test_without_bake_dependencies_bake_is_refused_with_the_reason_and_prebaked_
         bpy.ops.clothlight.apply_material()
 
 
+# -- Fit to Measurement ---------------------------------------------------------------------------
+
+
+def test_fit_to_measurement_runs_in_the_installed_extension(addon, scene, tmp_path):
+    """The smallest real fit (tests/test_fit_job.py) from the installed zip: its child finds the
+    extension's packages and bundled cma, and renders the cloth response with the pre-baked tables
+    (the zip ships no example tables) into the extension's user cache."""
+    from tests.test_fit_job import set_up_small_fit, write_small_measurement
+
+    set_up_small_fit(scene, write_small_measurement(tmp_path / "small.csv"))
+    scene.clothlight.fit.out_dir = str(tmp_path / "fit")
+    assert bpy.ops.clothlight.fit_medium("INVOKE_DEFAULT") == {"FINISHED"}
+    package = pathlib.Path(sys.modules[EXTENSION_MODULE].__file__).parent
+    assert not (package / "example_blends").exists() and (package / "prebaked" / PREBAKED_PRESET).is_dir()
+    assert (tmp_path / "fit" / "preset.toml").is_file() and scene.clothlight.fit.last() is not None
+    cache = pathlib.Path(addon["preferences"].cache_directory())
+    assert list(cache.glob("responses/*/response.npz"))
+    assert "fit.specular_weight" in scene.clothlight.medium.fitted_overrides
+
+
 # -- Validate -------------------------------------------------------------------------------------
 
 
@@ -568,8 +590,8 @@ class _Layout:
 def _draw_panels(context) -> list:
     labels = []
     for name in ("CLOTHLIGHT_PT_main", "CLOTHLIGHT_PT_sample", "CLOTHLIGHT_PT_medium", "CLOTHLIGHT_PT_bake_settings",
-                 "CLOTHLIGHT_PT_bake_grids", "CLOTHLIGHT_PT_material", "CLOTHLIGHT_PT_validation",
-                 "CLOTHLIGHT_PT_material_properties"):
+                 "CLOTHLIGHT_PT_bake_grids", "CLOTHLIGHT_PT_medium_fit", "CLOTHLIGHT_PT_material",
+                 "CLOTHLIGHT_PT_validation", "CLOTHLIGHT_PT_material_properties"):
         cls = getattr(bpy.types, name)
         panel = SimpleNamespace(layout=_Layout(labels))
         if hasattr(cls, "poll") and not cls.poll(context):

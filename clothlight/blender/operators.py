@@ -1,12 +1,14 @@
-"""Operators of the ClothLight add-on: Build Sample, Bake Tables, Apply Material, Set Up Cycles.
+"""Operators of the ClothLight add-on: Build Sample, Bake Tables, Fit to Measurement, Apply Material, Set Up Cycles.
 
 Each reports errors through Blender's report system (bad input names the parameter; unexpected
 failures print their traceback to the console and report one line).  Build Sample and Apply
 Material edit the scene and are undoable; neither leaves unused data blocks behind.  Bake Tables
-runs the bake in a child process (:mod:`.jobs`): in the interface it is modal, with a progress
-bar in the status bar and Esc (or the panel's Cancel button) to stop it; in background mode
-(``blender -b``, or Blender as a Python module) ``execute()`` runs the same bake to the end.
-The validation operator, ``clothlight.validate``, lives in :mod:`.validation.operator`.
+and Fit to Measurement run in a child process (:mod:`clothlight.jobs`, :mod:`clothlight.fit_job`):
+in the interface they are modal, with a progress bar in the status bar and Esc (or the panel's
+Cancel button) to stop them; in background mode (``blender -b``, or Blender as a Python module)
+``execute()`` runs the same job to the end.  A fit's result is loaded into the medium settings
+(Load Fit, or at once with the fit settings' Load Result).  The validation operator,
+``clothlight.validate``, lives in :mod:`.validation.operator`.
 """
 
 from __future__ import annotations
@@ -20,11 +22,14 @@ import traceback
 import bpy
 
 from . import preferences
+from ..fit_job import FitJob, fit_unavailable_reason
 from ..jobs import (
     BakeCancelled,
     BakeFailed,
     BakeJob,
     BakeRequest,
+    JobCancelled,
+    JobFailed,
     bake_unavailable_reason,
     preset_request,
 )
@@ -299,6 +304,66 @@ def _recolour_materials(medium, request: BakeRequest, folder: pathlib.Path) -> i
     return len(readers)
 
 
+# -- a child job in the interface: timer, status bar, Esc ---------------------------------------
+
+
+def _start_job_modal(operator, context, holder, job, what: str) -> set:
+    """Start ``job``'s child, make it ``holder``'s running job and poll it on a timer (``operator.modal``)."""
+    try:
+        job.start()
+    except (JobFailed, OSError) as error:
+        operator.report({"ERROR"}, f"{what} could not start: {error}")
+        return {"CANCELLED"}
+    holder.job, holder.scene_name = job, context.scene.name
+    operator._workspace = context.workspace
+    wm = context.window_manager
+    operator._timer = wm.event_timer_add(0.2, window=context.window)
+    wm.modal_handler_add(operator)
+    operator._show(context)
+    return {"RUNNING_MODAL"}
+
+
+def _show_job(operator, context, job, text) -> None:
+    """``job``'s progress bar in the status bar, labelled ``text()`` (asked at every redraw), with Esc."""
+
+    def draw_status(header, _context):
+        row = header.layout.row(align=True)
+        row.progress(factor=job.progress, type="BAR", text=text())
+        row.label(text="Esc to cancel", icon="EVENT_ESC")
+
+    operator._workspace.status_text_set(draw_status)
+    _redraw_panels(context)
+
+
+def _modal_job(operator, context, event, holder) -> set:
+    """One event of a running child job: Esc asks it to stop, a timer tick polls it; when it is over,
+    the status bar is cleared and ``operator._finish`` reports."""
+    job = holder.job
+    if event.type == "ESC" and event.value == "PRESS":
+        job.cancel()
+        return {"RUNNING_MODAL"}
+    if event.type != "TIMER":  # any timer's tick will do: polling the child is cheap
+        return {"PASS_THROUGH"}
+    if not job.poll():
+        operator._show(context)
+        return {"PASS_THROUGH"}
+    context.window_manager.event_timer_remove(operator._timer)
+    operator._workspace.status_text_set(None)
+    holder.job = None
+    scene = bpy.data.scenes.get(holder.scene_name) or context.scene
+    result = operator._finish(scene, job)
+    _redraw_panels(context)
+    return result
+
+
+def _end_job(operator, holder) -> None:
+    """Blender ends a modal operator (file load, quit): stop its child too."""
+    if holder.job is not None:
+        holder.job.cancel()
+        holder.job = None
+    operator._workspace.status_text_set(None)
+
+
 #: Seconds after the last dye change before a recolouring bake starts (a slider drag changes it often).
 RECOLOUR_DELAY_SECONDS = 0.4
 
@@ -410,55 +475,22 @@ class CLOTHLIGHT_OT_bake_tables(bpy.types.Operator):
         job = self._start(context)
         if job is None:
             return {"CANCELLED"}
-        try:
-            job.start()
-        except (BakeFailed, OSError) as error:
-            self.report({"ERROR"}, f"Bake could not start: {error}")
-            return {"CANCELLED"}
-        _RunningBake.job, _RunningBake.scene_name = job, context.scene.name
-        self._workspace = context.workspace
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(0.2, window=context.window)
-        wm.modal_handler_add(self)
-        self._show(context)
-        return {"RUNNING_MODAL"}
+        return _start_job_modal(self, context, _RunningBake, job, "Bake")
 
     def _show(self, context) -> None:
         job = _RunningBake.job
 
-        def draw_status(header, _context):
-            row = header.layout.row(align=True)
+        def text() -> str:
             state = "Cancelling" if job.cancelling else "Baking ClothLight tables"
-            row.progress(factor=job.progress, type="BAR", text=f"{state}: {job.progress:.0%}")
-            row.label(text="Esc to cancel", icon="EVENT_ESC")
+            return f"{state}: {job.progress:.0%}"
 
-        self._workspace.status_text_set(draw_status)
-        _redraw_panels(context)
+        _show_job(self, context, job, text)
 
     def modal(self, context, event):
-        job = _RunningBake.job
-        if event.type == "ESC" and event.value == "PRESS":
-            job.cancel()
-            return {"RUNNING_MODAL"}
-        if event.type != "TIMER":  # any timer's tick will do: polling the child is cheap
-            return {"PASS_THROUGH"}
-        if not job.poll():
-            self._show(context)
-            return {"PASS_THROUGH"}
-        context.window_manager.event_timer_remove(self._timer)
-        self._workspace.status_text_set(None)
-        _RunningBake.job = None
-        scene = bpy.data.scenes.get(_RunningBake.scene_name) or context.scene
-        result = self._finish(scene, job)
-        _redraw_panels(context)
-        return result
+        return _modal_job(self, context, event, _RunningBake)
 
     def cancel(self, context):
-        # Blender ends the operator (file load, quit): stop the child too.
-        if _RunningBake.job is not None:
-            _RunningBake.job.cancel()
-            _RunningBake.job = None
-        self._workspace.status_text_set(None)
+        _end_job(self, _RunningBake)
 
 
 class CLOTHLIGHT_OT_cancel_bake(bpy.types.Operator):
@@ -474,6 +506,199 @@ class CLOTHLIGHT_OT_cancel_bake(bpy.types.Operator):
 
     def execute(self, context):
         _RunningBake.job.cancel()
+        return {"FINISHED"}
+
+
+# -- Fit to Measurement --------------------------------------------------------------------------
+
+
+class _RunningFit:
+    """The one fit the interface is running (None when idle); the panel draws its progress."""
+
+    job: FitJob | None = None
+    scene_name: str = ""
+
+
+def running_fit() -> FitJob | None:
+    return _RunningFit.job
+
+
+def _fit_job_for(context, request) -> FitJob:
+    prefs = preferences.preferences(context)
+    threads = prefs.threads if prefs is not None and prefs.threads > 0 else None
+    return FitJob(request, cache_dir=preferences.cache_directory(context), threads=threads,
+                  scheduler=prefs.scheduler.strip() if prefs is not None else None,
+                  blender=bpy.app.binary_path, numba_cache_dir=preferences.numba_cache_directory(),
+                  bytecode_cache_dir=preferences.bytecode_cache_directory())
+
+
+def load_fit(medium, last: dict) -> None:
+    """Set the medium settings to a fit's result (``last``: :meth:`ClothLightFitSettings.last`): its
+    base medium and fitted values, the exposed ones shown in the panel, the rest kept as fitted values."""
+    medium.set_values(last["base"], [tuple(pair) for pair in last["overrides"]])
+
+
+def _fit_summary(outcome) -> str:
+    held = "" if outcome.held_out_rms is None else f", held out {outcome.held_out_rms:.3g}"
+    values = ", ".join(f"{name} {value:.4g}" for name, value in outcome.parameters.items())
+    return f"relative RMS {outcome.relative_rms:.3g}{held}; {values}"
+
+
+class CLOTHLIGHT_OT_fit_medium(bpy.types.Operator):
+    """Fit the medium's free parameters to a measured cloth BRDF (python -m precompute fit: CMA-ES over the
+    rendered cloth response, in a background process; docs/fitting.md). Esc cancels: nothing is written"""
+
+    bl_idname = "clothlight.fit_medium"
+    bl_label = "Fit to Measurement"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if _RunningFit.job is not None:
+            cls.poll_message_set("A fit is running")
+            return False
+        reason = fit_unavailable_reason()
+        if reason:
+            cls.poll_message_set(reason)
+            return False
+        return context.scene is not None
+
+    def _start(self, context) -> FitJob | None:
+        settings = context.scene.clothlight
+        try:
+            request = settings.fit.request(settings.medium, preferences.fit_directory()).check()
+            job = _fit_job_for(context, request)
+        except (ParameterError, ValueError, OSError) as error:
+            self.report({"ERROR"}, str(error))
+            return None
+        return job
+
+    def _finish(self, scene, job: FitJob):
+        if isinstance(job.error, JobCancelled):
+            self.report({"WARNING"}, str(job.error))
+            return {"CANCELLED"}
+        if isinstance(job.error, JobFailed):
+            if not job.error.bad_input and job.error.log:
+                print(job.error.log, file=sys.stderr)
+            self.report({"ERROR"}, f"Fit failed: {job.error}")
+            return {"CANCELLED"}
+        outcome = job.outcome
+        settings = scene.clothlight
+        last = {"folder": str(outcome.folder), "preset": str(outcome.preset), "relative_rms": outcome.relative_rms,
+                "held_out_rms": outcome.held_out_rms, "base": job.request.medium.preset,
+                "overrides": [list(pair) for pair in dict((*job.request.medium.overrides, *outcome.overrides)).items()]}
+        settings.fit.last_result = json.dumps(last)
+        loaded = ""
+        if settings.fit.load_result:
+            load_fit(settings.medium, last)
+            loaded = "; the fitted values are in the panel"
+        for hit in outcome.bound_hits:
+            self.report({"WARNING"}, hit)
+        self.report({"INFO"}, f"Fitted in {outcome.seconds:.0f} s: {_fit_summary(outcome)}{loaded}. "
+                              f"Preset: {outcome.preset}")
+        return {"FINISHED"}
+
+    def execute(self, context):
+        job = self._start(context)
+        if job is None:
+            return {"CANCELLED"}
+        shown = [-1]
+
+        def progress(fraction):
+            percent = int(fraction * 100)
+            if percent // 10 != shown[0] // 10:
+                shown[0] = percent
+                print(f"ClothLight fit: {percent} % ({job.stage})", flush=True)
+
+        try:
+            job.wait(on_progress=progress)
+        except (JobFailed, JobCancelled):
+            pass  # job.error says which; _finish reports it
+        return self._finish(context.scene, job)
+
+    def invoke(self, context, event):
+        if bpy.app.background:
+            return self.execute(context)
+        return self._start_modal(context)
+
+    def _start_modal(self, context):
+        """Start the child and the timer that polls it; ``modal()`` takes it from there."""
+        job = self._start(context)
+        if job is None:
+            return {"CANCELLED"}
+        return _start_job_modal(self, context, _RunningFit, job, "Fit")
+
+    def _show(self, context) -> None:
+        job = _RunningFit.job
+
+        def text() -> str:
+            state = "Cancelling" if job.cancelling else "Fitting the ClothLight medium"
+            return f"{state}: {job.progress:.0%}" + (f", {job.stage}" if job.stage and not job.cancelling else "")
+
+        _show_job(self, context, job, text)
+
+    def modal(self, context, event):
+        return _modal_job(self, context, event, _RunningFit)
+
+    def cancel(self, context):
+        _end_job(self, _RunningFit)
+
+
+class CLOTHLIGHT_OT_cancel_fit(bpy.types.Operator):
+    """Stop the running fit; nothing is written"""
+
+    bl_idname = "clothlight.cancel_fit"
+    bl_label = "Cancel Fit"
+    bl_options = {"INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return _RunningFit.job is not None
+
+    def execute(self, context):
+        _RunningFit.job.cancel()
+        return {"FINISHED"}
+
+
+class CLOTHLIGHT_OT_load_fit(bpy.types.Operator):
+    """Set the medium's values to the last fit's (its fitted preset): Bake Tables then bakes the fitted medium"""
+
+    bl_idname = "clothlight.load_fit"
+    bl_label = "Load Fitted Values"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or context.scene.clothlight.fit.last() is None:
+            cls.poll_message_set("No fit yet")
+            return False
+        return True
+
+    def execute(self, context):
+        settings = context.scene.clothlight
+        last = settings.fit.last()
+        try:
+            load_fit(settings.medium, last)
+        except (KeyError, TypeError, ValueError, ParameterError) as error:
+            self.report({"ERROR"}, f"The last fit's values cannot be loaded: {error}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Medium set to the fit in {last['folder']}")
+        return {"FINISHED"}
+
+
+class CLOTHLIGHT_OT_clear_fitted_values(bpy.types.Operator):
+    """Forget the fitted values the panel does not show: the base medium's own values again"""
+
+    bl_idname = "clothlight.clear_fitted_values"
+    bl_label = "Clear Fitted Values"
+    bl_options = {"REGISTER", "UNDO", "INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None and bool(context.scene.clothlight.medium.fitted_overrides)
+
+    def execute(self, context):
+        context.scene.clothlight.medium.fitted_overrides = ""
         return {"FINISHED"}
 
 
@@ -518,6 +743,10 @@ CLASSES = (
     CLOTHLIGHT_OT_build_sample,
     CLOTHLIGHT_OT_bake_tables,
     CLOTHLIGHT_OT_cancel_bake,
+    CLOTHLIGHT_OT_fit_medium,
+    CLOTHLIGHT_OT_cancel_fit,
+    CLOTHLIGHT_OT_load_fit,
+    CLOTHLIGHT_OT_clear_fitted_values,
     CLOTHLIGHT_OT_apply_material,
     CLOTHLIGHT_OT_setup_render,
 )
@@ -530,8 +759,9 @@ def register() -> None:
 
 def unregister() -> None:
     _ScheduledRecolour.cancel()
-    if _RunningBake.job is not None:
-        _RunningBake.job.cancel()
-        _RunningBake.job = None
+    for holder in (_RunningBake, _RunningFit):
+        if holder.job is not None:
+            holder.job.cancel()
+            holder.job = None
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

@@ -1,10 +1,12 @@
-"""Add-on preferences: cache folder and thread count for bakes; the user folders the add-on writes into.
+"""Add-on preferences: cache folder and thread count for bakes and fits; the user folders the add-on writes into.
 
 An extension must not write into its own folder (Blender may replace it on update, or install it
 read-only): whatever the add-on keeps goes under the extension's user folder
 (``bpy.utils.extension_path_user``) — the bake cache (:func:`cache_directory`, with the user copies
-of the pre-baked tables), numba's compiled kernels (:func:`numba_cache_directory`) and the bake
-child's Python bytecode (:func:`bytecode_cache_directory`).
+of the pre-baked tables and the fit's cloth responses), numba's compiled kernels
+(:func:`numba_cache_directory`), the bake and fit children's Python bytecode
+(:func:`bytecode_cache_directory`) and the fits written without a folder of their own
+(:func:`fit_directory`).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import os
 import bpy
 
 from ..addon import EXTENSION_PACKAGE, import_precompute
+from ..fit_job import fit_unavailable_reason
 from ..jobs import bake_unavailable_reason
 
 
@@ -30,7 +33,7 @@ class ClothLightPreferences(bpy.types.AddonPreferences):
     )
     threads: bpy.props.IntProperty(
         name="Bake Threads",
-        description="CPU threads used by Monte-Carlo bakes. 0: all cores",
+        description="CPU threads used by Monte-Carlo bakes and fits (a count). 0: all cores",
         default=0,
         min=0,
         soft_max=os.cpu_count() or 1,
@@ -51,9 +54,9 @@ class ClothLightPreferences(bpy.types.AddonPreferences):
         layout.label(text=f"In use: {cache_directory(context)}", icon="FILE_FOLDER")
         layout.prop(self, "threads")
         layout.prop(self, "scheduler")
-        reason = bake_unavailable_reason()
-        if reason:
-            layout.label(text=reason, icon="ERROR")
+        for reason in (bake_unavailable_reason(), fit_unavailable_reason()):
+            if reason:
+                layout.label(text=reason, icon="ERROR")
 
 
 def preferences(context=None) -> ClothLightPreferences | None:
@@ -72,6 +75,15 @@ def cache_directory(context=None) -> str:
     if not EXTENSION_PACKAGE:
         return str(import_precompute("cache").default_cache_dir())
     return bpy.utils.extension_path_user(EXTENSION_PACKAGE, path="cache", create=True)
+
+
+def fit_directory() -> str:
+    """Where a fit writes when the panel names no folder: ``fits/`` in the extension's user folder
+    (in development, in the user cache folder)."""
+    folder = _user_folder("fits")
+    if folder is None:
+        return str(import_precompute("cache").default_cache_dir() / "fits")
+    return folder
 
 
 def _user_folder(name: str) -> str | None:

@@ -24,9 +24,11 @@ WEAVE_VALUES = [f"weave.{name}" for name in (
     "pattern", "custom_draft", "wif_path", "warp_count", "weft_count", "spacing_mm", "cross_section",
     "yarn_radius_mm", "half_width_mm", "half_thickness_mm", "auto_crimp", "crimp_warp_mm", "crimp_weft_mm",
     "segments_per_crossing", "segments_around", "real_world_size")]
-# "base" first: setting it loads the TOML preset, the saved values then override it.
+# "base" first: setting it loads the TOML preset, the saved values then override it (a fit's values
+# the panel does not show among them).
 MEDIUM_VALUES = [f"medium.{name}" for name in (
     "base", "dye_weight_percent", "particle_diameter_nm", "particle_volume_fraction", "yarn_radius_mm",
+    "fitted_overrides",
     "budget", "target_error", "paths_per_cell", "seed", "n_around", "n_along", "angular_resolution",
     "incidence_resolution")]
 

@@ -1,4 +1,4 @@
-"""Scene settings of the add-on: the woven sample, the yarn medium and its bake, the material.
+"""Scene settings of the add-on: the woven sample, the yarn medium and its bake and fit, the material.
 
 Registered as ``Scene.clothlight`` (saved with the .blend, undoable, animatable where it makes
 sense).  Lengths carry their unit in the name ("mm", "nm") because the weave core and the bake
@@ -8,18 +8,27 @@ scene (see :func:`millimetre_scale`).
 The medium settings start from a shipped preset (``precompute/presets/*.toml``, chosen by
 ``base``) and expose the values an artist tunes; only values that differ from the preset go to
 the bake as overrides, so an untouched preset bakes exactly what ``python -m precompute bake
---preset <name>`` bakes and hits the same cache entry (and the same pre-baked tables).
+--preset <name>`` bakes and hits the same cache entry (and the same pre-baked tables).  Values a
+fit found that the panel does not expose (a second particle species, the fibre's absorption, the
+sheen) are kept as overrides of their own (``fitted_overrides``) and baked with the rest.
+
+The fit settings (``Scene.clothlight.fit``) say what ``python -m precompute fit`` would be told:
+the measurement, the free parameters, the budget, the colour targets, the output folder
+(:class:`clothlight.fit_job.FitRequest`).
 """
 
 from __future__ import annotations
 
 import functools
+import json
+import pathlib
 
 import bpy
 import numpy as np
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from ..addon import import_precompute
+from ..fit_job import FREE_PARAMETERS, FitRequest
 from ..jobs import BakeRequest, preset_request, typed_number
 from ..weave import BUILT_IN, WeaveParameterError, WeaveParameters
 from ..weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
@@ -238,6 +247,17 @@ def _recolour(self, context) -> None:
         operators.schedule_recolour(context.scene.name)
 
 
+def _show_key(key: str, config: dict) -> str:
+    """A dotted override key as the panel shows it: a particle species by its name."""
+    parts = key.split(".")
+    if parts[0] == "particles" and len(parts) == 3 and parts[1].isdigit():
+        particles = config.get("particles") or []
+        index = int(parts[1])
+        if index < len(particles) and isinstance(particles[index], dict) and particles[index].get("name"):
+            return f"{particles[index]['name']}.{parts[2]}"
+    return key
+
+
 def _forget_request(self, _context) -> None:
     # A folder chosen by hand: what it was baked from is in its summary, not in these settings.
     self.tables_request = ""
@@ -320,6 +340,10 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
     tables_request: StringProperty(
         name="Baked Settings", default="", options={"HIDDEN"},
         description="The settings the tables in Tables were baked from (empty: chosen by hand)")
+    fitted_overrides: StringProperty(
+        name="Fitted Values", default="", options={"HIDDEN"},
+        description="Values a fit set that the panel does not show (JSON pairs of a preset key and its value in "
+                    "the preset's units), baked with the rest; cleared when the base medium changes")
 
     def load_preset(self, name: str) -> None:
         """Set every exposed value from the shipped preset ``name`` (its [transport] table included);
@@ -327,6 +351,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         config = preset_config(name)
         for prop, key in medium_keys(config).items():
             setattr(self, prop, float(config_value(config, key)))
+        self.fitted_overrides = ""
         request = preset_request(name)
         for field in ("n_around", "n_along", "angular_resolution", "seed"):
             setattr(self, field, getattr(request, field))
@@ -339,11 +364,47 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
     def exposed_keys(self) -> dict[str, str]:
         return medium_keys(preset_config(self.base))
 
+    def extra_overrides(self) -> list[tuple[str, float]]:
+        """The fitted values the panel does not expose (``fitted_overrides``), as (key, value) pairs."""
+        if not self.fitted_overrides:
+            return []
+        try:
+            return [(str(key), float(value)) for key, value in json.loads(self.fitted_overrides)]
+        except (ValueError, TypeError):
+            return []
+
+    def extra_overrides_text(self) -> str:
+        """The fitted values the panel does not expose, as one line ("" for none)."""
+        config = preset_config(self.base)
+        return ", ".join(f"{_show_key(key, config)} {value:.4g}" for key, value in self.extra_overrides())
+
+    def set_values(self, base: str, overrides) -> None:
+        """Make these settings the medium ``base`` with ``overrides`` ((dotted key, value) pairs, as a
+        :class:`~clothlight.jobs.BakeRequest` holds them): the exposed values from them or the preset,
+        the rest kept in ``fitted_overrides``.  The bake settings (budget, seed, grids) stay."""
+        if self.base != base:
+            self.base = base  # loads the preset's values and bake settings
+        config = preset_config(base)
+        given = {str(key): float(value) for key, value in overrides}
+        exposed = medium_keys(config)
+        for prop, key in exposed.items():
+            value = given.pop(key, None)
+            setattr(self, prop, float(config_value(config, key)) if value is None else value)
+        self.fitted_overrides = json.dumps(sorted([key, value] for key, value in given.items())) if given else ""
+
     def request(self) -> BakeRequest:
         """The bake these settings ask for: overrides only where a value differs from the preset."""
         config = preset_config(self.base)
         overrides = [(key, typed_number(getattr(self, prop))) for prop, key in medium_keys(config).items()
                      if typed_number(getattr(self, prop)) != typed_number(config_value(config, key))]
+        exposed = set(medium_keys(config).values())
+        for key, value in self.extra_overrides():
+            try:
+                preset_value = typed_number(config_value(config, key))
+            except (KeyError, IndexError, TypeError, ValueError):
+                preset_value = None
+            if key not in exposed and typed_number(value) != preset_value:
+                overrides.append((key, typed_number(value)))
         fixed = self.budget == "PATHS"
         series = None
         if self.use_dye_series and "dye_weight_percent" in medium_keys(config):
@@ -357,6 +418,99 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
             angular_resolution=self.angular_resolution, incidence_resolution=self.incidence_resolution or "auto")
 
 
+def _free_items():
+    items = []
+    for index, (name, label, unit, low, high, what) in enumerate(FREE_PARAMETERS):
+        unit_text = f" {unit}" if unit else " (a fraction, no unit)" if "fraction" in name else " (no unit)"
+        items.append((name, label, f"Free {what} ({name}): fitted within {low:g}–{high:g}{unit_text}", 1 << index))
+    return items
+
+
+#: The free parameters a new fit starts with: the dye and the sheen (docs/fitting.md: the sheen's two
+#: are profiled for every candidate and cost no evaluations).
+DEFAULT_FREE = {"dye_weight_percent", "specular_weight", "specular_slope"}
+
+
+class ClothLightFitSettings(bpy.types.PropertyGroup):
+    """A fit of the yarn medium to a measured cloth BRDF (``python -m precompute fit``, docs/fitting.md)."""
+
+    measured_path: StringProperty(
+        name="Measurement", subtype="FILE_PATH", default="",
+        description="Measured cloth BRDF: a CSV of theta_i, phi_i, theta_o, phi_o in degrees and R, G, B in 1/sr "
+                    "(or spectral columns; docs/validation.md). Views in the plane of incidence are fitted, those "
+                    "in the perpendicular plane held out")
+    free: EnumProperty(
+        name="Free Parameters", items=_free_items(), options={"ENUM_FLAG"}, default=DEFAULT_FREE,
+        description="The medium's values the fit may change, each within its fit range; the others stay as the "
+                    "panel shows them. A particle parameter needs a species of that name in the base medium")
+    budget: IntProperty(
+        name="Budget (evaluations)", default=150, min=3, soft_min=10, soft_max=400,
+        description="Forward-model evaluations at most, the final accurate one included (a count; each takes "
+                    "seconds: 150 is about 10 minutes on two cores)")
+    time_limit: FloatProperty(
+        name="Time Limit (s)", default=0.0, min=0.0, soft_max=3600.0, step=1000, precision=0,
+        description="Wall-clock seconds at most for the search; it stops before a generation that would not fit "
+                    "with the final evaluation. 0: no limit")
+    target_ratios: StringProperty(
+        name="Target Ratios", default="",
+        description="Colour ratios to meet at normal incidence and view (θi = 0, θo ≤ 10°), as X/Y=value with X, "
+                    "Y two of R, G, B (ratios of linear Rec. 709 BRDF channels, no unit), comma-separated: "
+                    "e.g. B/R=0.08,G/R=0.011. Empty: none")
+    max_back_front: FloatProperty(
+        name="Max Back/Front", default=0.0, min=0.0, soft_max=2.0, precision=2, step=5,
+        description="The largest luminance ratio (no unit) of the cloth lit from straight behind over lit from "
+                    "the front, at normal view: real cloth is darker from behind (e.g. 0.5). 0: not constrained")
+    seed: IntProperty(
+        name="Seed", default=0, min=0,
+        description="Seed of the optimiser and of every forward evaluation (an integer): the same seed gives "
+                    "the same fit")
+    dye_series: BoolProperty(
+        name="Dye Series", default=False,
+        description="For a fit whose only free medium parameter is the dye (the sheen may be free too): one "
+                    "Monte-Carlo transport for the dye's whole fit range (0.1–10 % of fibre weight), every "
+                    "candidate read from it in about a second and without noise between candidates")
+    out_dir: StringProperty(
+        name="Output Folder", subtype="DIR_PATH", default="",
+        description="Folder the fit writes (fitted preset.toml, fit.json, report.md), as a whole: new, or an "
+                    "earlier fit's, which it replaces. Empty: fits/<measurement name> in the add-on's user folder")
+    load_result: BoolProperty(
+        name="Load Result", default=True,
+        description="After a fit, set the medium's values to the fitted ones (Bake Tables then bakes the fitted "
+                    "medium)")
+    last_result: StringProperty(
+        name="Last Fit", default="", options={"HIDDEN"},
+        description="The last fit's outcome (JSON: folder, fitted preset, relative RMS, fitted values)")
+
+    def free_names(self) -> tuple[str, ...]:
+        """The free parameters ticked, in the order of :data:`clothlight.fit_job.FREE_PARAMETERS`."""
+        return tuple(name for name, *_ in FREE_PARAMETERS if name in self.free)
+
+    def request(self, medium, default_out: str | pathlib.Path) -> FitRequest:
+        """The fit these settings ask for, from the medium settings ``medium`` as they are; the output
+        folder ``default_out`` / <measurement name> when none is set."""
+        measured = bpy.path.abspath(self.measured_path) if self.measured_path else ""
+        if self.out_dir:
+            out = bpy.path.abspath(self.out_dir)
+        else:
+            out = str(pathlib.Path(default_out) / (pathlib.Path(measured).stem or "fit"))
+        free = self.free_names()
+        # Dye Series is offered (drawn) only for a fit of the dye alone: hidden, it asks for nothing.
+        dye_alone = [name for name in free if not name.startswith("specular_")] == ["dye_weight_percent"]
+        return FitRequest(measured=measured, out=out, free=free, medium=medium.request(),
+                          target_ratios=self.target_ratios, max_back_front=self.max_back_front or None,
+                          budget=self.budget, budget_seconds=self.time_limit or None, seed=self.seed,
+                          dye_series=self.dye_series and dye_alone)
+
+    def last(self) -> dict | None:
+        """The last fit's outcome as stored (folder, preset, relative_rms, held_out_rms, base, overrides)."""
+        if not self.last_result:
+            return None
+        try:
+            return json.loads(self.last_result)
+        except ValueError:
+            return None
+
+
 def _is_sun(_self, obj) -> bool:
     return obj.type == "LIGHT" and obj.data.type == "SUN"
 
@@ -364,6 +518,7 @@ def _is_sun(_self, obj) -> bool:
 class ClothLightSceneSettings(bpy.types.PropertyGroup):
     weave: PointerProperty(type=ClothLightWeaveSettings)
     medium: PointerProperty(type=ClothLightMediumSettings)
+    fit: PointerProperty(type=ClothLightFitSettings)
     material_mode: EnumProperty(
         name="Lighting", default="GENERAL",
         items=[("GENERAL", "General", "Any lights and world: the baked BRDF as a fitted mixture of Cycles "
@@ -394,7 +549,7 @@ class ClothLightSceneSettings(bpy.types.PropertyGroup):
                     "UV unit (the garment's length along u over the weave's repeat, both in mm). 0: off")
 
 
-CLASSES = (ClothLightWeaveSettings, ClothLightMediumSettings, ClothLightSceneSettings)
+CLASSES = (ClothLightWeaveSettings, ClothLightMediumSettings, ClothLightFitSettings, ClothLightSceneSettings)
 
 
 def register() -> None:
@@ -409,5 +564,5 @@ def unregister() -> None:
         bpy.utils.unregister_class(cls)
 
 
-__all__ = ["ClothLightMediumSettings", "ClothLightSceneSettings", "ClothLightWeaveSettings", "ParameterError",
-           "millimetre_scale", "parse_draft"]
+__all__ = ["ClothLightFitSettings", "ClothLightMediumSettings", "ClothLightSceneSettings", "ClothLightWeaveSettings",
+           "ParameterError", "millimetre_scale", "parse_draft"]

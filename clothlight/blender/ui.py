@@ -1,8 +1,8 @@
 """ClothLight panels: the 3D View sidebar's "Cloth" tab, and the Material properties of a ClothLight material.
 
 Sidebar (N panel → Cloth): ClothLight (render set-up) with sub-panels Woven Sample, Yarn Medium
-(with Bake Settings and Grids), Material and Validation, in the order of the work.  The weave and
-medium panels carry their preset menus in the header, as Blender's own panels do.
+(with Bake Settings and Grids, and Fit to Measurement), Material and Validation, in the order of the
+work.  The weave and medium panels carry their preset menus in the header, as Blender's own panels do.
 """
 
 from __future__ import annotations
@@ -10,6 +10,7 @@ from __future__ import annotations
 import bpy
 
 from . import operators
+from ..fit_job import fit_unavailable_reason
 from ..jobs import bake_unavailable_reason
 from ..prebaked import prebaked_tables
 from .garment.operator import BAKE_COMMAND
@@ -100,6 +101,11 @@ class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
         for prop in ("dye_weight_percent", "particle_diameter_nm", "particle_volume_fraction", "yarn_radius_mm"):
             if prop in keys:
                 col.prop(medium, prop)
+        fitted = medium.extra_overrides_text()
+        if fitted:
+            row = layout.row(align=True)
+            row.label(text=f"Fitted: {fitted}", icon="DRIVER")
+            row.operator("clothlight.clear_fitted_values", text="", icon="X")
         if "dye_weight_percent" not in keys:
             layout.label(text="This medium is undyed", icon="INFO")
         else:
@@ -158,6 +164,52 @@ class CLOTHLIGHT_PT_bake_grids(_SidebarPanel, bpy.types.Panel):
         col = layout.column(align=True)
         for prop in ("n_around", "n_along", "angular_resolution", "incidence_resolution"):
             col.prop(medium, prop)
+
+
+class CLOTHLIGHT_PT_medium_fit(_SidebarPanel, bpy.types.Panel):
+    """Fit the medium above to a measured cloth BRDF (python -m precompute fit, docs/fitting.md)."""
+
+    bl_label = "Fit to Measurement"
+    bl_parent_id = "CLOTHLIGHT_PT_medium"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        fit = context.scene.clothlight.fit
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(fit, "measured_path")
+        column = layout.column(heading="Free Parameters", align=True)
+        column.prop(fit, "free")
+        if [name for name in fit.free_names() if not name.startswith("specular_")] == ["dye_weight_percent"]:
+            layout.prop(fit, "dye_series")
+        column = layout.column(align=True)
+        column.prop(fit, "budget")
+        column.prop(fit, "time_limit")
+        layout.prop(fit, "target_ratios")
+        layout.prop(fit, "max_back_front")
+        layout.prop(fit, "seed")
+        layout.prop(fit, "out_dir")
+        layout.prop(fit, "load_result")
+        job = operators.running_fit()
+        if job is not None:
+            row = layout.row(align=True)
+            row.progress(factor=job.progress, type="BAR", text=f"Fitting: {job.progress:.0%}")
+            row.operator("clothlight.cancel_fit", text="", icon="CANCEL")
+            if job.stage:
+                layout.label(text=job.stage)
+        else:
+            layout.operator("clothlight.fit_medium", icon="FCURVE")
+            reason = fit_unavailable_reason()
+            if reason:
+                layout.label(text=reason, icon="ERROR")
+        last = fit.last()
+        if last is not None:
+            column = layout.column(align=True)
+            held = "" if last.get("held_out_rms") is None else f", held out {last['held_out_rms']:.3g}"
+            column.label(text=f"Last fit: relative RMS {last['relative_rms']:.3g}{held}", icon="FILE_TEXT")
+            column.label(text=last["preset"])
+            column.operator("clothlight.load_fit", icon="IMPORT")
 
 
 def _draw_material_info(layout, material) -> None:
@@ -261,6 +313,7 @@ CLASSES = (
     CLOTHLIGHT_PT_medium,
     CLOTHLIGHT_PT_bake_settings,
     CLOTHLIGHT_PT_bake_grids,
+    CLOTHLIGHT_PT_medium_fit,
     CLOTHLIGHT_PT_material,
     CLOTHLIGHT_PT_garment,
     CLOTHLIGHT_PT_validation,

@@ -1,5 +1,6 @@
 """Render cost of the yarn material vs a Principled BSDF with sheen on the same woven mesh
-(same resolution, samples, lights; CPU).  Target (issue 7): at most 2x."""
+(same resolution, samples, lights; CPU), on the default preset and on the paper's literal medium.
+Target (issues 7, 18): at most 2x."""
 
 import pathlib
 import sys
@@ -15,11 +16,16 @@ from clothlight.blender.sample_object import build_sample_object
 from clothlight.weave import WeaveParameters
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.bake import bake
+from precompute.medium import DEFAULT_PRESET
 from render_cost import light_and_camera, print_render_cost
 
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-material-"))
 grids = ["transport.angular_resolution=8", "transport.incidence_resolution=9"]
-tables = yarn_tables_from_bake(bake("paper_2008", grids, paths_per_cell=500, cache_dir=out / "cache").folder)
+# The default (a scattering medium: almost no light crosses a yarn unscattered) and the paper's literal
+# medium (a tinted glass rod: the unscattered light is most of its red, and its closures cost).
+PRESETS = (DEFAULT_PRESET, "paper_2008")
+tables = {name: yarn_tables_from_bake(bake(name, grids, paths_per_cell=500, cache_dir=out / "cache").folder)
+          for name in PRESETS}
 
 bpy.ops.wm.read_homefile(use_empty=True)
 scene = bpy.context.scene
@@ -27,9 +33,11 @@ SIZES = ((160, 16), (320, 64))  # pixels per side, samples per pixel
 configure_measurement_render(scene, resolution=(SIZES[0][0],) * 2, samples=SIZES[0][1])  # OSL, to compile
 sample = build_sample_object(WeaveParameters(warp_count=12, weft_count=12))
 sun = light_and_camera(scene, (0.0, -4.0, 3.0), (0.93, 0.0, 0.0))
-materials = {"yarn, general lighting": build_yarn_material(tables, "yarn general", mode=GENERAL_MODE),
-             "yarn, sun mode": build_yarn_material(tables, "yarn sun", mode=SUN_MODE)}
-sync_sun(materials["yarn, sun mode"], sun)
+materials = {}
+for name in PRESETS:
+    materials[f"{name}, general lighting"] = build_yarn_material(tables[name], f"{name} general", mode=GENERAL_MODE)
+    materials[f"{name}, sun mode"] = build_yarn_material(tables[name], f"{name} sun", mode=SUN_MODE)
+    sync_sun(materials[f"{name}, sun mode"], sun)
 # Small renders weigh each render's fixed cost (scene sync, OSL compilation) more: both sizes.
 for pixels, samples in SIZES:
     configure_measurement_render(scene, resolution=(pixels, pixels), samples=samples)

@@ -7,11 +7,36 @@ first (:func:`yarn_tables_from_bake`).
 
 from __future__ import annotations
 
+import math
 import pathlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 from .addon import import_precompute
+
+
+#: The general mode of the yarn material leaves out an unscattered path whose weight, (1 − F)² F^k
+#: times its attenuation, is below this in every channel (``CL_UNSCATTERED_MIN_FACTOR`` in
+#: osl/clothlight.h): a path costs a closure, and one left out carries less than 0.3 % of the light
+#: reaching the yarn.
+GENERAL_MODE_MIN_WEIGHT = 0.003
+
+
+def attenuation_reach(table, floor: float = GENERAL_MODE_MIN_WEIGHT) -> float:
+    """The path length ℓ / R from which an attenuation table (``unscattered.exr``'s pixels, (1, M, C)
+    or (M, C)), read as the shader reads it (linear between pixel centres, held at the ends:
+    ``precompute.table_layout.interpolate_attenuation``), is below ``floor`` in every channel;
+    ``inf`` where its last pixel is not.  A general-mode path longer than this weighs less than
+    ``floor`` (its Fresnel factor is at most 1), so the shader leaves it out before its lookup."""
+    import numpy as np
+
+    max_length = import_precompute("ballistic").MAX_LENGTH_OVER_RADIUS
+    table = np.asarray(table, float).reshape(-1, np.shape(table)[-1])
+    above = np.flatnonzero(np.any(table >= floor, axis=-1))
+    first_below_for_good = 0 if above.size == 0 else int(above[-1]) + 1
+    if first_below_for_good == table.shape[0]:
+        return math.inf
+    return first_below_for_good * max_length / (table.shape[0] - 1)
 
 
 @dataclass(frozen=True)
@@ -33,6 +58,9 @@ class YarnTableFiles:
         the unscattered light.
     unscattered_samples
         Pixels of the attenuation table.
+    unscattered_reach
+        ℓ / R from which the attenuation table is below the general mode's floor for an unscattered
+        path (:func:`attenuation_reach`); ``inf`` when it never is.
     specular
         The yarn shader's specular term as the bake recorded it (``summary.json`` → ``specular``,
         docs/table-spec.md): ``weight`` (SpecularWeight), ``slope`` (Slope, the Beckmann rms slope m)
@@ -49,6 +77,7 @@ class YarnTableFiles:
     host_index: float
     unscattered_samples: int
     specular: Mapping | None = None
+    unscattered_reach: float = math.inf
 
     def __post_init__(self):
         for name in ("brdf_path", "lobe_path", "unscattered_path"):
@@ -84,4 +113,5 @@ def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:
         host_index=float(summary["host_index"]),
         unscattered_samples=summary["unscattered_samples"],
         specular=table_folder.summary_specular(summary, checked.folder),
+        unscattered_reach=attenuation_reach(checked.tables[files["unscattered"]].pixels),
     )

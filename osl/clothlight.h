@@ -200,16 +200,24 @@ color cl_table_texel(string file, float u, float v)
     return texture(file, u, v, 0, 0, 0, 0, "wrap", "clamp", "interp", "linear");
 }
 
-// One exit-direction tile of an atlas whose tiles are tile_count x tile_rows cells of
-// exit_resolution^2 pixels; (s, t) are the exit direction's square coordinates.  (s, t) is held
-// inside the tile's outermost pixel centres so linear filtering never reads a neighbouring tile.
+// Texture coordinates (u, v; v down, as texture() reads) of an exit direction in one tile of an
+// atlas of tiles_x x tiles_y tiles of exit_resolution^2 pixels; (s, t) are the exit direction's
+// square coordinates.  (s, t) is held inside the tile's outermost pixel centres so linear filtering
+// never reads a neighbouring tile.
+void cl_tile_coordinates(int tile_col, int tile_row, int tiles_x, int tiles_y, int exit_resolution,
+                         float s, float t, output float u, output float v)
+{
+    float half_texel = 0.5 / exit_resolution;
+    u = (tile_col + clamp(s, half_texel, 1.0 - half_texel)) / tiles_x;
+    v = (tile_row + clamp(t, half_texel, 1.0 - half_texel)) / tiles_y;
+}
+
 color cl_tile_lookup(string file, int tile_col, int tile_row, int tiles_x, int tiles_y,
                      int exit_resolution, float s, float t)
 {
-    float half_texel = 0.5 / exit_resolution;
-    float sc = clamp(s, half_texel, 1.0 - half_texel);
-    float tc = clamp(t, half_texel, 1.0 - half_texel);
-    return cl_table_texel(file, (tile_col + sc) / tiles_x, (tile_row + tc) / tiles_y);
+    float u, v;
+    cl_tile_coordinates(tile_col, tile_row, tiles_x, tiles_y, exit_resolution, s, t, u, v);
+    return cl_table_texel(file, u, v);
 }
 
 // Yarn BRDF rho(wi, wo) = L_o / E_perp (1/sr) from the atlas: incidence tiles on the sphere grid
@@ -314,11 +322,15 @@ color cl_unscattered_rho(string file, int samples, float eta, vector wi, vector 
 // hair reflection lobe about the axis V - L, whose mirror direction is L; light from behind: GGX
 // refraction about the generalised half vector -(V + eta_l L), eta_l large enough for L to be
 // reachable.  A path whose light would arrive within ~6 degrees of the view's side plane from behind
-// has no such refraction and is left out, and so is a path whose Fresnel factor is below
-// CL_UNSCATTERED_MIN_FACTOR: each closure costs every light sample an evaluation, and the paths left
-// out carry at most ~0.3 % of the unscattered light.
-closure color cl_unscattered_closures(string file, int samples, float eta, vector wo, vector V, vector x, vector y,
-                                      vector z, float roughness)
+// has no such refraction and is left out, and so is a path whose weight (Fresnel factor times
+// attenuation, in every channel) is below CL_UNSCATTERED_MIN_FACTOR: each closure costs every light
+// sample an evaluation and starts paths of its own, and a path left out carries less than 0.3 % of
+// the light reaching the yarn.  In a medium that scatters (the fitted presets) no path is left at all.
+// `reach`: the path length l/R from which the attenuation is below CL_UNSCATTERED_MIN_FACTOR in
+// every channel (clothlight.yarn_tables.attenuation_reach): longer paths are left out before their
+// lookup, which in a medium that scatters is every path.
+closure color cl_unscattered_closures(string file, int samples, float reach, float eta, vector wo, vector V,
+                                      vector x, vector y, vector z, float roughness)
 {
     vector toward_light[CL_UNSCATTERED_ORDERS];
     float fresnel_factor[CL_UNSCATTERED_ORDERS];
@@ -326,10 +338,12 @@ closure color cl_unscattered_closures(string file, int samples, float eta, vecto
     cl_unscattered_paths(wo, eta, toward_light, fresnel_factor, length_over_radius);
     closure color lobes = 0;
     for (int k = 0; k < CL_UNSCATTERED_ORDERS; k++) {
-        if (fresnel_factor[k] < CL_UNSCATTERED_MIN_FACTOR)
-            break;  // the factors fall with k
-        vector L = normalize(toward_light[k][0] * x + toward_light[k][1] * y + toward_light[k][2] * z);
+        if (fresnel_factor[k] < CL_UNSCATTERED_MIN_FACTOR || length_over_radius[k] > reach)
+            break;  // the factors fall with k, and the lengths grow
         color weight = fresnel_factor[k] * cl_unscattered_attenuation(file, samples, length_over_radius[k]);
+        if (max(weight[0], max(weight[1], weight[2])) < CL_UNSCATTERED_MIN_FACTOR)
+            break;
+        vector L = normalize(toward_light[k][0] * x + toward_light[k][1] * y + toward_light[k][2] * z);
         if (dot(L, z) >= 0.0) {
             vector axis = V - L;
             if (dot(axis, axis) < 1e-8)  // retro-reflection: any axis across the view mirrors it onto itself
@@ -350,19 +364,15 @@ closure color cl_unscattered_closures(string file, int samples, float eta, vecto
 // Number of closure-mixture lobes: the tiles of lobes.exr (precompute.closure_fit.LOBES).
 #define CL_LOBE_COUNT 5
 
-// The general-lighting closure mixture of a baked rho for the view wo (frame x, y, z; V the world
-// view): five Cycles closures weighted per exit cell, in the order of precompute.closure_fit.LOBES.
-// A lobe of zero weight adds no closure: each costs Cycles an evaluation per light sample, and the
-// fit leaves out the minor ones (precompute.closure_fit.MIN_LOBE_SHARE).
-closure color cl_closure_mixture(string lobe_table, int exit_resolution, vector wo, vector V, vector x,
-                                 vector z, float reflection_r1, float reflection_r2, float transmission_r1,
+// The general-lighting closure mixture of a baked rho (frame x, z; V the world view): five Cycles
+// closures in the order of precompute.closure_fit.LOBES, with the weights of lobes.exr at the view
+// (looked up by the material: cloth_yarn_exit.osl).  A lobe of zero weight adds no closure: each
+// costs Cycles an evaluation per light sample, and the fit leaves out the minor ones
+// (precompute.closure_fit.MIN_LOBE_SHARE).
+closure color cl_closure_mixture(color weight[CL_LOBE_COUNT], vector V, vector x, vector z,
+                                 float reflection_r1, float reflection_r2, float transmission_r1,
                                  float transmission_r2, float retroreflection_alpha)
 {
-    float so, to;
-    cl_hemisphere_to_square(wo, so, to);
-    color weight[CL_LOBE_COUNT];
-    for (int k = 0; k < CL_LOBE_COUNT; k++)
-        weight[k] = cl_tile_lookup(lobe_table, k, 0, CL_LOBE_COUNT, 1, exit_resolution, so, to);
     closure color mixture = 0;
     if (weight[0] != color(0))
         mixture += weight[0] * diffuse(z);

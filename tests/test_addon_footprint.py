@@ -112,9 +112,10 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
         table_folder = importlib.import_module(EXTENSION + ".precompute.table_folder")
 
         def table_paths(material):
-            node = next(n for n in material.node_tree.nodes if n.type == "SCRIPT")
-            return [pathlib.Path(node.inputs[name].default_value)
-                    for name in ("Table", "LobeTable", "UnscatteredTable")]
+            node = next(n for n in material.node_tree.nodes if n.type == "SCRIPT" and "Table" in n.inputs)
+            lobe_images = {{n.image.filepath for n in material.node_tree.nodes if n.type == "TEX_IMAGE"}}
+            return [pathlib.Path(node.inputs[name].default_value) for name in ("Table", "UnscatteredTable")] + [
+                pathlib.Path(bpy.path.abspath(path)) for path in sorted(lobe_images)]
 
         bpy.ops.wm.read_homefile(use_empty=True)
         scene = bpy.context.scene

@@ -7,6 +7,7 @@ import re
 
 import pytest
 
+from clothlight.yarn_tables import GENERAL_MODE_MIN_WEIGHT
 from precompute import ballistic
 from precompute.closure_fit import LOBES
 
@@ -24,4 +25,5 @@ def test_the_header_states_the_lobe_count_and_the_unscattered_paths_as_python():
     assert defines["CL_UNSCATTERED_ORDERS"] == ballistic.ORDERS
     assert defines["CL_UNSCATTERED_MAX_LENGTH"] == ballistic.MAX_LENGTH_OVER_RADIUS
     assert defines["CL_CONE_CUTOFF"] == ballistic.CONE_CUTOFF
+    assert defines["CL_UNSCATTERED_MIN_FACTOR"] == GENERAL_MODE_MIN_WEIGHT
     assert defines["CL_QUARTER_PI"] == pytest.approx(math.pi / 4, rel=1e-15)

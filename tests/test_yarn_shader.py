@@ -19,6 +19,7 @@ from precompute import ballistic
 from precompute.table_layout import (
     brdf_atlas,
     interpolate_attenuation,
+    interpolate_exit_tile,
     interpolate_rho,
     interpolate_unscattered_rho,
     lobe_atlas,
@@ -27,10 +28,17 @@ from tests.helpers import add_sun_and_camera, direction, empty_render_scene, uni
 
 bpy = pytest.importorskip("bpy")
 
-from clothlight.blender.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, shader_node, sync_sun  # noqa: E402
+from clothlight.blender.materials import (  # noqa: E402
+    GENERAL_MODE,
+    LOBE_WEIGHT_SOCKETS,
+    SUN_MODE,
+    build_yarn_material,
+    shader_node,
+    sync_sun,
+)
 from clothlight.blender.measurement_render import configure_measurement_render, render_to_array  # noqa: E402
 from clothlight.mesh_attributes import CLOTH_NORMAL, YARN_TANGENT  # noqa: E402
-from clothlight.yarn_tables import YarnTableFiles  # noqa: E402
+from clothlight.yarn_tables import YarnTableFiles, attenuation_reach  # noqa: E402
 
 N_I, N_O = 13, 8
 SUN_IRRADIANCE = 2.0
@@ -162,6 +170,24 @@ def test_general_mode_renders_each_unscattered_path_as_a_lobe_of_its_weight(
 
 
 @pytest.mark.blender
+def test_general_mode_leaves_out_the_paths_beyond_the_reach_without_changing_a_pixel(tmp_path, synthetic_tables):
+    # A yarn that scatters: the attenuation falls below the floor within a radius, so every path
+    # but the short grazing ones is left out before its lookup, as the weight test would.
+    tables = synthetic_tables[0]
+    attenuation = np.exp(-np.outer(ballistic.attenuation_lengths(), [6.0, 4.0, 3.0]))[None]
+    write_exr(tmp_path / "scattering.exr", attenuation)
+    scattering = dataclasses.replace(tables, unscattered_path=tmp_path / "scattering.exr")
+    reach = attenuation_reach(attenuation)
+    assert 1.0 < reach < 2.0
+    renders = []
+    for tables in (scattering, dataclasses.replace(scattering, unscattered_reach=reach)):
+        scene, _ = patch_scene(tables, GENERAL_MODE, 75.0, 30.0, unit([0.2, 0.3, -0.9]))
+        renders.append(render_to_array(scene, tmp_path / f"reach{len(renders)}.exr"))
+    np.testing.assert_array_equal(renders[0], renders[1])
+    assert renders[0][..., :3].max() > 0.0
+
+
+@pytest.mark.blender
 @pytest.mark.parametrize(
     "view_zenith, view_azimuth, sun_direction",
     [(20.0, 40.0, unit([0.3, -0.2, 0.9])),  # front: diffuse, fibre cone, retro-reflection
@@ -170,12 +196,18 @@ def test_general_mode_renders_each_unscattered_path_as_a_lobe_of_its_weight(
     ids=["front", "cone", "behind"])
 def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_zenith, view_azimuth, sun_direction):
     tables, _, weights, _ = synthetic_tables
-    # the mixture alone: a yarn that lets no light through unscattered
+    # Each exit cell's weights its own (the material's image nodes must find the view's cell in
+    # every tile, as the twin does), and the mixture alone: a yarn that lets no light through
+    # unscattered.
+    weights = weights * np.random.default_rng(3).uniform(0.3, 1.0, weights.shape)
+    write_exr(tmp_path / "lobes.exr", lobe_atlas(weights))
     write_exr(tmp_path / "opaque.exr", np.zeros((1, ballistic.ATTENUATION_SAMPLES, 3)))
-    tables = dataclasses.replace(tables, unscattered_path=tmp_path / "opaque.exr")
+    tables = dataclasses.replace(tables, lobe_path=tmp_path / "lobes.exr", unscattered_path=tmp_path / "opaque.exr")
     scene, wo = patch_scene(tables, GENERAL_MODE, view_zenith, view_azimuth, sun_direction)
     pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
-    expected = SUN_IRRADIANCE * lobe_responses(wo, sun_direction) @ weights[0]
+    tiles = weights.reshape(N_O, N_O, len(LOBES), 3)
+    at_view = np.stack([interpolate_exit_tile(tiles[:, :, k], wo) for k in range(len(LOBES))])
+    expected = SUN_IRRADIANCE * lobe_responses(wo, sun_direction) @ at_view
     assert expected.min() > 1e-3
     np.testing.assert_allclose(pixels.mean(axis=0), expected, rtol=0.01, atol=1e-4)
 
@@ -234,3 +266,7 @@ def test_the_yarn_material_is_no_light_to_sample(synthetic_tables, mode):
     material = build_yarn_material(synthetic_tables[0], mode=mode)
     assert material.cycles.emission_sampling == "NONE"
     assert not material.cycles.use_bump_map_correction
+
+
+def test_the_material_feeds_the_lobe_weights_in_the_order_of_the_tiles():
+    assert tuple(LOBE_WEIGHT_SOCKETS) == LOBES

@@ -8,6 +8,7 @@ does not see them.
 
 from __future__ import annotations
 
+import hashlib
 import pathlib
 
 import bpy
@@ -31,6 +32,20 @@ LOBE_SHAPE_SOCKETS = {
 
 #: cloth_yarn.osl's inputs for the bake's specular record (``summary.json`` → ``specular``).
 SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope"}
+
+#: cloth_yarn.osl's inputs for the closure-mixture weights, keyed by lobe in the order of the tiles
+#: of ``lobes.exr`` (precompute.closure_fit.LOBES).
+LOBE_WEIGHT_SOCKETS = {
+    "diffuse": "DiffuseWeight",
+    "translucent": "TranslucentWeight",
+    "fibre_reflection": "FibreReflectionWeight",
+    "fibre_transmission": "FibreTransmissionWeight",
+    "retroreflection": "RetroreflectionWeight",
+}
+#: cloth_yarn.osl's UnscatteredReach where the attenuation never falls below its floor (its default).
+UNSCATTERED_REACH_NEVER = 1e9
+#: Label of the Image Texture nodes that read ``lobes.exr`` for the general mode.
+LOBE_IMAGE_LABEL = "ClothLight lobe weights"
 
 
 def _object_to_world(tree, attribute_name: str, vector_type: str, location):
@@ -80,9 +95,11 @@ def configure_cycles_material(material) -> None:
 
 
 def shader_node(material):
-    """The ClothLight script node of ``material``, or None."""
+    """The ClothLight script node of ``material`` whose closure is the surface (not a helper that
+    computes lookups for it), or None."""
     for node in material.node_tree.nodes:
-        if node.type == "SCRIPT" and node.script and node.script.name.startswith("clothlight_"):
+        if (node.type == "SCRIPT" and node.script and node.script.name.startswith("clothlight_")
+                and "BSDF" in node.outputs):
             return node
     return None
 
@@ -114,10 +131,58 @@ def build_yarn_material(
     """
     material, shader = _new_material(name, "cloth_yarn")
     tree = material.node_tree
-    tree.links.new(_object_to_world(tree, YARN_TANGENT, "VECTOR", (-200, 200)), shader.inputs["YarnTangent"])
-    _read_tables(shader, tables)
+    tangent = _object_to_world(tree, YARN_TANGENT, "VECTOR", (-200, 200))
+    tree.links.new(tangent, shader.inputs["YarnTangent"])
+    _lobe_weight_nodes(tree, shader, tangent)
+    _read_tables(material, shader, tables)
     shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
     return material
+
+
+def _lobe_weight_nodes(tree, shader, tangent) -> None:
+    """The general mode's lookup of its closure weights: cloth_yarn_exit.osl finds the view in the
+    lobe atlas, one Image Texture node per lobe reads its tile there (linear, clamped to the tile
+    by the coordinates), and the shader's weight inputs take them.  Cycles looks up a packed image
+    itself, as under SVM; a texture() in the shader would go through OpenImageIO (1.3-1.4x faster
+    general mode, ``benchmarks/bench_yarn_material.py``).  Sun mode reads none of it, and OSL runs
+    the nodes only when their outputs are read."""
+    exit_node = add_script_node(tree, "cloth_yarn_exit")
+    exit_node.location = (-200, 600)
+    tree.links.new(tangent, exit_node.inputs["YarnTangent"])
+    for k, socket in enumerate(LOBE_WEIGHT_SOCKETS.values()):
+        shift = tree.nodes.new("ShaderNodeVectorMath")
+        shift.operation = "ADD"
+        shift.location = (0, 800 - 150 * k)
+        tree.links.new(exit_node.outputs["LobeCoordinates"], shift.inputs[0])
+        shift.inputs[1].default_value = (k / len(LOBE_WEIGHT_SOCKETS), 0.0, 0.0)
+        texture = tree.nodes.new("ShaderNodeTexImage")
+        texture.label = LOBE_IMAGE_LABEL
+        texture.interpolation = "Linear"
+        texture.extension = "EXTEND"
+        texture.location = (150, 800 - 150 * k)
+        tree.links.new(shift.outputs[0], texture.inputs["Vector"])
+        tree.links.new(texture.outputs["Color"], shader.inputs[socket])
+
+
+def lobe_image_nodes(material) -> list:
+    """The Image Texture nodes of a yarn material that read its lobe atlas."""
+    return [node for node in material.node_tree.nodes if node.type == "TEX_IMAGE" and node.label == LOBE_IMAGE_LABEL]
+
+
+def _packed_lobe_image(path: pathlib.Path):
+    """``lobes.exr`` as a packed float image: Cycles reads a packed image's pixels through its own
+    image manager (a file path would go to OpenImageIO under OSL).  Named by its content, so that
+    materials of the same tables share one image and a table folder written again in place is never
+    served from an older copy."""
+    name = f"ClothLight lobes {hashlib.sha256(path.read_bytes()).hexdigest()[:16]}"
+    image = bpy.data.images.get(name)
+    if image is None or image.packed_file is None:
+        image = bpy.data.images.load(str(path), check_existing=False)
+        image.name = name
+        image.colorspace_settings.name = "Non-Color"
+        image.alpha_mode = "NONE"
+        image.pack()
+    return image
 
 
 def yarn_tables_folder(material) -> str | None:
@@ -134,16 +199,24 @@ def read_other_tables(material, tables) -> None:
     node = shader_node(material)
     if node is None or "Table" not in node.inputs:
         raise ValueError(f"material {material.name!r} has no ClothLight yarn shader")
-    _read_tables(node, tables)
+    _read_tables(material, node, tables)
 
 
-def _read_tables(shader, tables) -> None:
+def _read_tables(material, shader, tables) -> None:
     shader.inputs["Table"].default_value = str(tables.brdf_path)
     shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
     shader.inputs["ExitResolution"].default_value = tables.exit_resolution
-    shader.inputs["LobeTable"].default_value = str(tables.lobe_path)
+    image = _packed_lobe_image(tables.lobe_path)
+    for texture in lobe_image_nodes(material):
+        previous, texture.image = texture.image, image
+        if previous is not None and previous.users == 0:
+            bpy.data.images.remove(previous)
+    for node in material.node_tree.nodes:
+        if node.type == "SCRIPT" and "LobeCoordinates" in node.outputs:
+            node.inputs["ExitResolution"].default_value = tables.exit_resolution
     shader.inputs["UnscatteredTable"].default_value = str(tables.unscattered_path)
     shader.inputs["UnscatteredSamples"].default_value = tables.unscattered_samples
+    shader.inputs["UnscatteredReach"].default_value = min(tables.unscattered_reach, UNSCATTERED_REACH_NEVER)
     shader.inputs["UnscatteredSpread"].default_value = _ballistic.SUN_MODE_SPREAD_RAD
     for socket, key in LOBE_SHAPE_SOCKETS.items():
         shader.inputs[socket].default_value = tables.lobe_shape[key]

@@ -143,8 +143,8 @@ def _lobe_weight_nodes(tree, shader, tangent) -> None:
     """The general mode's lookup of its closure weights: cloth_yarn_exit.osl finds the view in the
     lobe atlas, one Image Texture node per lobe reads its tile there (linear, clamped to the tile
     by the coordinates), and the shader's weight inputs take them.  Cycles looks up a packed image
-    itself, as under SVM; a texture() in the shader would go through OpenImageIO (1.3-1.4x faster
-    general mode, ``benchmarks/bench_yarn_material.py``).  Sun mode reads none of it, and OSL runs
+    itself, as under SVM; a texture() in the shader would go through OpenImageIO (the general mode
+    1.4-1.6x faster at 320² pixels, ``benchmarks/bench_yarn_material.py``).  Sun mode reads none of it, and OSL runs
     the nodes only when their outputs are read."""
     exit_node = add_script_node(tree, "cloth_yarn_exit")
     exit_node.location = (-200, 600)

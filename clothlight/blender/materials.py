@@ -1,7 +1,8 @@
 """Material builder: ClothLight's OSL shaders as Cycles materials on the woven sample.
 
 The shader is embedded as an internal text block (a saved .blend renders
-elsewhere), table paths sit on string sockets, and the mesh attributes the
+elsewhere), table paths sit on string sockets (the general mode's lobe atlas is
+a packed image instead), and the mesh attributes the
 shader needs arrive through linked sockets: in Cycles ``getattribute`` alone
 does not see them.
 """
@@ -144,8 +145,8 @@ def _lobe_weight_nodes(tree, shader, tangent) -> None:
     lobe atlas, one Image Texture node per lobe reads its tile there (linear, clamped to the tile
     by the coordinates), and the shader's weight inputs take them.  Cycles looks up a packed image
     itself, as under SVM; a texture() in the shader would go through OpenImageIO (the general mode
-    1.4-1.6x faster at 320² pixels, ``benchmarks/bench_yarn_material.py``).  Sun mode reads none of it, and OSL runs
-    the nodes only when their outputs are read."""
+    renders 1.4-1.6x faster so at 320² pixels, ``benchmarks/bench_yarn_material.py``).  The sun mode
+    reads none of it, and OSL runs these nodes only when their outputs are read."""
     exit_node = add_script_node(tree, "cloth_yarn_exit")
     exit_node.location = (-200, 600)
     tree.links.new(tangent, exit_node.inputs["YarnTangent"])

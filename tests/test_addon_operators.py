@@ -336,16 +336,21 @@ class _Workspace:
         self.status.append(text)
 
 
-def _interactive_bake(operators, scene):
-    """The Bake Tables operator's interactive path (invoke → modal on timer ticks) with a recording report."""
-    cls = operators.CLOTHLIGHT_OT_bake_tables
-    methods = {name: getattr(cls, name) for name in ("_start", "_start_modal", "_show", "_finish", "modal")}
-    operator = type("InteractiveBake", (), {**methods, "report": lambda self, kind, text: self.reports.append(
-        (kind.pop(), text))})()
+def interactive_operator(cls, scene):
+    """A child-job operator's interactive path (invoke → modal on timer ticks), out of Blender's
+    operator machinery, with a recording report; returns it and its context."""
+    names = ("_start", "_start_modal", "_show", "_status", "_finish", "modal", "_running", "_what")
+    members = {name: getattr(cls, name) for name in names}
+    members["report"] = lambda self, kind, text: self.reports.append((kind.pop(), text))
+    operator = type(f"Interactive{cls.__name__}", (), members)()
     operator.reports = []
     context = SimpleNamespace(scene=scene, window=None, workspace=_Workspace(), window_manager=_WindowManager(),
                               preferences=bpy.context.preferences)
     return operator, context
+
+
+def _interactive_bake(operators, scene):
+    return interactive_operator(operators.CLOTHLIGHT_OT_bake_tables, scene)
 
 
 def _tick(operator, context, until):

@@ -370,19 +370,13 @@ def test_the_fit_operator_fits_in_background_mode_and_loads_the_fitted_values(ad
 @pytest.mark.blender
 def test_esc_cancels_an_interactive_fit_and_nothing_is_written(addon, bpy, measured, tmp_path):
     from clothlight.blender import operators
-    from tests.test_addon_operators import _tick, _WindowManager, _Workspace
+    from tests.test_addon_operators import _tick, interactive_operator
 
     scene = addon
     set_up_small_fit(scene, measured)
     scene.clothlight.fit.budget = 400
     scene.clothlight.fit.out_dir = str(tmp_path / "interactive")
-    cls = operators.CLOTHLIGHT_OT_fit_medium
-    methods = {name: getattr(cls, name) for name in ("_start", "_start_modal", "_show", "_finish", "modal")}
-    operator = type("InteractiveFit", (), {**methods, "report": lambda self, kind, text: self.reports.append(
-        (kind.pop(), text))})()
-    operator.reports = []
-    context = SimpleNamespace(scene=scene, window=None, workspace=_Workspace(), window_manager=_WindowManager(),
-                              preferences=bpy.context.preferences)
+    operator, context = interactive_operator(operators.CLOTHLIGHT_OT_fit_medium, scene)
     assert operator._start_modal(context) == {"RUNNING_MODAL"}
     job = operators.running_fit()
     assert job is not None and not bpy.ops.clothlight.fit_medium.poll()

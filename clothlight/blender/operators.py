@@ -364,6 +364,61 @@ def _end_job(operator, holder) -> None:
     operator._workspace.status_text_set(None)
 
 
+class _ChildJobOperator:
+    """What an operator running a child job (Bake Tables, Fit to Measurement) does around its own
+    ``_start(context)`` (the job, or None after a report) and ``_finish(scene, job)``: in background
+    mode it waits, printing the progress; in the interface it polls the child on a timer, with a
+    progress bar in the status bar that ``_status(job)`` labels, and Esc cancels.  ``_running`` holds
+    the one running job, ``_what`` names it."""
+
+    _running: type
+    _what: str
+
+    def execute(self, context):
+        job = self._start(context)
+        if job is None:
+            return {"CANCELLED"}
+        shown = [-1]
+
+        def progress(fraction):
+            percent = int(fraction * 100)
+            if percent // 10 != shown[0] // 10:
+                shown[0] = percent
+                print(f"{self._status(job)}: {percent} %", flush=True)
+
+        try:
+            job.wait(on_progress=progress)
+        except (JobFailed, JobCancelled):
+            pass  # job.error says which; _finish reports it
+        return self._finish(context.scene, job)
+
+    def invoke(self, context, event):
+        if bpy.app.background:
+            return self.execute(context)
+        return self._start_modal(context)
+
+    def _start_modal(self, context):
+        """Start the child and the timer that polls it; ``modal()`` takes it from there."""
+        job = self._start(context)
+        if job is None:
+            return {"CANCELLED"}
+        return _start_job_modal(self, context, self._running, job, self._what)
+
+    def _show(self, context) -> None:
+        job = self._running.job
+
+        def text() -> str:
+            return f"Cancelling: {job.progress:.0%}" if job.cancelling else f"{self._status(job)}: {job.progress:.0%}"
+
+        _show_job(self, context, job, text)
+
+    def modal(self, context, event):
+        return _modal_job(self, context, event, self._running)
+
+    def cancel(self, context):
+        _end_job(self, self._running)
+
+
 #: Seconds after the last dye change before a recolouring bake starts (a slider drag changes it often).
 RECOLOUR_DELAY_SECONDS = 0.4
 
@@ -399,7 +454,7 @@ class _ScheduledRecolour:
         cls.start = None
 
 
-class CLOTHLIGHT_OT_bake_tables(bpy.types.Operator):
+class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
     """Bake the yarn's BRDF tables from the medium settings (Monte-Carlo light transport in a background
     process; cached, so an unchanged medium is instant). Esc cancels"""
 
@@ -447,50 +502,11 @@ class CLOTHLIGHT_OT_bake_tables(bpy.types.Operator):
         self.report({"INFO"}, f"Tables {how}: {outcome.folder}{_ratios_text(outcome)}")
         return {"FINISHED"}
 
-    def execute(self, context):
-        job = self._start(context)
-        if job is None:
-            return {"CANCELLED"}
-        shown = [-1]
+    _running = _RunningBake
+    _what = "Bake"
 
-        def progress(fraction):
-            percent = int(fraction * 100)
-            if percent // 10 != shown[0] // 10:
-                shown[0] = percent
-                print(f"ClothLight bake: {percent} %", flush=True)
-
-        try:
-            job.wait(on_progress=progress)
-        except (BakeFailed, BakeCancelled):
-            pass  # job.error says which; _finish reports it
-        return self._finish(context.scene, job)
-
-    def invoke(self, context, event):
-        if bpy.app.background:
-            return self.execute(context)
-        return self._start_modal(context)
-
-    def _start_modal(self, context):
-        """Start the child and the timer that polls it; ``modal()`` takes it from there."""
-        job = self._start(context)
-        if job is None:
-            return {"CANCELLED"}
-        return _start_job_modal(self, context, _RunningBake, job, "Bake")
-
-    def _show(self, context) -> None:
-        job = _RunningBake.job
-
-        def text() -> str:
-            state = "Cancelling" if job.cancelling else "Baking ClothLight tables"
-            return f"{state}: {job.progress:.0%}"
-
-        _show_job(self, context, job, text)
-
-    def modal(self, context, event):
-        return _modal_job(self, context, event, _RunningBake)
-
-    def cancel(self, context):
-        _end_job(self, _RunningBake)
+    def _status(self, job) -> str:
+        return "Baking ClothLight tables"
 
 
 class CLOTHLIGHT_OT_cancel_bake(bpy.types.Operator):
@@ -544,7 +560,7 @@ def _fit_summary(outcome) -> str:
     return f"relative RMS {outcome.relative_rms:.3g}{held}; {values}"
 
 
-class CLOTHLIGHT_OT_fit_medium(bpy.types.Operator):
+class CLOTHLIGHT_OT_fit_medium(_ChildJobOperator, bpy.types.Operator):
     """Fit the medium's free parameters to a measured cloth BRDF (python -m precompute fit: CMA-ES over the
     rendered cloth response, in a background process; docs/fitting.md). Esc cancels: nothing is written"""
 
@@ -598,50 +614,11 @@ class CLOTHLIGHT_OT_fit_medium(bpy.types.Operator):
                               f"Preset: {outcome.preset}")
         return {"FINISHED"}
 
-    def execute(self, context):
-        job = self._start(context)
-        if job is None:
-            return {"CANCELLED"}
-        shown = [-1]
+    _running = _RunningFit
+    _what = "Fit"
 
-        def progress(fraction):
-            percent = int(fraction * 100)
-            if percent // 10 != shown[0] // 10:
-                shown[0] = percent
-                print(f"ClothLight fit: {percent} % ({job.stage})", flush=True)
-
-        try:
-            job.wait(on_progress=progress)
-        except (JobFailed, JobCancelled):
-            pass  # job.error says which; _finish reports it
-        return self._finish(context.scene, job)
-
-    def invoke(self, context, event):
-        if bpy.app.background:
-            return self.execute(context)
-        return self._start_modal(context)
-
-    def _start_modal(self, context):
-        """Start the child and the timer that polls it; ``modal()`` takes it from there."""
-        job = self._start(context)
-        if job is None:
-            return {"CANCELLED"}
-        return _start_job_modal(self, context, _RunningFit, job, "Fit")
-
-    def _show(self, context) -> None:
-        job = _RunningFit.job
-
-        def text() -> str:
-            state = "Cancelling" if job.cancelling else "Fitting the ClothLight medium"
-            return f"{state}: {job.progress:.0%}" + (f", {job.stage}" if job.stage and not job.cancelling else "")
-
-        _show_job(self, context, job, text)
-
-    def modal(self, context, event):
-        return _modal_job(self, context, event, _RunningFit)
-
-    def cancel(self, context):
-        _end_job(self, _RunningFit)
+    def _status(self, job) -> str:
+        return "Fitting the ClothLight medium" + (f", {job.stage}" if job.stage else "")
 
 
 class CLOTHLIGHT_OT_cancel_fit(bpy.types.Operator):

@@ -18,6 +18,7 @@ import json
 import pathlib
 import sys
 import traceback
+from collections.abc import Callable
 
 import bpy
 
@@ -369,10 +370,23 @@ class _ChildJobOperator:
     ``_start(context)`` (the job, or None after a report) and ``_finish(scene, job)``: in background
     mode it waits, printing the progress; in the interface it polls the child on a timer, with a
     progress bar in the status bar that ``_status(job)`` labels, and Esc cancels.  ``_running`` holds
-    the one running job, ``_what`` names it."""
+    the one running job, ``_what`` names it; none starts while one runs or where
+    ``_unavailable_reason()`` says why not."""
 
     _running: type
     _what: str
+    _unavailable_reason: Callable[[], str | None]  # why the job cannot run here (a missing library), or None
+
+    @classmethod
+    def poll(cls, context):
+        if cls._running.job is not None:
+            cls.poll_message_set(f"A {cls._what.lower()} is running")
+            return False
+        reason = cls._unavailable_reason()
+        if reason:
+            cls.poll_message_set(reason)
+            return False
+        return context.scene is not None
 
     def execute(self, context):
         job = self._start(context)
@@ -462,17 +476,6 @@ class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
     bl_label = "Bake Tables"
     bl_options = {"REGISTER", "UNDO"}
 
-    @classmethod
-    def poll(cls, context):
-        if _RunningBake.job is not None:
-            cls.poll_message_set("A bake is running")
-            return False
-        reason = bake_unavailable_reason()
-        if reason:
-            cls.poll_message_set(reason)
-            return False
-        return context.scene is not None
-
     def _start(self, context) -> BakeJob | None:
         try:
             request = context.scene.clothlight.medium.request()
@@ -504,6 +507,7 @@ class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
 
     _running = _RunningBake
     _what = "Bake"
+    _unavailable_reason = staticmethod(bake_unavailable_reason)
 
     def _status(self, job) -> str:
         return "Baking ClothLight tables"
@@ -568,17 +572,6 @@ class CLOTHLIGHT_OT_fit_medium(_ChildJobOperator, bpy.types.Operator):
     bl_label = "Fit to Measurement"
     bl_options = {"REGISTER", "UNDO"}
 
-    @classmethod
-    def poll(cls, context):
-        if _RunningFit.job is not None:
-            cls.poll_message_set("A fit is running")
-            return False
-        reason = fit_unavailable_reason()
-        if reason:
-            cls.poll_message_set(reason)
-            return False
-        return context.scene is not None
-
     def _start(self, context) -> FitJob | None:
         settings = context.scene.clothlight
         try:
@@ -616,6 +609,7 @@ class CLOTHLIGHT_OT_fit_medium(_ChildJobOperator, bpy.types.Operator):
 
     _running = _RunningFit
     _what = "Fit"
+    _unavailable_reason = staticmethod(fit_unavailable_reason)
 
     def _status(self, job) -> str:
         return "Fitting the ClothLight medium" + (f", {job.stage}" if job.stage else "")

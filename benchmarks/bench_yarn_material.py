@@ -1,5 +1,6 @@
 """Render cost of the yarn material vs a Principled BSDF with sheen on the same woven mesh
 (same resolution, samples, lights; CPU), on the default preset and on the paper's literal medium.
+The default's general mode is plain Cycles nodes (SVM); its OSL general mode is timed beside it.
 Target (issues 7, 18): at most 2x."""
 
 import pathlib
@@ -35,7 +36,12 @@ sample = build_sample_object(WeaveParameters(warp_count=12, weft_count=12))
 sun = light_and_camera(scene, (0.0, -4.0, 3.0), (0.93, 0.0, 0.0))
 materials = {}
 for name in PRESETS:
-    materials[f"{name}, general lighting"] = build_yarn_material(tables[name], f"{name} general", mode=GENERAL_MODE)
+    general = build_yarn_material(tables[name], f"{name} general", mode=GENERAL_MODE)
+    in_nodes = not any(node.type == "SCRIPT" for node in general.node_tree.nodes)
+    materials[f"{name}, general, {'plain nodes' if in_nodes else 'OSL'}"] = general
+    if in_nodes:  # the OSL shader's general mode of the same medium, side by side
+        materials[f"{name}, general, OSL"] = build_yarn_material(tables[name], f"{name} general OSL",
+                                                                 mode=GENERAL_MODE, plain_nodes=False)
     materials[f"{name}, sun mode"] = build_yarn_material(tables[name], f"{name} sun", mode=SUN_MODE)
     sync_sun(materials[f"{name}, sun mode"], sun)
 # Small renders weigh each render's fixed cost (scene sync, OSL compilation) more: both sizes.

@@ -42,10 +42,11 @@ def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: i
     """Render ``obj`` with the reference and each of ``materials`` (label → material): a warm-up
     each (shader compile, BVH), then ``repeats`` rounds of one timed render per material, taken in
     turn so that a machine whose speed drifts slows them alike; print the medians and ratios.  The
-    reference renders under Cycles' default SVM, as a user would render it; the materials under the
-    scene's shading system (OSL where the ClothLight shaders need it)."""
+    reference renders under Cycles' default SVM, as a user would render it, and so does every
+    material without a script node; the others under OSL, which their shaders need."""
     every = {REFERENCE: principled_with_sheen(), **materials}
-    shading_systems = {label: label != REFERENCE and scene.cycles.shading_system for label in every}
+    shading_systems = {label: any(node.type == "SCRIPT" for node in material.node_tree.nodes)
+                       for label, material in every.items()}
     runs = {label: [] for label in every}
     for round_index in range(repeats + 1):
         for label, material in every.items():

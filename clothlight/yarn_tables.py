@@ -39,6 +39,22 @@ def attenuation_reach(table, floor: float = GENERAL_MODE_MIN_WEIGHT) -> float:
     return first_below_for_good * max_length / (table.shape[0] - 1)
 
 
+def shortest_unscattered_path(host_index: float) -> float:
+    """The shortest path ℓ / R of light crossing a yarn of index ``host_index`` unscattered toward
+    any view (``precompute.ballistic.unscattered_paths``): the chord of the first refracted path,
+    2 |u_z| / (1 − ω_x² / n²) for the view ω inside the yarn refracted to u, is least for a view at
+    the horizon across the axis, 2 √(1 − 1/n²) (1.53 R at n = 1.557)."""
+    return 2.0 * math.sqrt(max(0.0, 1.0 - 1.0 / host_index**2))
+
+
+def renders_in_nodes(tables: YarnTableFiles) -> bool:
+    """Whether the general mode of ``tables`` has no unscattered light to render (its reach is
+    shorter than the shortest unscattered path, so the OSL shader would add none of it either) and
+    can be plain Cycles nodes (clothlight.blender.yarn_nodes).  True for a medium that scatters
+    (every fitted preset); False for a nearly clear yarn (``paper_2008``)."""
+    return tables.unscattered_reach < shortest_unscattered_path(tables.host_index)
+
+
 @dataclass(frozen=True)
 class YarnTableFiles:
     """Paths and grid sizes of one baked yarn: the BRDF atlas, the closure-lobe atlas and the

@@ -110,11 +110,13 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
         enable_seconds = time.perf_counter() - started
         heavy_at_enable = heavy_imported()
         table_folder = importlib.import_module(EXTENSION + ".precompute.table_folder")
+        materials = importlib.import_module(EXTENSION + ".clothlight.blender.materials")
 
         def table_paths(material):
-            node = next(n for n in material.node_tree.nodes if n.type == "SCRIPT" and "Table" in n.inputs)
+            # the default medium's general mode: plain nodes, the lobe atlas packed from its file
+            folder = pathlib.Path(materials.yarn_tables_folder(material))
             lobe_images = {{n.image.filepath for n in material.node_tree.nodes if n.type == "TEX_IMAGE"}}
-            return [pathlib.Path(node.inputs[name].default_value) for name in ("Table", "UnscatteredTable")] + [
+            return [folder / "brdf.exr", folder / "unscattered.exr"] + [
                 pathlib.Path(bpy.path.abspath(path)) for path in sorted(lobe_images)]
 
         bpy.ops.wm.read_homefile(use_empty=True)
@@ -162,16 +164,17 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
     assert list(pathlib.Path(used["numba_cache"]).rglob("grids.*.nbi"))
 
     restarted = run_blender(f"""
-        import addon_utils
+        import addon_utils, importlib
         started = time.perf_counter()
         addon_utils.enable(EXTENSION, default_set=True)
         enable_seconds = time.perf_counter() - started
         heavy_at_enable = heavy_imported()
         bpy.ops.wm.open_mainfile(filepath={str(saved)!r})
         sample = next(obj for obj in bpy.data.objects if obj.type == "MESH")
-        node = next(n for n in sample.active_material.node_tree.nodes if n.type == "SCRIPT")
+        materials = importlib.import_module(EXTENSION + ".clothlight.blender.materials")
         print(json.dumps({{"enable_seconds": enable_seconds, "heavy_at_enable": heavy_at_enable,
-                          "table": node.inputs["Table"].default_value}}))
+                          "table": str(pathlib.Path(materials.yarn_tables_folder(sample.active_material))
+                                       / "brdf.exr")}}))
     """, env, cwd=tmp_path)
     print(f"enable at a Blender start: {restarted['enable_seconds']:.2f} s")
     assert restarted["heavy_at_enable"] == []

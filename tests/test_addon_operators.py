@@ -44,7 +44,8 @@ def addon(extension_zip):
 
     yield {name: importlib.import_module(f"{ADDON}.{module}")
            for name, module in (("operators", "blender.operators"), ("jobs", "jobs"), ("prebaked", "prebaked"),
-                                ("properties", "blender.properties"), ("preferences", "blender.preferences"))}
+                                ("properties", "blender.properties"), ("preferences", "blender.preferences"),
+                                ("materials", "blender.materials"))}
     import addon_utils
 
     addon_utils.disable(EXTENSION_MODULE)
@@ -67,6 +68,11 @@ def unused_blocks() -> set:
 def shader_inputs(material):
     node = next(n for n in material.node_tree.nodes if n.type == "SCRIPT")
     return node.inputs
+
+
+def brdf_table(addon, material) -> pathlib.Path:
+    """The BRDF table a yarn material reads (an OSL shader or the general mode's plain nodes)."""
+    return pathlib.Path(addon["materials"].yarn_tables_folder(material)) / "brdf.exr"
 
 
 # -- registration, preferences ---------------------------------------------------------------------
@@ -163,13 +169,15 @@ def test_apply_material_uses_the_prebaked_tables_follows_the_sun_and_leaves_no_o
     general = sample.active_material
     general_name = general.name
     prebaked = addon["prebaked"].PREBAKED_DIR / PREBAKED_PRESET
-    table = pathlib.Path(shader_inputs(general)["Table"].default_value)
+    table = brdf_table(addon, general)
     # The shipped tables' copy in the user cache (an update replaces the extension's folder):
     # tests/test_addon_footprint.py follows it through a saved file.
     assert table.name == "brdf.exr" and not table.is_relative_to(prebaked.parents[1])
     assert table.read_bytes() == (prebaked / "brdf.exr").read_bytes()
-    assert shader_inputs(general)["SunMode"].default_value == 0
-    assert scene.render.engine == "CYCLES" and scene.cycles.shading_system
+    # The default medium scatters: its general mode is plain nodes, which need no OSL.
+    assert addon["materials"].material_mode(general) == "GENERAL"
+    assert not [node for node in general.node_tree.nodes if node.type == "SCRIPT"]
+    assert scene.render.engine == "CYCLES" and not scene.cycles.shading_system
 
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
     scene.collection.objects.link(sun)
@@ -246,7 +254,7 @@ def test_bake_tables_runs_to_the_end_in_background_mode_and_apply_uses_its_table
     assert medium.tables_request == medium.request().to_json()
     bpy.ops.clothlight.build_sample()
     assert bpy.ops.clothlight.apply_material() == {"FINISHED"}
-    table = pathlib.Path(shader_inputs(bpy.context.active_object.active_material)["Table"].default_value)
+    table = brdf_table(addon, bpy.context.active_object.active_material)
     assert table == folder / "brdf.exr"
 
 
@@ -276,7 +284,7 @@ def test_a_dye_range_bakes_once_then_a_dye_change_rebakes_from_it_and_recolours_
     bpy.ops.clothlight.build_sample()
     assert bpy.ops.clothlight.apply_material() == {"FINISHED"}
     material = bpy.context.active_object.active_material
-    assert pathlib.Path(shader_inputs(material)["Table"].default_value) == first / "brdf.exr"
+    assert brdf_table(addon, material) == first / "brdf.exr"
 
     medium.dye_weight_percent = 2.0  # the update schedules the re-bake (a timer: never run in background mode)
     pending = operators._ScheduledRecolour.start
@@ -291,7 +299,7 @@ def test_a_dye_range_bakes_once_then_a_dye_change_rebakes_from_it_and_recolours_
     assert len([entry for entry in cache.glob("dye_series/*/*") if not entry.name.startswith(".")]) == 1
     assert "reweighting" in summary["seconds"] and "reweighting" in before["seconds"]
     assert summary["rho_normal_rgb"][0] < before["rho_normal_rgb"][0]  # more dye, darker
-    assert pathlib.Path(shader_inputs(material)["Table"].default_value) == second / "brdf.exr"
+    assert brdf_table(addon, material) == second / "brdf.exr"
 
     medium.dye_weight_percent = 4.0  # outside the range: the panel says so, nothing is scheduled
     assert operators._ScheduledRecolour.start is None

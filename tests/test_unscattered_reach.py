@@ -1,12 +1,19 @@
 """How the yarn material reads the unscattered light's table (clothlight/yarn_tables.py): the general
-mode's reach, the path length beyond which a path weighs less than the shader's floor."""
+mode's reach, the path length beyond which a path weighs less than the shader's floor, and whether
+any path is that short (else the general mode is plain Cycles nodes)."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from clothlight.yarn_tables import GENERAL_MODE_MIN_WEIGHT, attenuation_reach
+from clothlight.yarn_tables import (
+    GENERAL_MODE_MIN_WEIGHT,
+    attenuation_reach,
+    renders_in_nodes,
+    shortest_unscattered_path,
+)
 from precompute import ballistic
 from precompute.table_layout import interpolate_attenuation
 
@@ -23,3 +30,27 @@ def test_the_reach_is_where_the_attenuation_falls_below_the_general_modes_floor_
     assert attenuation_reach(np.full((1, ballistic.ATTENUATION_SAMPLES, 3), 0.5 * floor)) == 0.0
     clear = np.exp(-np.outer(ballistic.attenuation_lengths(), [0.1, 0.1, 0.1]))[None]
     assert attenuation_reach(clear) == math.inf
+
+
+@pytest.mark.parametrize("index", [1.33, 1.557, 2.0])
+def test_the_shortest_unscattered_path_is_the_least_chord_over_every_view(index):
+    # Views over the hemisphere, denser toward the horizon where the least chord lies.
+    rng = np.random.default_rng(5)
+    z = rng.uniform(0.0, 1.0, 200_000) ** 3
+    phi = rng.uniform(0.0, 2.0 * math.pi, z.size)
+    planar = np.sqrt(1.0 - z**2)
+    wo = np.stack([planar * np.cos(phi), planar * np.sin(phi), z], axis=-1)
+    wo = np.concatenate([wo, [[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]]])
+    _, _, length = ballistic.unscattered_paths(wo, index)
+    shortest = shortest_unscattered_path(index)
+    assert length.min() >= shortest * (1.0 - 1e-9)
+    assert length.min() == pytest.approx(shortest, rel=1e-9)  # reached at the horizon across the axis
+    assert length[..., 1:].min() > shortest  # a path reflected inside is longer still
+
+
+def test_a_medium_renders_in_plain_nodes_only_where_no_unscattered_path_reaches_the_floor():
+    reach = {"scattering": 0.78, "clear": math.inf, "at the shortest chord": shortest_unscattered_path(1.557)}
+    tables = {name: SimpleNamespace(unscattered_reach=value, host_index=1.557) for name, value in reach.items()}
+    assert renders_in_nodes(tables["scattering"])
+    assert not renders_in_nodes(tables["clear"])
+    assert not renders_in_nodes(tables["at the shortest chord"])  # that path would still be rendered

@@ -82,7 +82,8 @@ def spec_sun_rho(atlas, attenuation, wi, wo):
 
 
 def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, *, cloth_normal=(0.0, 0.0, 1.0),
-                specular_weight=0.0):
+                specular_weight=0.0, plain_nodes=None):
+    """A lit, viewed patch of yarn; the material in plain nodes renders under SVM, as a user's would."""
     scene = empty_render_scene(resolution=8, samples=1 if mode == SUN_MODE else 16, bounces=0)
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     plane = bpy.context.active_object
@@ -90,12 +91,16 @@ def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, 
     for name, value in ((YARN_TANGENT, (1.0, 0.0, 0.0)), (CLOTH_NORMAL, cloth_normal)):
         attribute = mesh.attributes.new(name, "FLOAT_VECTOR", "POINT")
         attribute.data.foreach_set("vector", np.tile(value, len(mesh.vertices)).astype(np.float32))
-    material = build_yarn_material(tables, mode=mode)
-    shader_node(material).inputs["SpecularWeight"].default_value = specular_weight
+    tables = dataclasses.replace(tables, specular={"weight": specular_weight, "slope": 0.8})
+    material = build_yarn_material(tables, mode=mode, plain_nodes=plain_nodes)
     mesh.materials.append(material)
 
     wo = direction(view_zenith_deg, view_azimuth_deg)
-    sync_sun(material, add_sun_and_camera(scene, sun_direction, wo, SUN_IRRADIANCE))
+    sun = add_sun_and_camera(scene, sun_direction, wo, SUN_IRRADIANCE)
+    if shader_node(material) is None:
+        scene.cycles.shading_system = False
+    else:
+        sync_sun(material, sun)
     return scene, wo
 
 
@@ -187,23 +192,32 @@ def test_general_mode_leaves_out_the_paths_beyond_the_reach_without_changing_a_p
     assert renders[0][..., :3].max() > 0.0
 
 
+def without_unscattered_light(tables, folder):
+    """``tables`` of a yarn that lets no light through unscattered: its general mode can be plain nodes."""
+    write_exr(folder / "opaque.exr", np.zeros((1, ballistic.ATTENUATION_SAMPLES, 3)))
+    return dataclasses.replace(tables, unscattered_path=folder / "opaque.exr", unscattered_reach=0.0)
+
+
 @pytest.mark.blender
+@pytest.mark.parametrize("plain_nodes", [True, False], ids=["plain-nodes", "osl"])
 @pytest.mark.parametrize(
     "view_zenith, view_azimuth, sun_direction",
     [(20.0, 40.0, unit([0.3, -0.2, 0.9])),  # front: diffuse, fibre cone, retro-reflection
      (35.0, 10.0, unit([-0.5, 0.1, 0.85])),  # close to the fibre's specular cone
-     (20.0, 40.0, unit([0.2, 0.3, -0.9]))],  # behind: translucent, fibre transmission
-    ids=["front", "cone", "behind"])
-def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_zenith, view_azimuth, sun_direction):
+     (20.0, 40.0, unit([0.2, 0.3, -0.9])),  # behind: translucent, fibre transmission
+     (80.0, 225.0, unit([0.3, -0.2, 0.9]))],  # a grazing view in the map's third octant pair
+    ids=["front", "cone", "behind", "grazing"])
+def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_zenith, view_azimuth, sun_direction,
+                                               plain_nodes):
     tables, _, weights, _ = synthetic_tables
     # Each exit cell's weights its own (the material's image nodes must find the view's cell in
     # every tile, as the twin does), and the mixture alone: a yarn that lets no light through
     # unscattered.
     weights = weights * np.random.default_rng(3).uniform(0.3, 1.0, weights.shape)
     write_exr(tmp_path / "lobes.exr", lobe_atlas(weights))
-    write_exr(tmp_path / "opaque.exr", np.zeros((1, ballistic.ATTENUATION_SAMPLES, 3)))
-    tables = dataclasses.replace(tables, lobe_path=tmp_path / "lobes.exr", unscattered_path=tmp_path / "opaque.exr")
-    scene, wo = patch_scene(tables, GENERAL_MODE, view_zenith, view_azimuth, sun_direction)
+    tables = dataclasses.replace(without_unscattered_light(tables, tmp_path), lobe_path=tmp_path / "lobes.exr")
+    scene, wo = patch_scene(tables, GENERAL_MODE, view_zenith, view_azimuth, sun_direction, plain_nodes=plain_nodes)
+    assert (shader_node(bpy.context.active_object.active_material) is None) == plain_nodes
     pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
     tiles = weights.reshape(N_O, N_O, len(LOBES), 3)
     at_view = np.stack([interpolate_exit_tile(tiles[:, :, k], wo) for k in range(len(LOBES))])
@@ -212,14 +226,14 @@ def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_
     np.testing.assert_allclose(pixels.mean(axis=0), expected, rtol=0.01, atol=1e-4)
 
 
-def rendered_specular(tmp_path, tables, mode, view, sun_direction, cloth_normal):
-    """Mean radiance of the patch with the specular term minus without it."""
+def rendered_specular(tmp_path, tables, mode, view, sun_direction, cloth_normal, weight=1.0, plain_nodes=None):
+    """Mean radiance of the patch with the specular term of ``weight`` minus without it."""
     zenith = math.degrees(math.acos(view[2]))
     azimuth = math.degrees(math.atan2(view[1], view[0]))
     means = []
-    for weight in (1.0, 0.0):
+    for weight in (weight, 0.0):
         scene, _ = patch_scene(tables, mode, zenith, azimuth, sun_direction, cloth_normal=cloth_normal,
-                               specular_weight=weight)
+                               specular_weight=weight, plain_nodes=plain_nodes)
         means.append(render_to_array(scene, tmp_path / f"{mode}{weight}.exr")[..., :3].reshape(-1, 3).mean(axis=0))
     return means[0] - means[1]
 
@@ -229,13 +243,17 @@ def rendered_specular(tmp_path, tables, mode, view, sun_direction, cloth_normal)
     (unit([0.3, 0.0, 0.95]), unit([-0.5, 0.1, 0.86]), True),  # the face toward the cloth normal and the sun
     (unit([0.6, 0.0, -0.8]), unit([0.8, 0.0, -0.6]), False),  # a face turned below the cloth: sun behind it
 ], ids=["face-lit", "face-below-cloth"])
-def test_general_mode_specular_is_the_sun_modes(tmp_path, synthetic_tables, cloth_normal, sun_direction, lit):
+@pytest.mark.parametrize("plain_nodes", [True, False], ids=["plain-nodes", "osl"])
+def test_general_mode_specular_is_the_sun_modes(tmp_path, synthetic_tables, cloth_normal, sun_direction, lit,
+                                                plain_nodes):
     # The Cook-Torrance term is about the cloth normal, but a face lit from behind reflects none of
     # it (the sun mode's rule): Cycles' closure must give the same on either side of the cloth plane.
-    tables = synthetic_tables[0]
+    # In plain nodes it is the Metallic BSDF with extinction 0: the same exact dielectric Fresnel.
+    tables = without_unscattered_light(synthetic_tables[0], tmp_path)
     view = unit([0.8, 0.1, 0.6])
     sun = rendered_specular(tmp_path, tables, SUN_MODE, view, sun_direction, cloth_normal)
-    general = rendered_specular(tmp_path, tables, GENERAL_MODE, view, sun_direction, cloth_normal)
+    general = rendered_specular(tmp_path, tables, GENERAL_MODE, view, sun_direction, cloth_normal,
+                                plain_nodes=plain_nodes)
     if lit:
         assert sun.min() > 1e-2
         np.testing.assert_allclose(general, sun, rtol=0.02)
@@ -245,25 +263,80 @@ def test_general_mode_specular_is_the_sun_modes(tmp_path, synthetic_tables, clot
 
 
 @pytest.mark.blender
-@pytest.mark.parametrize("mode", [SUN_MODE, GENERAL_MODE])
-def test_the_specular_is_the_same_on_both_faces_of_the_cloth(tmp_path, synthetic_tables, mode):
+@pytest.mark.parametrize("mode, plain_nodes", [(SUN_MODE, False), (GENERAL_MODE, False), (GENERAL_MODE, True)],
+                         ids=["sun", "general-osl", "general-plain-nodes"])
+def test_the_specular_is_the_same_on_both_faces_of_the_cloth(tmp_path, synthetic_tables, mode, plain_nodes):
     # Seen and lit from the cloth's back, the term is about the back's normal: the same sheen.
-    tables = synthetic_tables[0]
+    tables = without_unscattered_light(synthetic_tables[0], tmp_path)
     view, sun_direction = unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])
-    front = rendered_specular(tmp_path, tables, mode, view, sun_direction, (0.0, 0.0, 1.0))
-    back = rendered_specular(tmp_path, tables, mode, view, sun_direction, (0.0, 0.0, -1.0))
+    front = rendered_specular(tmp_path, tables, mode, view, sun_direction, (0.0, 0.0, 1.0), plain_nodes=plain_nodes)
+    back = rendered_specular(tmp_path, tables, mode, view, sun_direction, (0.0, 0.0, -1.0), plain_nodes=plain_nodes)
     assert front.min() > 1e-2
     np.testing.assert_allclose(back, front, rtol=1e-3 if mode == SUN_MODE else 0.02)
 
 
 @pytest.mark.blender
-@pytest.mark.parametrize("mode", [SUN_MODE, GENERAL_MODE])
-def test_the_yarn_material_is_no_light_to_sample(synthetic_tables, mode):
+def test_plain_nodes_carry_a_specular_weight_above_one(tmp_path, synthetic_tables):
+    # A Mix Shader's factor stops at 1: a weight of 2.5 is three copies of the lobe at 5/6 each.
+    tables = without_unscattered_light(synthetic_tables[0], tmp_path)
+    view, sun_direction = unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])
+    once = rendered_specular(tmp_path, tables, GENERAL_MODE, view, sun_direction, (0.0, 0.0, 1.0), plain_nodes=True)
+    more = rendered_specular(tmp_path, tables, GENERAL_MODE, view, sun_direction, (0.0, 0.0, 1.0), weight=2.5,
+                             plain_nodes=True)
+    assert once.min() > 1e-2
+    np.testing.assert_allclose(more, 2.5 * once, rtol=0.02)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("light_between_yarns", [False, True], ids=["sun", "sun-sky-bounces"])
+def test_plain_nodes_render_the_woven_sample_as_the_osl_general_mode(tmp_path, synthetic_tables, light_between_yarns):
+    # The same closures with the same weights on a woven sample.  Under the sun alone, direct light:
+    # pixel for pixel the same image.  With a grey sky and four bounces (light between yarns and
+    # through their far faces) the two pick closures to sample in another order, so their noise
+    # differs, and their means agree.  The camera frames the inside of the sample: through a cut
+    # yarn end it would see the yarn's far face, where the OSL shader turns its frame outward and a
+    # Hair BSDF node cannot.
+    from clothlight.blender.sample_object import build_sample_object
+    from clothlight.weave import WeaveParameters
+
+    tables, _, weights, _ = synthetic_tables
+    weights = weights * np.random.default_rng(4).uniform(0.3, 1.0, weights.shape)
+    write_exr(tmp_path / "lobes.exr", lobe_atlas(weights))
+    tables = dataclasses.replace(without_unscattered_light(tables, tmp_path), lobe_path=tmp_path / "lobes.exr",
+                                 specular={"weight": 0.5, "slope": 0.3})
+    scene = empty_render_scene(resolution=48, samples=64 if light_between_yarns else 4,
+                               bounces=4 if light_between_yarns else 0)
+    if light_between_yarns:
+        scene.world = bpy.data.worlds.new("grey")
+        scene.world.color = (0.2, 0.2, 0.2)
+    sample = build_sample_object(WeaveParameters(warp_count=6, weft_count=6))
+    add_sun_and_camera(scene, unit([0.3, -0.4, 0.85]), unit([0.0, -0.5, 0.85]), SUN_IRRADIANCE)
+    scene.camera.data.ortho_scale = 0.5 * min(sample.dimensions[:2])
+    scene.camera.location = np.asarray(scene.camera.location) + np.asarray(sample.location)
+    images = {}
+    for plain_nodes in (True, False):
+        material = build_yarn_material(tables, f"general {plain_nodes}", mode=GENERAL_MODE, plain_nodes=plain_nodes)
+        sample.data.materials.clear()
+        sample.data.materials.append(material)
+        scene.cycles.shading_system = not plain_nodes
+        images[plain_nodes] = render_to_array(scene, tmp_path / f"{plain_nodes}.exr")[..., :3]
+    assert (images[False].sum(axis=-1) > 0).mean() > 0.5
+    if light_between_yarns:
+        np.testing.assert_allclose(images[True].mean(axis=(0, 1)), images[False].mean(axis=(0, 1)), rtol=0.01)
+    else:
+        np.testing.assert_allclose(images[True], images[False], rtol=1e-3, atol=1e-6)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("mode, plain_nodes", [(SUN_MODE, False), (GENERAL_MODE, False), (GENERAL_MODE, True)],
+                         ids=["sun", "general-osl", "general-plain-nodes"])
+def test_the_yarn_material_is_no_light_to_sample(tmp_path, synthetic_tables, mode, plain_nodes):
     # Cycles cannot tell whether an OSL shader emits; sampling every triangle of the cloth as a
     # light made the general mode 1.7x slower, for no light (clothlight.blender.materials).
     bpy.ops.wm.read_homefile(use_empty=True)
     configure_measurement_render(bpy.context.scene, resolution=(8, 8), samples=1)
-    material = build_yarn_material(synthetic_tables[0], mode=mode)
+    material = build_yarn_material(without_unscattered_light(synthetic_tables[0], tmp_path), mode=mode,
+                                   plain_nodes=plain_nodes)
     assert material.cycles.emission_sampling == "NONE"
     assert not material.cycles.use_bump_map_correction
 

@@ -5,6 +5,10 @@ elsewhere), table paths sit on string sockets (the general mode's lobe atlas is
 a packed image instead), and the mesh attributes the
 shader needs arrive through linked sockets: in Cycles ``getattribute`` alone
 does not see them.
+
+The general mode of a medium without unscattered light to render (every fitted
+preset) is built from plain Cycles nodes instead (:mod:`.yarn_nodes`): it needs
+no OSL and renders under Cycles' default SVM, on the CPU or a GPU.
 """
 
 from __future__ import annotations
@@ -17,6 +21,8 @@ import bpy
 from ..addon import import_precompute
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from .osl_shaders import add_script_node
+from ..yarn_tables import renders_in_nodes
+from .yarn_nodes import general_mode_surface
 
 _ballistic = import_precompute("ballistic")
 
@@ -47,6 +53,12 @@ LOBE_WEIGHT_SOCKETS = {
 UNSCATTERED_REACH_NEVER = 1e9
 #: Label of the Image Texture nodes that read ``lobes.exr`` for the general mode.
 LOBE_IMAGE_LABEL = "ClothLight lobe weights"
+#: Custom properties of a yarn material: the folder of the tables it reads, and (for the general
+#: mode in plain nodes, which has no SunMode socket) its mode.
+TABLES_PROPERTY = "clothlight_tables"
+MODE_PROPERTY = "clothlight_mode"
+#: The ``clothlight_shader`` a yarn material in plain nodes records (the OSL ones: their shader).
+PLAIN_NODES = "Cycles nodes"
 
 
 def _object_to_world(tree, attribute_name: str, vector_type: str, location):
@@ -68,6 +80,8 @@ def _new_material(name: str, shader_name: str):
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
     tree = material.node_tree
     tree.nodes.clear()
+    for key in (MODE_PROPERTY, TABLES_PROPERTY):
+        material.pop(key, None)
     shader = add_script_node(tree, shader_name)
     shader.location = (300, 0)
     output = tree.nodes.new("ShaderNodeOutputMaterial")
@@ -112,11 +126,18 @@ def build_baseline_material(name: str = "ClothLight Baseline", *, mode: str = SU
     return material
 
 
+def needs_osl(tables, mode: str) -> bool:
+    """Whether the yarn material of ``tables`` in ``mode`` is an OSL shader (the scene must render
+    with Cycles' OSL on the CPU) rather than plain nodes (:mod:`.yarn_nodes`)."""
+    return mode != GENERAL_MODE or not renders_in_nodes(tables)
+
+
 def build_yarn_material(
     tables,
     name: str = "ClothLight Yarn",
     *,
     mode: str = SUN_MODE,
+    plain_nodes: bool | None = None,
 ):
     """The yarn material reading baked tables.
 
@@ -129,7 +150,20 @@ def build_yarn_material(
     mode
         :data:`SUN_MODE` (exact under the scene's sun, for validation) or
         :data:`GENERAL_MODE` (closure mixture, any lighting).
+    plain_nodes
+        General mode: build it from plain Cycles nodes (no OSL: SVM, CPU or GPU). None (the default):
+        wherever the medium allows (:func:`.yarn_nodes.renders_in_nodes`); True refuses a medium
+        with unscattered light to render; False: the OSL shader.
     """
+    if mode not in (SUN_MODE, GENERAL_MODE):
+        raise ValueError(f"mode must be {SUN_MODE!r} or {GENERAL_MODE!r}, not {mode!r}")
+    if plain_nodes is None:
+        plain_nodes = not needs_osl(tables, mode)
+    if plain_nodes:
+        if needs_osl(tables, mode):
+            raise ValueError("only the general mode of a medium without unscattered light to render is built "
+                             f"from plain nodes (unscattered reach {tables.unscattered_reach:.3g} R)")
+        return _build_plain_general_material(tables, name)
     material, shader = _new_material(name, "cloth_yarn")
     tree = material.node_tree
     tangent = _object_to_world(tree, YARN_TANGENT, "VECTOR", (-200, 200))
@@ -137,6 +171,29 @@ def build_yarn_material(
     _lobe_weight_nodes(tree, shader, tangent)
     _read_tables(material, shader, tables)
     shader.inputs["SunMode"].default_value = int(mode == SUN_MODE)
+    return material
+
+
+def _build_plain_general_material(tables, name: str):
+    material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    tree = material.node_tree
+    previous_images = {node.image for node in tree.nodes if node.type == "TEX_IMAGE" and node.image is not None}
+    tree.nodes.clear()
+    for key in ("clothlight_shader", MODE_PROPERTY, TABLES_PROPERTY):
+        material.pop(key, None)
+    tangent = _object_to_world(tree, YARN_TANGENT, "VECTOR", (-2200, 200))
+    cloth_normal = _object_to_world(tree, CLOTH_NORMAL, "NORMAL", (-2200, -700))
+    surface = general_mode_surface(tree, tables, tangent, cloth_normal, _packed_lobe_image(tables.lobe_path))
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    output.location = (1200, 0)
+    tree.links.new(surface, output.inputs["Surface"])
+    for image in previous_images:
+        if image.users == 0:
+            bpy.data.images.remove(image)
+    material["clothlight_shader"] = PLAIN_NODES
+    material[MODE_PROPERTY] = GENERAL_MODE
+    material[TABLES_PROPERTY] = str(tables.brdf_path.parent)
+    configure_cycles_material(material)
     return material
 
 
@@ -188,15 +245,30 @@ def _packed_lobe_image(path: pathlib.Path):
 
 def yarn_tables_folder(material) -> str | None:
     """The folder of the tables a yarn material reads, or None (not a ClothLight yarn material)."""
+    if TABLES_PROPERTY in material:
+        return material[TABLES_PROPERTY]
     node = shader_node(material)
     if node is None or "Table" not in node.inputs:
         return None
     return str(pathlib.Path(bpy.path.abspath(node.inputs["Table"].default_value)).parent)
 
 
+def material_mode(material) -> str | None:
+    """:data:`SUN_MODE` or :data:`GENERAL_MODE` for a ClothLight yarn or baseline material, else None."""
+    if MODE_PROPERTY in material:
+        return material[MODE_PROPERTY]
+    node = shader_node(material)
+    if node is None or "SunMode" not in node.inputs:
+        return None
+    return SUN_MODE if node.inputs["SunMode"].default_value else GENERAL_MODE
+
+
 def read_other_tables(material, tables) -> None:
-    """Point a yarn material at other tables (another bake of its yarn): the shader's table inputs
-    only, its mode and sun kept."""
+    """Point a yarn material at other tables (another bake of its yarn), its mode and sun kept: the
+    OSL shader's table inputs, or the general mode's plain nodes built again."""
+    if material.get(MODE_PROPERTY) == GENERAL_MODE:
+        build_yarn_material(tables, material.name, mode=GENERAL_MODE)
+        return
     node = shader_node(material)
     if node is None or "Table" not in node.inputs:
         raise ValueError(f"material {material.name!r} has no ClothLight yarn shader")
@@ -204,6 +276,7 @@ def read_other_tables(material, tables) -> None:
 
 
 def _read_tables(material, shader, tables) -> None:
+    material[TABLES_PROPERTY] = str(tables.brdf_path.parent)
     shader.inputs["Table"].default_value = str(tables.brdf_path)
     shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
     shader.inputs["ExitResolution"].default_value = tables.exit_resolution

@@ -38,15 +38,16 @@ from .materials import (
     GENERAL_MODE,
     SUN_MODE,
     build_yarn_material,
+    material_mode,
+    needs_osl,
     read_other_tables,
-    shader_node,
     sync_sun,
     yarn_tables_folder,
 )
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from ..prebaked import tables_for_request
 from .properties import ParameterError, millimetre_scale
-from .render_setup import use_cycles_osl_on_cpu
+from .render_setup import use_cycles, use_cycles_osl_on_cpu
 from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
 from .sun_link import SUN_PROPERTY
 from ..weave import WeaveParameterError
@@ -216,7 +217,7 @@ class CLOTHLIGHT_OT_apply_material(bpy.types.Operator):
             tables = yarn_tables_from_bake(folder)
             name = material_name(medium, folder, mode)
             # Script nodes compile only when the scene renders with Cycles and OSL.
-            render_note = use_cycles_osl_on_cpu(context.scene)
+            render_note = (use_cycles_osl_on_cpu if needs_osl(tables, mode) else use_cycles)(context.scene)
             material = build_yarn_material(tables, name, mode=mode)
         except (LookupError, FileNotFoundError, ValueError, ParameterError) as error:
             self.report({"ERROR"}, str(error))
@@ -690,16 +691,17 @@ class CLOTHLIGHT_OT_setup_render(bpy.types.Operator):
 
 def material_summary(material) -> dict | None:
     """What the panels show about a ClothLight material: shader, mode, tables and sun."""
-    node = shader_node(material) if material is not None else None
-    if node is None:
+    mode = material_mode(material) if material is not None else None
+    if mode is None:
         return None
-    info = {"shader": material.get("clothlight_shader", node.script.name),
-            "mode": "Sun (exact)" if node.inputs["SunMode"].default_value else "General"}
-    if "Table" in node.inputs:
-        table = pathlib.Path(bpy.path.abspath(node.inputs["Table"].default_value))
-        info["tables"] = str(table.parent)
+    info = {"shader": material.get("clothlight_shader", ""),
+            "mode": "Sun (exact)" if mode == SUN_MODE else "General"}
+    folder = yarn_tables_folder(material)
+    if folder is not None:
+        folder = pathlib.Path(bpy.path.abspath(folder))
+        info["tables"] = str(folder)
         try:
-            summary = json.loads((table.parent / "summary.json").read_text())
+            summary = json.loads((folder / "summary.json").read_text())
             info["medium"] = summary.get("medium", {}).get("name", "")
             info["table1"] = summary.get("table1_ratios_normal", {})
         except (OSError, ValueError):

@@ -1,4 +1,4 @@
-"""Scene settings that ClothLight's OSL materials need in Cycles."""
+"""Scene settings that ClothLight's materials need in Cycles."""
 
 from __future__ import annotations
 
@@ -7,6 +7,15 @@ OSL_DEVICE_NOTE = (
     "where texture() ignores wrap/filter options and trace() always misses: tables would be read "
     "unfiltered and yarn-to-yarn shadows would be lost."
 )
+
+
+def use_cycles(scene) -> str:
+    """Switch ``scene`` to Cycles, its shading system and device left as they are (a yarn material in
+    plain nodes renders under either); return a message saying what changed."""
+    if scene.render.engine == "CYCLES":
+        return "Cycles (already set)"
+    scene.render.engine = "CYCLES"
+    return "Cycles (render engine → Cycles). The material is plain Cycles nodes: SVM or OSL, CPU or GPU."
 
 
 def use_cycles_osl_on_cpu(scene) -> str:

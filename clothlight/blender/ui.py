@@ -14,7 +14,7 @@ from ..fit_job import fit_unavailable_reason
 from ..jobs import bake_unavailable_reason
 from ..prebaked import prebaked_tables
 from .garment.operator import BAKE_COMMAND
-from .materials import shader_node
+from .materials import material_mode
 from .preset_menus import CLOTHLIGHT_PT_medium_presets, CLOTHLIGHT_PT_weave_presets
 
 
@@ -37,7 +37,7 @@ class CLOTHLIGHT_PT_main(_SidebarPanel, bpy.types.Panel):
         if _engine_ready(context.scene):
             layout.label(text="Cycles, OSL on the CPU", icon="CHECKMARK")
         else:
-            layout.label(text="ClothLight renders in Cycles with OSL on the CPU", icon="INFO")
+            layout.label(text="Sun mode and clear yarns render in Cycles with OSL on the CPU", icon="INFO")
         layout.operator("clothlight.setup_render", icon="SHADING_RENDERED")
 
 
@@ -292,7 +292,7 @@ class CLOTHLIGHT_PT_material_properties(bpy.types.Panel):
     @classmethod
     def poll(cls, context):
         material = context.material
-        return material is not None and shader_node(material) is not None
+        return material is not None and material_mode(material) is not None
 
     def draw(self, context):
         settings = context.scene.clothlight

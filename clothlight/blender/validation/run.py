@@ -26,7 +26,7 @@ import bpy
 import numpy as np
 
 from ..garment.material import build_garment_material, cloth_tables_from_bake
-from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, shader_node
+from ..materials import GENERAL_MODE, SUN_MODE, build_baseline_material, build_yarn_material, yarn_tables_folder
 from ...mesh_attributes import YARN_TANGENT
 from ...yarn_tables import yarn_tables_from_bake
 from ...validation.framing import (
@@ -379,9 +379,9 @@ def garment_patch(rig):
 def tables_of_sample(sample) -> str | None:
     """The bake folder of the first ClothLight yarn material on the object ``sample``, or None."""
     for slot in sample.material_slots:
-        node = shader_node(slot.material) if slot.material is not None else None
-        if node is not None and "Table" in node.inputs and node.inputs["Table"].default_value:
-            return str(pathlib.Path(bpy.path.abspath(node.inputs["Table"].default_value)).parent)
+        folder = yarn_tables_folder(slot.material) if slot.material is not None else None
+        if folder:
+            return str(pathlib.Path(bpy.path.abspath(folder)))
     return None
 
 

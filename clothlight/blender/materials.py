@@ -152,7 +152,7 @@ def build_yarn_material(
         :data:`GENERAL_MODE` (closure mixture, any lighting).
     plain_nodes
         General mode: build it from plain Cycles nodes (no OSL: SVM, CPU or GPU). None (the default):
-        wherever the medium allows (:func:`.yarn_nodes.renders_in_nodes`); True refuses a medium
+        wherever the medium allows (:func:`clothlight.yarn_tables.renders_in_nodes`); True refuses a medium
         with unscattered light to render; False: the OSL shader.
     """
     if mode not in (SUN_MODE, GENERAL_MODE):

@@ -18,6 +18,10 @@ class NodeBuilder:
         node.location = location
         for name, value in properties.items():
             setattr(node, name, value)
+        return self.node_inputs(node, inputs)
+
+    def node_inputs(self, node, inputs):
+        """Fill ``node``'s inputs (by position, or by name from a mapping; None skips); returns it."""
         items = inputs.items() if isinstance(inputs, dict) else enumerate(inputs)
         for key, value in items:
             if value is None:
@@ -39,3 +43,22 @@ class NodeBuilder:
 
     def link(self, socket, target) -> None:
         self.tree.links.new(socket, target)
+
+    def tangent_frame(self, normal, tangent, location=(0, 0)):
+        """The frame of a surface whose ``tangent`` (a yarn axis, a warp) is made normal to the unit
+        ``normal``: the sockets of x = normalize(t − (t·n) n) and y = n × x."""
+        x0, y0 = location
+        along = self.vector_math("DOT_PRODUCT", tangent, normal, location=(x0, y0)).outputs["Value"]
+        normal_part = self.vector_math("SCALE", normal, location=(x0 + 150, y0))
+        self.link(along, normal_part.inputs["Scale"])
+        in_plane = self.vector_math("SUBTRACT", tangent, normal_part.outputs[0], location=(x0 + 300, y0))
+        x = self.vector_math("NORMALIZE", in_plane.outputs[0], location=(x0 + 450, y0)).outputs[0]
+        y = self.vector_math("CROSS_PRODUCT", normal, x, location=(x0 + 600, y0 - 100)).outputs[0]
+        return x, y
+
+    def add_shaders(self, closures, x=0):
+        """The socket of the sum of the shader sockets ``closures`` (Add Shader nodes in a chain)."""
+        total = closures[0]
+        for index, closure in enumerate(closures[1:]):
+            total = self.node("ShaderNodeAddShader", (x, -150 * index), (total, closure)).outputs[0]
+        return total

@@ -24,8 +24,6 @@ from __future__ import annotations
 
 import math
 
-import bpy
-
 from ..addon import import_precompute
 from .node_builder import NodeBuilder
 
@@ -82,18 +80,14 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
         closure = nodes.node(node_type, (260, y), {"Color": weight.outputs["Color"]}, **settings)
         if node_type == "ShaderNodeBsdfHair":
             longitudinal, azimuthal = HAIR_ROUGHNESS[settings["component"]]
-            for socket, value in (("Offset", 0.0), ("RoughnessU", shape[longitudinal]),
-                                  ("RoughnessV", shape[azimuthal]), ("Tangent", axis)):
-                _set(nodes, closure.inputs[socket], value)
+            nodes.node_inputs(closure, {"Offset": 0.0, "RoughnessU": shape[longitudinal],
+                                        "RoughnessV": shape[azimuthal], "Tangent": axis})
         elif node_type == "ShaderNodeBsdfAnisotropic":  # back-scatter: GGX about the view, α = roughness²
-            _set(nodes, closure.inputs["Roughness"], math.sqrt(shape["retroreflection_alpha"]))
-            _set(nodes, closure.inputs["Anisotropy"], 0.0)
-            nodes.link(toward_view, closure.inputs["Normal"])
+            nodes.node_inputs(closure, {"Roughness": math.sqrt(shape["retroreflection_alpha"]), "Anisotropy": 0.0,
+                                        "Normal": toward_view})
         closures.append(closure.outputs[0])
     closures += _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal)
-    surface = closures[0] if closures else None
-    for index, closure in enumerate(closures[1:]):
-        surface = nodes.node("ShaderNodeAddShader", (560, 600 - 150 * index), (surface, closure)).outputs[0]
+    surface = nodes.add_shaders(closures, x=560) if closures else None
 
     # A far face (backfacing) passes every ray but the camera's: factor = backfacing × (1 − camera ray).
     light_path = nodes.node("ShaderNodeLightPath", (200, -900))
@@ -103,23 +97,11 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
     return nodes.node("ShaderNodeMixShader", (900, 0), (passes, surface, transparent.outputs[0])).outputs[0]
 
 
-def _set(nodes, socket, value) -> None:
-    if isinstance(value, bpy.types.NodeSocket):
-        nodes.link(value, socket)
-    else:
-        socket.default_value = value
-
-
 def _yarn_frame_view(nodes, normal, tangent, toward_view):
     """The yarn frame (``cl_yarn_frame``: x the axis made normal to z, y = z × x, z the shading
     normal) and the view in it on the tables' hemisphere (``cl_exit_direction``); returns the
     sockets of the axis x and of the view."""
-    along = nodes.vector_math("DOT_PRODUCT", tangent, normal, location=(-1400, -200)).outputs["Value"]
-    normal_part = nodes.vector_math("SCALE", normal, location=(-1250, -200))
-    nodes.link(along, normal_part.inputs["Scale"])
-    in_plane = nodes.vector_math("SUBTRACT", tangent, normal_part.outputs[0], location=(-1100, -200))
-    axis = nodes.vector_math("NORMALIZE", in_plane.outputs[0], location=(-950, -200)).outputs[0]
-    across = nodes.vector_math("CROSS_PRODUCT", normal, axis, location=(-800, -300)).outputs[0]
+    axis, across = nodes.tangent_frame(normal, tangent, (-1400, -200))
     components = [nodes.vector_math("DOT_PRODUCT", toward_view, direction, location=(-650, 100 - 120 * i))
                   .outputs["Value"] for i, direction in enumerate((axis, across, normal))]
     up = nodes.math("MAXIMUM", components[2], 0.0, location=(-500, -140))  # a silhouette view at the horizon

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import bpy
 
 from ..materials import GENERAL_MODE, SUN_MODE, configure_cycles_material
+from ..node_builder import NodeBuilder
 from ..osl_shaders import add_script_node
 from ...garment.goniometry import SIDES
 from ...garment.tables import (
@@ -180,34 +181,13 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
 
     ``detail`` (:func:`_weave_detail`): the closures about the bent normal, their weights times
     s = coverage / mean coverage, the open weave's 1 − s (1 − open): the same mean per repeat."""
-    nodes, links = tree.nodes, tree.links
-
-    def math_node(operation, a, b=None, location=(0, 0), vector=True):
-        node = nodes.new("ShaderNodeVectorMath" if vector else "ShaderNodeMath")
-        node.operation = operation
-        node.location = location
-        for index, value in enumerate((a, b)):
-            if value is None:
-                continue
-            if isinstance(value, bpy.types.NodeSocket):
-                links.new(value, node.inputs[index])
-            else:
-                node.inputs[index].default_value = value
-        return node
-
-    geometry = nodes.new("ShaderNodeNewGeometry")
-    geometry.location = (-800, 200)
+    nodes = NodeBuilder(tree)
+    geometry = nodes.node("ShaderNodeNewGeometry", (-800, 200))
     normal, incoming = geometry.outputs["Normal"], geometry.outputs["Incoming"]
-    along_normal = math_node("DOT_PRODUCT", tangent_socket, normal, (-600, -200)).outputs["Value"]
-    normal_part = math_node("SCALE", normal, None, (-450, -200))
-    links.new(along_normal, normal_part.inputs["Scale"])
-    in_plane = math_node("SUBTRACT", tangent_socket, normal_part.outputs[0], (-300, -200)).outputs[0]
-    warp = math_node("NORMALIZE", in_plane, None, (-150, -200)).outputs[0]
-    weft = math_node("CROSS_PRODUCT", normal, warp, (0, -300)).outputs[0]
-    view = nodes.new("ShaderNodeCombineXYZ")
-    view.location = (150, 100)
-    links.new(math_node("DOT_PRODUCT", incoming, warp, (0, 100)).outputs["Value"], view.inputs["X"])
-    links.new(math_node("DOT_PRODUCT", incoming, weft, (0, 0)).outputs["Value"], view.inputs["Y"])
+    warp, weft = nodes.tangent_frame(normal, tangent_socket, (-600, -200))
+    view = nodes.node("ShaderNodeCombineXYZ", (150, 100),
+                      (nodes.vector_math("DOT_PRODUCT", incoming, warp, location=(0, 100)).outputs["Value"],
+                       nodes.vector_math("DOT_PRODUCT", incoming, weft, location=(0, 0)).outputs["Value"]))
 
     # Image coordinates (Blender's v runs up from the bottom row; the front block is on top):
     # u = (k + inset + span (ω_x + 1)/2) / K,  v = 1 − (inset + span (1 − ω_y)/2 + back) / 2.
@@ -215,17 +195,10 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
     inset, span = 0.5 / n, (n - 1.0) / n
     scale = (span / (2.0 * tiles), span / 4.0, 0.0)
     offset = (0.0, 1.0 - (inset + span / 2.0) / 2.0, 0.0)
-    base = nodes.new("ShaderNodeVectorMath")
-    base.operation = "MULTIPLY_ADD"
-    base.location = (300, 100)
-    links.new(view.outputs[0], base.inputs[0])
-    base.inputs[1].default_value = scale
-    base.inputs[2].default_value = offset
-    back = nodes.new("ShaderNodeCombineXYZ")
-    back.location = (300, -100)
-    links.new(math_node("MULTIPLY", geometry.outputs["Backfacing"], 0.5, (150, -100), vector=False).outputs[0],
-              back.inputs["Y"])
-    coordinates = math_node("SUBTRACT", base.outputs[0], back.outputs[0], (450, 0)).outputs[0]
+    base = nodes.vector_math("MULTIPLY_ADD", view.outputs[0], scale, offset, location=(300, 100))
+    back = nodes.node("ShaderNodeCombineXYZ", (300, -100),
+                      (None, nodes.math("MULTIPLY", geometry.outputs["Backfacing"], 0.5, location=(150, -100))))
+    coordinates = nodes.vector_math("SUBTRACT", base.outputs[0], back.outputs[0], location=(450, 0)).outputs[0]
 
     image = bpy.data.images.load(str(tables.lobe_path), check_existing=True)
     image.colorspace_settings.name = "Non-Color"
@@ -237,56 +210,43 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
     weights = {}
     for _, tile in kinds:
         k = LOBE_TILES.index(tile)
-        shifted = math_node("ADD", coordinates, ((k + inset + span / 2.0) / tiles, 0.0, 0.0), (600, 300 - 200 * k))
-        texture = nodes.new("ShaderNodeTexImage")
-        texture.image = image
-        texture.interpolation = "Linear"
-        texture.extension = "EXTEND"
-        texture.location = (750, 300 - 200 * k)
-        links.new(shifted.outputs[0], texture.inputs["Vector"])
+        shifted = nodes.vector_math("ADD", coordinates, ((k + inset + span / 2.0) / tiles, 0.0, 0.0),
+                                    location=(600, 300 - 200 * k))
+        texture = nodes.node("ShaderNodeTexImage", (750, 300 - 200 * k), {"Vector": shifted.outputs[0]}, image=image,
+                             interpolation="Linear", extension="EXTEND")
         weights[tile] = texture.outputs["Color"]
 
     closures = {}
     for node_type, tile in kinds:
-        closure = nodes.new(node_type)
-        closure.location = (1000, 300 - 200 * len(closures))
+        y = 300 - 200 * len(closures)
         weight = weights[tile]
         if detail is not None:
-            normal, scale = detail
-            if "Normal" in closure.inputs:
-                links.new(normal, closure.inputs["Normal"])
+            bent, scale = detail
             if tile == "open_weave":  # 1 − s (1 − open)
-                covered = math_node("SUBTRACT", (1.0, 1.0, 1.0), weight, (850, closure.location[1] - 100))
-                weight = math_node("SCALE", covered.outputs[0], None, (900, closure.location[1] - 100))
-                links.new(scale, weight.inputs["Scale"])
-                weight = math_node("SUBTRACT", (1.0, 1.0, 1.0), weight.outputs[0], (950, closure.location[1] - 100))
-                weight = math_node("MAXIMUM", weight.outputs[0], (0.0, 0.0, 0.0), (975, closure.location[1] - 100))
+                covered = nodes.vector_math("SUBTRACT", (1.0, 1.0, 1.0), weight, location=(850, y - 100))
+                scaled = nodes.vector_math("SCALE", covered.outputs[0], location=(900, y - 100))
+                nodes.link(scale, scaled.inputs["Scale"])
+                open_share = nodes.vector_math("SUBTRACT", (1.0, 1.0, 1.0), scaled.outputs[0], location=(950, y - 100))
+                weight = nodes.vector_math("MAXIMUM", open_share.outputs[0], (0.0, 0.0, 0.0),
+                                           location=(975, y - 100)).outputs[0]
             else:
-                weight = math_node("SCALE", weight, None, (900, closure.location[1] - 100))
-                links.new(scale, weight.inputs["Scale"])
-            weight = weight.outputs[0]
-        links.new(weight, closure.inputs["Color"])
+                scaled = nodes.vector_math("SCALE", weight, location=(900, y - 100))
+                nodes.link(scale, scaled.inputs["Scale"])
+                weight = scaled.outputs[0]
+        closure = nodes.node(node_type, (1000, y), {"Color": weight})
+        if detail is not None and "Normal" in closure.inputs:
+            nodes.link(bent, closure.inputs["Normal"])
         closures[tile] = closure
     if transmission:
-        hair = closures["fibre_transmission"]
-        hair.component = "Transmission"
-        hair.inputs["Offset"].default_value = 0.0
-        hair.inputs["RoughnessU"].default_value = tables.lobe_shape["transmission_longitudinal"]
-        hair.inputs["RoughnessV"].default_value = tables.lobe_shape["transmission_azimuthal"]
-        links.new(warp, hair.inputs["Tangent"])
+        nodes.node_inputs(closures["fibre_transmission"], {
+            "Offset": 0.0, "RoughnessU": tables.lobe_shape["transmission_longitudinal"],
+            "RoughnessV": tables.lobe_shape["transmission_azimuthal"], "Tangent": warp})
+        closures["fibre_transmission"].component = "Transmission"
     gloss = closures["gloss"]
     gloss.distribution = "BECKMANN"
-    gloss.inputs["Roughness"].default_value = tables.lobe_shape["gloss_alpha"] ** 0.5  # Cycles: α = roughness²
-    gloss.inputs["Anisotropy"].default_value = 0.0
-    closures = list(closures.values())
-    total = closures[0].outputs[0]
-    for closure in closures[1:]:
-        add = nodes.new("ShaderNodeAddShader")
-        add.location = (1200, closure.location[1])
-        links.new(total, add.inputs[0])
-        links.new(closure.outputs[0], add.inputs[1])
-        total = add.outputs[0]
-    return total
+    nodes.node_inputs(gloss, {"Roughness": tables.lobe_shape["gloss_alpha"] ** 0.5,  # Cycles: α = roughness²
+                              "Anisotropy": 0.0})
+    return nodes.add_shaders([closure.outputs[0] for closure in closures.values()], x=1200)
 
 
 def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_MODE, name: str | None = None,

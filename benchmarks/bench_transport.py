@@ -9,7 +9,13 @@ Also prints how far eq. (5) at the default grids is from a direct parallel-beam 
 for red cotton, both of the scattered light (the discretisation error of the tables; the
 unscattered light is exact, precompute/ballistic.py, docs/transport.md).
 
-    python benchmarks/bench_transport.py [slab] [yarn] [bake]
+    python benchmarks/bench_transport.py [slab] [yarn] [bake] [mcml] [--mcml-source DIR]
+
+``mcml`` (issue 24) times MCML 1.2 beside ClothLight in the same run (benchmarks/mcml_reference.py: built
+from its public source when a C compiler is there, skipped with the reason otherwise) and prints the
+ratios the issue asks for: the kernel's photons/s per core on the van de Hulst slab (n 1 and 1.5,
+target ≥ 2), whole processes at 10⁶ photons (target ≥ 1), and the default bake as a process on this
+machine's cores over MCML's 4·10⁶ van de Hulst photons on one thread (target ≤ 30).
 """
 
 from __future__ import annotations
@@ -17,7 +23,9 @@ from __future__ import annotations
 import os
 import pathlib
 import resource
+import subprocess
 import sys
+import tempfile
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
@@ -107,7 +115,69 @@ def bake() -> None:
                   f"{difference.max() / a_b[:, k].max():.3f} of the brightest; summed around the yarn "
                   f"{a_s[:, k].sum() / a_b[:, k].sum() - 1:+.4f}")
 
+VAN_DE_HULST = {"albedo": 0.9, "g": 0.75, "tau": 2.0}
+REPO = pathlib.Path(__file__).resolve().parents[1]
+
+
+def median_of(function, rounds: int) -> float:
+    return sorted(function() for _ in range(rounds))[rounds // 2]
+
+
+def process_seconds(command: list[str]) -> float:
+    start = time.perf_counter()
+    subprocess.run(command, cwd=REPO, check=True, capture_output=True)
+    return time.perf_counter() - start
+
+
+def mcml(source: str | None = None, rounds: int = 3) -> None:
+    from mcml_reference import MCMLUnavailable, build_mcml, run_slab
+
+    try:
+        executable = build_mcml(source)
+    except MCMLUnavailable as reason:
+        print(f"MCML side by side skipped: {reason}")
+        return
+    slab = VAN_DE_HULST
+    photons = 4_000_000
+    simulate_hg_slab(slab["albedo"], slab["g"], slab["tau"], 1.0, paths=1000)  # compile
+    print(f"MCML 1.2 (-O3 -march=native) beside ClothLight, van de Hulst slab (a {slab['albedo']}, g {slab['g']}, "
+          f"tau {slab['tau']}), one thread each, medians of {rounds} interleaved runs, load {os.getloadavg()[0]:.1f}")
+    mcml_seconds = {}
+    for index in (1.0, 1.5):
+        ours, theirs = [], []
+        for _ in range(rounds):
+            result, wall, _ = timed(lambda: simulate_hg_slab(slab["albedo"], slab["g"], slab["tau"], index,
+                                                             paths=photons, seed=3, threads=1))
+            ours.append(wall)
+            reference = run_slab(executable, photons, slab["albedo"], slab["g"], slab["tau"], index)
+            theirs.append(reference["wall_s"])
+        ours_s, theirs_s = sorted(ours)[rounds // 2], sorted(theirs)[rounds // 2]
+        mcml_seconds[index] = theirs_s
+        print(f"  kernel, n {index}: ClothLight {photons / ours_s / 1e6:.2f} M photons/s, MCML "
+              f"{photons / theirs_s / 1e6:.2f} M photons/s: {theirs_s / ours_s:.2f}x MCML (target >= 2); "
+              f"R {result.R_total[0]:.4f} vs {reference['R_total']:.4f}, T {result.T_total[0]:.4f} vs "
+              f"{reference['T_total']:.4f}")
+    slab_command = [sys.executable, "-m", "precompute", "slab", "--albedo", str(slab["albedo"]), "--g",
+                    str(slab["g"]), "--tau", str(slab["tau"]), "--paths", "1000000", "--threads", "1"]
+    ours = median_of(lambda: process_seconds(slab_command), rounds)
+    theirs = median_of(lambda: run_slab(executable, 1_000_000, slab["albedo"], slab["g"], slab["tau"], 1.0)["wall_s"],
+                       rounds)
+    print(f"  whole process, 1e6 photons, n 1: python -m precompute slab {ours:.2f} s, MCML {theirs:.2f} s: "
+          f"{theirs / ours:.2f}x MCML (target >= 1)")
+    with tempfile.TemporaryDirectory(prefix="clothlight-bench-bake-") as cache:
+        bake_seconds = process_seconds([sys.executable, "-m", "precompute", "bake", "--cache-dir", cache])
+    print(f"  default bake (python -m precompute bake, a fresh cache, {os.cpu_count()} cores): {bake_seconds:.0f} s = "
+          f"{bake_seconds / mcml_seconds[1.0]:.0f}x MCML's {photons:.0e} van de Hulst photons on one thread "
+          f"({mcml_seconds[1.0]:.2f} s; target <= 30)")
+
+
 if __name__ == "__main__":
-    chosen = sys.argv[1:] or ["slab", "yarn", "bake"]
-    for name in chosen:
-        {"slab": slab, "yarn": yarn, "bake": bake}[name]()
+    arguments = sys.argv[1:]
+    mcml_source = None
+    if "--mcml-source" in arguments:
+        at = arguments.index("--mcml-source")
+        mcml_source = arguments[at + 1]
+        del arguments[at:at + 2]
+    modes = {"slab": slab, "yarn": yarn, "bake": bake, "mcml": lambda: mcml(mcml_source)}
+    for name in arguments or ["slab", "yarn", "bake"]:
+        modes[name]()

@@ -127,7 +127,7 @@ def _lobe_atlas_coordinates(nodes, view, exit_resolution: int):
     y_major = nodes.math("SUBTRACT", 1.0, x_major, location=(-950, 1200))
     scaled_radius = nodes.math("MULTIPLY", radius, 4.0 / math.pi, location=(-950, 900))
 
-    def coordinate(major, own, other_abs, other_major, other, location):
+    def coordinate(major, own, other_abs, other_major, location):
         """a (or b): sign(own) r where ``own`` is the major axis, r (4/π) atan2(own, |other|) where not."""
         edge = nodes.math("MULTIPLY", nodes.math("SIGN", own, location=location), radius,
                           location=(location[0] + 150, location[1]))
@@ -137,8 +137,8 @@ def _lobe_atlas_coordinates(nodes, view, exit_resolution: int):
                           nodes.math("MULTIPLY", inside, other_major, location=(location[0] + 300, location[1] - 100)),
                           location=(location[0] + 450, location[1]))
 
-    a = coordinate(x_major, x, abs_y, y_major, y, (-800, 1300))
-    b = coordinate(y_major, y, abs_x, x_major, x, (-800, 1000))
+    a = coordinate(x_major, x, abs_y, y_major, (-800, 1300))
+    b = coordinate(y_major, y, abs_x, x_major, (-800, 1000))
     disk = nodes.node("ShaderNodeCombineXYZ", (-300, 1150), (a, b, 0.0))
     square = nodes.vector_math("MULTIPLY_ADD", disk.outputs[0], (0.5, 0.5, 0.0), (0.5, 0.5, 0.0),
                                location=(-150, 1150))
@@ -154,9 +154,8 @@ def _lobe_atlas_coordinates(nodes, view, exit_resolution: int):
 def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal) -> list:
     """The cloth's specular closures (``cl_cloth_specular_closure``): about the cloth normal turned
     toward the viewer, on faces whose normal is on its side only, weighted by the specular weight."""
-    specular = tables.specular or {}
-    weight = float(specular.get("weight", 1.0))
-    slope = float(specular.get("slope", 0.8))
+    specular = tables.specular or import_precompute("table_folder").default_specular()
+    weight, slope = float(specular["weight"]), float(specular["slope"])
     if weight <= 0.0:
         return []
     facing = nodes.math("SIGN", nodes.vector_math("DOT_PRODUCT", cloth_normal, toward_view, location=(-1400, -700))

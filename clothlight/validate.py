@@ -18,6 +18,7 @@ from __future__ import annotations
 
 try:  # a Ctrl-C before the handler in main() is in place still exits with 130, without a traceback
     import contextlib
+    import math
     import os
     import pathlib
     import sys
@@ -82,6 +83,9 @@ def build_parser():
     parser.add_argument("--patch-mm", type=VALIDATION_PATCH_MM.argument("--patch-mm"),
                         help=f"side of the framed patch, {VALIDATION_PATCH_MM.allowed()} (default: largest that fits)")
     parser.add_argument("--no-swatches", action="store_true", help="skip the front/back-lit colour swatches")
+    parser.add_argument("--specular-weight", type=float, metavar="W",
+                        help="the yarn materials' SpecularWeight in place of the bake's (a number ≥ 0; 0: the "
+                             "cloth without its sheen)")
     parser.add_argument("--json", action="store_true", help="print the results as JSON on stdout")
     return parser
 
@@ -119,6 +123,8 @@ def check_arguments(args) -> None:
     for option, folder in (("--tables", args.tables), ("--cloth-tables", args.cloth_tables)):
         if folder is not None and not pathlib.Path(folder).is_dir():
             raise ParameterError(option, folder, "an existing bake folder")
+    if args.specular_weight is not None and not (math.isfinite(args.specular_weight) and args.specular_weight >= 0):
+        raise ParameterError("--specular-weight", args.specular_weight, "a finite number ≥ 0")
     if args.measured is not None:
         if not pathlib.Path(args.measured).is_file():
             raise ParameterError("--measured", args.measured, "an existing measurement file")
@@ -176,7 +182,8 @@ def _sweep(args, interrupt) -> dict:
         with stdout_to_stderr() if args.json else contextlib.nullcontext():
             return run_validation(sample, args.out, scheduler=args.scheduler, materials=args.material,
                                   tables_dir=args.tables, cloth_dir=args.cloth_tables, measured_csv=args.measured,
-                                  settings=settings, swatches=not args.no_swatches, progress=progress)
+                                  settings=settings, swatches=not args.no_swatches,
+                                  specular_weight=args.specular_weight, progress=progress)
     finally:
         if progress_shown:
             print(file=sys.stderr)  # end the progress line: what follows starts on its own

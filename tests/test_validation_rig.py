@@ -219,6 +219,25 @@ def png_size(path):
 
 
 @pytest.mark.blender
+def test_a_sweep_can_set_the_yarns_specular_weight_to_measure_the_cloth_without_its_sheen(tmp_path, constant_bake):
+    # The sheen is linear in its weight: the cloth with weight 2 minus the cloth without it is twice
+    # the cloth with weight 1 minus the cloth without it, at the mirror view where the sheen shines.
+    fresh_file()
+    settings = RigSettings(incidences_deg=(30.0,), views_deg=(30.0, -20.0), resolution=16, samples=1)
+    brdf = {}
+    for weight in (0.0, 1.0, 2.0):
+        results = run_validation(None, tmp_path / str(weight), tables_dir=constant_bake, materials=("yarn",),
+                                 settings=settings, swatches=False, specular_weight=weight)
+        assert results["settings"]["yarn_specular"]["weight"] == weight
+        brdf[weight] = np.array([v["brdf_rgb"] for v in results["materials"]["yarn"]["views"]])
+    sheen = brdf[1.0] - brdf[0.0]
+    assert sheen[0].min() > 1e-3  # the mirror view
+    np.testing.assert_allclose(brdf[2.0] - brdf[0.0], 2.0 * sheen, rtol=1e-3, atol=1e-6)
+    with pytest.raises(ParameterError, match="specular_weight"):
+        ValidationRun(None, tmp_path / "bad", tables_dir=constant_bake, materials=("yarn",), specular_weight=-1.0)
+
+
+@pytest.mark.blender
 def test_the_whole_sweep_writes_calibrated_results_plots_and_report(tmp_path, constant_bake):
     fresh_file()
     settings = RigSettings(incidences_deg=(0.0, 60.0), views_deg=(-60.0, 0.0, 60.0), resolution=16, samples=1)

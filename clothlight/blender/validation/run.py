@@ -17,10 +17,11 @@ measurement), ``swatches/*.png`` and the float renders under ``renders/``.
 from __future__ import annotations
 
 import atexit
+import math
 import pathlib
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import bpy
 import numpy as np
@@ -99,12 +100,16 @@ class ValidationRun:
         Angles, framing and render settings (:class:`.rig.RigSettings`).
     swatches
         Also render the front- and back-lit colour swatches (§6.1).
+    specular_weight
+        The yarn materials' SpecularWeight in place of the bake's (``summary.json`` → ``specular``),
+        e.g. 0 to measure the cloth without its sheen; None keeps the bake's.
 
     Raises ParameterError (or MeasurementFormatError naming the row) before any render.
     """
 
     def __init__(self, sample=None, out_dir="clothlight_validation", *, materials=None, tables_dir=None,
-                 cloth_dir=None, measured_csv=None, settings: RigSettings = RigSettings(), swatches: bool = True):
+                 cloth_dir=None, measured_csv=None, settings: RigSettings = RigSettings(), swatches: bool = True,
+                 specular_weight: float | None = None):
         if materials is None:
             materials = DEFAULT_MATERIALS if tables_dir is not None else ("baseline",)
         materials = tuple(materials)
@@ -123,6 +128,16 @@ class ValidationRun:
                 self.tables = yarn_tables_from_bake(tables_dir)
             except (FileNotFoundError, ValueError, KeyError) as error:
                 raise ParameterError("tables_dir", str(tables_dir), f"a complete bake folder ({error})") from None
+        self.specular_weight = specular_weight
+        if specular_weight is not None:
+            if isinstance(specular_weight, bool) or not (isinstance(specular_weight, (int, float))
+                                                         and math.isfinite(specular_weight) and specular_weight >= 0):
+                raise ParameterError("specular_weight", specular_weight, "a finite number ≥ 0")
+            if self.tables is not None:
+                self.tables = replace(
+                    self.tables, specular={**self.tables.specular, "weight": float(specular_weight),
+                                           "source": f"{self.tables.specular['source']}, weight set to "
+                                                     f"{specular_weight:g} for this sweep"})
         self.cloth_tables = None
         if set(GARMENT_MATERIALS) & set(self.materials):
             try:
@@ -234,6 +249,7 @@ class ValidationRun:
         start = time.perf_counter()
         distributed = import_precompute("distributed")
         inputs = {"sample": self.sample, "settings": self.settings, "materials": self.materials,
+                  "specular_weight": self.specular_weight,
                   "tables": distributed.folder_payload(self.tables.brdf_path.parent) if self.tables else None,
                   "cloth": (distributed.folder_payload(self.cloth_tables.lobe_path.parent) if self.cloth_tables
                             else None)}
@@ -310,6 +326,7 @@ class ValidationRun:
                            "thickness_mm": 2 * rig.bounds.half_thickness,
                            "weave": _weave_description(rig.sample)},
                 "tables_dir": str(self.tables.brdf_path.parent) if self.tables else None,
+                "yarn_specular": dict(self.tables.specular) if self.tables and self.tables.specular else None,
                 "cloth_dir": str(self.cloth_tables.lobe_path.parent) if self.cloth_tables else None,
                 "measured_csv": str(self.measured_csv) if self.measured_csv else None,
             },
@@ -525,7 +542,7 @@ def _worker_sweep(inputs: dict, garment: bool) -> _WorkerSweep:
         run = ValidationRun(inputs["sample"], root / "out", materials=inputs["materials"],
                             tables_dir=write_payload(inputs["tables"], root / "tables") if inputs["tables"] else None,
                             cloth_dir=write_payload(inputs["cloth"], root / "cloth") if inputs["cloth"] else None,
-                            settings=inputs["settings"])
+                            settings=inputs["settings"], specular_weight=inputs["specular_weight"])
         rig = build_rig(run.sample, run.settings)
         rig.scene.render.threads_mode = "FIXED"
         rig.scene.render.threads = worker_threads()

@@ -343,3 +343,30 @@ def test_the_yarn_material_is_no_light_to_sample(tmp_path, synthetic_tables, mod
 
 def test_the_material_feeds_the_lobe_weights_in_the_order_of_the_tiles():
     assert tuple(LOBE_WEIGHT_SOCKETS) == LOBES
+
+
+@pytest.mark.blender
+def test_new_tables_reach_a_material_saved_with_an_older_shader(synthetic_tables):
+    # A .blend keeps the shader its material was made with: one from before UnscatteredReach (an
+    # older ClothLight) is built again with this version's when it is pointed at other tables
+    # (the Dye Range's recolour), in its mode and under its sun.
+    from clothlight.blender.materials import material_mode, read_other_tables
+    from clothlight.blender.osl_shaders import shader_source
+    from tests.helpers import script_material
+
+    bpy.ops.wm.read_homefile(use_empty=True)
+    configure_measurement_render(bpy.context.scene, resolution=(8, 8), samples=1)
+    source = shader_source("cloth_yarn")
+    older = source.replace("    float UnscatteredReach = 1e9,", "").replace("UnscatteredReach,", "1e9,")
+    assert older != source
+    material, node = script_material("saved yarn", "cloth_yarn", older)
+    node.inputs["SunMode"].default_value = 1
+    node.inputs["SunDirection"].default_value = (0.6, 0.0, 0.8)
+    assert "UnscatteredReach" not in node.inputs
+    tables = synthetic_tables[0]
+    read_other_tables(material, tables)
+    node = shader_node(material)
+    assert "UnscatteredReach" in node.inputs
+    assert node.inputs["Table"].default_value == str(tables.brdf_path)
+    assert material_mode(material) == SUN_MODE
+    assert tuple(node.inputs["SunDirection"].default_value) == pytest.approx((0.6, 0.0, 0.8))

@@ -263,15 +263,34 @@ def material_mode(material) -> str | None:
     return SUN_MODE if node.inputs["SunMode"].default_value else GENERAL_MODE
 
 
+#: The sun-mode inputs a yarn material built again keeps (its sun, until the sun link syncs it).
+_SUN_SOCKETS = ("SunDirection", "SunIrradiance")
+#: The shader inputs :func:`_read_tables` sets and the lobe weights the general mode feeds: a shader
+#: without one of them is older than this version.
+_TABLE_SOCKETS = ("Table", "IncidenceResolution", "ExitResolution", "UnscatteredTable", "UnscatteredSamples",
+                  "UnscatteredReach", "UnscatteredSpread", "IOR", *LOBE_SHAPE_SOCKETS, *SPECULAR_SOCKETS,
+                  *LOBE_WEIGHT_SOCKETS.values())
+
+
 def read_other_tables(material, tables) -> None:
     """Point a yarn material at other tables (another bake of its yarn), its mode and sun kept: the
-    OSL shader's table inputs, or the general mode's plain nodes built again."""
+    OSL shader's table inputs, or the general mode's plain nodes built again.  A material saved with
+    an older shader (a .blend keeps the shader it was made with), which lacks an input the tables
+    set, is built again with this version's, in its mode."""
     if material.get(MODE_PROPERTY) == GENERAL_MODE:
         build_yarn_material(tables, material.name, mode=GENERAL_MODE)
         return
     node = shader_node(material)
     if node is None or "Table" not in node.inputs:
         raise ValueError(f"material {material.name!r} has no ClothLight yarn shader")
+    if any(name not in node.inputs for name in _TABLE_SOCKETS):
+        mode = material_mode(material) or SUN_MODE
+        sun = {name: tuple(node.inputs[name].default_value) for name in _SUN_SOCKETS if name in node.inputs}
+        build_yarn_material(tables, material.name, mode=mode)
+        node = shader_node(material)
+        for name, value in sun.items():
+            node.inputs[name].default_value = value
+        return
     _read_tables(material, node, tables)
 
 

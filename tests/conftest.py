@@ -33,9 +33,12 @@ import pytest
 
 from tests.helpers import BLENDER_ONLY, build_extension_zip
 
-if "BLENDER_USER_RESOURCES" not in os.environ:
+# Blender's user folder (installed extensions, their wheels and caches) in a temporary folder, one
+# per process: pytest-xdist's workers inherit the controller's environment, and two workers
+# installing the extension into one folder would race.  A folder the user set is kept.
+if os.environ.get("BLENDER_USER_RESOURCES", "") == os.environ.get("CLOTHLIGHT_TEST_USER_RESOURCES", ""):
     _user_resources = tempfile.mkdtemp(prefix="clothlight-blender-user-")
-    os.environ["BLENDER_USER_RESOURCES"] = _user_resources
+    os.environ["BLENDER_USER_RESOURCES"] = os.environ["CLOTHLIGHT_TEST_USER_RESOURCES"] = _user_resources
     atexit.register(shutil.rmtree, _user_resources, ignore_errors=True)
 
 

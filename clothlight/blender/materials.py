@@ -53,6 +53,8 @@ LOBE_WEIGHT_SOCKETS = {
 UNSCATTERED_REACH_NEVER = 1e9
 #: Label of the Image Texture nodes that read ``lobes.exr`` for the general mode.
 LOBE_IMAGE_LABEL = "ClothLight lobe weights"
+#: Name of a packed ``lobes.exr``, followed by a digest of its content.
+LOBE_IMAGE_PREFIX = "ClothLight lobes "
 #: Custom properties of a yarn material: the folder of the tables it reads, and (for the general
 #: mode in plain nodes, which has no SunMode socket) its mode.
 TABLES_PROPERTY = "clothlight_tables"
@@ -76,12 +78,23 @@ def _object_to_world(tree, attribute_name: str, vector_type: str, location):
     return transform.outputs["Vector"]
 
 
-def _new_material(name: str, shader_name: str):
+def _fresh_material(name: str):
+    """The material named ``name`` (made if missing) emptied of its nodes and ClothLight properties;
+    lobe atlases only it used are removed (a material built again must not leave orphans)."""
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
-    tree = material.node_tree
-    tree.nodes.clear()
-    for key in (MODE_PROPERTY, TABLES_PROPERTY):
+    images = {node.image for node in material.node_tree.nodes if node.type == "TEX_IMAGE" and node.image}
+    material.node_tree.nodes.clear()
+    for image in images:
+        if image.users == 0 and image.name.startswith(LOBE_IMAGE_PREFIX):
+            bpy.data.images.remove(image)
+    for key in ("clothlight_shader", MODE_PROPERTY, TABLES_PROPERTY):
         material.pop(key, None)
+    return material
+
+
+def _new_material(name: str, shader_name: str):
+    material = _fresh_material(name)
+    tree = material.node_tree
     shader = add_script_node(tree, shader_name)
     shader.location = (300, 0)
     output = tree.nodes.new("ShaderNodeOutputMaterial")
@@ -175,21 +188,14 @@ def build_yarn_material(
 
 
 def _build_plain_general_material(tables, name: str):
-    material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    material = _fresh_material(name)
     tree = material.node_tree
-    previous_images = {node.image for node in tree.nodes if node.type == "TEX_IMAGE" and node.image is not None}
-    tree.nodes.clear()
-    for key in ("clothlight_shader", MODE_PROPERTY, TABLES_PROPERTY):
-        material.pop(key, None)
     tangent = _object_to_world(tree, YARN_TANGENT, "VECTOR", (-2200, 200))
     cloth_normal = _object_to_world(tree, CLOTH_NORMAL, "NORMAL", (-2200, -700))
     surface = general_mode_surface(tree, tables, tangent, cloth_normal, _packed_lobe_image(tables.lobe_path))
     output = tree.nodes.new("ShaderNodeOutputMaterial")
     output.location = (1200, 0)
     tree.links.new(surface, output.inputs["Surface"])
-    for image in previous_images:
-        if image.users == 0:
-            bpy.data.images.remove(image)
     material["clothlight_shader"] = PLAIN_NODES
     material[MODE_PROPERTY] = GENERAL_MODE
     material[TABLES_PROPERTY] = str(tables.brdf_path.parent)
@@ -232,7 +238,7 @@ def _packed_lobe_image(path: pathlib.Path):
     image manager (a file path would go to OpenImageIO under OSL).  Named by its content, so that
     materials of the same tables share one image and a table folder written again in place is never
     served from an older copy."""
-    name = f"ClothLight lobes {hashlib.sha256(path.read_bytes()).hexdigest()[:16]}"
+    name = LOBE_IMAGE_PREFIX + hashlib.sha256(path.read_bytes()).hexdigest()[:16]
     image = bpy.data.images.get(name)
     if image is None or image.packed_file is None:
         image = bpy.data.images.load(str(path), check_existing=False)

@@ -54,14 +54,22 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
     ``tangent`` and ``cloth_normal`` are world-space vector sockets (the yarn axis and the cloth's
     macroscopic normal); ``lobe_image`` is ``lobes.exr`` as a Blender image.  Like the OSL shader,
     a yarn's far face lets every ray but the camera's pass (the tables hold the light through the
-    yarn), and other yarns' front faces block shadow rays."""
+    yarn), and other yarns' front faces block shadow rays.
+
+    Cycles runs every node at every point it shades (30 math nodes cost about a quarter of a
+    Principled BSDF render), so the graph holds as few nodes as the formulas allow."""
     nodes = NodeBuilder(tree)
     geometry = nodes.node("ShaderNodeNewGeometry", (-1600, 200))
     normal, toward_view = geometry.outputs["Normal"], geometry.outputs["Incoming"]
-    axis, view = _yarn_frame_view(nodes, normal, tangent, toward_view)
-    coordinates = _lobe_atlas_coordinates(nodes, view, tables.exit_resolution)
+    axis, across = nodes.tangent_frame(normal, tangent, (-1400, -200))
+    view = [nodes.vector_math("DOT_PRODUCT", toward_view, direction, location=(-650, 100 - 120 * i))
+            .outputs["Value"] for i, direction in enumerate((axis, across, normal))]
+    half_texel = 0.5 / tables.exit_resolution
+    span = 1.0 - 2.0 * half_texel
+    coordinates = _held_square_coordinates(nodes, view, half_texel)
 
     present = lobes_present(lobe_image)
+    lobe_count = len(present)
     shape = tables.lobe_shape
     closures = []
     for k, (node_type, settings) in enumerate((
@@ -74,7 +82,9 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
         if not present[k]:
             continue
         y = 600 - 220 * k
-        tile = nodes.vector_math("ADD", coordinates, (k / len(present), 0.0, 0.0), location=(-200, y))
+        # Tile k: u = (k + h + (1 − 2h) s′)/K and v = h + (1 − 2h) t′ (see _held_square_coordinates).
+        tile = nodes.vector_math("MULTIPLY_ADD", coordinates, (span / lobe_count, span, 0.0),
+                                 ((k + half_texel) / lobe_count, half_texel, 0.0), location=(-200, y))
         weight = nodes.node("ShaderNodeTexImage", (-20, y), {"Vector": tile.outputs[0]}, image=lobe_image,
                             interpolation="Linear", extension="EXTEND", label=f"lobe weight {k}")
         closure = nodes.node(node_type, (260, y), {"Color": weight.outputs["Color"]}, **settings)
@@ -89,66 +99,49 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
     closures += _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal)
     surface = nodes.add_shaders(closures, x=560) if closures else None
 
-    # A far face (backfacing) passes every ray but the camera's: factor = backfacing × (1 − camera ray).
+    # A far face (backfacing) passes every ray but the camera's: backfacing > is-camera-ray.
     light_path = nodes.node("ShaderNodeLightPath", (200, -900))
-    not_camera = nodes.math("SUBTRACT", 1.0, light_path.outputs["Is Camera Ray"], location=(400, -900))
-    passes = nodes.math("MULTIPLY", geometry.outputs["Backfacing"], not_camera, location=(600, -900))
+    passes = nodes.math("GREATER_THAN", geometry.outputs["Backfacing"], light_path.outputs["Is Camera Ray"],
+                        location=(400, -900))
     transparent = nodes.node("ShaderNodeBsdfTransparent", (600, -1050))
     return nodes.node("ShaderNodeMixShader", (900, 0), (passes, surface, transparent.outputs[0])).outputs[0]
 
 
-def _yarn_frame_view(nodes, normal, tangent, toward_view):
-    """The yarn frame (``cl_yarn_frame``: x the axis made normal to z, y = z × x, z the shading
-    normal) and the view in it on the tables' hemisphere (``cl_exit_direction``); returns the
-    sockets of the axis x and of the view."""
-    axis, across = nodes.tangent_frame(normal, tangent, (-1400, -200))
-    components = [nodes.vector_math("DOT_PRODUCT", toward_view, direction, location=(-650, 100 - 120 * i))
-                  .outputs["Value"] for i, direction in enumerate((axis, across, normal))]
-    up = nodes.math("MAXIMUM", components[2], 0.0, location=(-500, -140))  # a silhouette view at the horizon
-    view = nodes.node("ShaderNodeCombineXYZ", (-350, 0), (components[0], components[1], up))
-    return axis, nodes.vector_math("NORMALIZE", view.outputs[0], location=(-200, 0)).outputs[0]
+def _held_square_coordinates(nodes, view, half_texel: float):
+    """The socket of (s′, t′, 0): where the view falls in the tables' hemisphere square
+    (``cl_exit_direction`` and ``cl_hemisphere_to_square``, Shirley & Chiu 1997), held inside the
+    tile's outermost pixel centres h = ``half_texel`` and 1 − h (``cl_tile_coordinates``) and mapped
+    to [0, 1]: s′ = (s − h)/(1 − 2h), t′ the same of 1 − t (Blender's image v runs up).
+
+    ``view`` holds the sockets of the unit view's components (ω_x, ω_y, ω_z) in the yarn frame.  A
+    view below the shading horizon (a silhouette) is taken at the horizon: with ω_z clamped at 0, r =
+    √(1 − ω_z) is 1 and the azimuth is kept, as normalising (ω_x, ω_y, 0) would.  The concentric
+    map's inverse in one formula for both octant pairs: with c(p, q) = clamp((4/π) atan2(p, |q|), −1, 1),
+    a = r c(ω_x, ω_y) and b = r c(ω_y, ω_x) (where |ω_x| ≥ |ω_y| the clamp makes a = sign(ω_x) r,
+    elsewhere the atan2 stays inside ±1); s = (a + 1)/2 and 1 − t = (1 − b)/2."""
+    omega_x, omega_y, omega_z = view
+    radius = nodes.math("SQRT", _clamped(nodes.math("SUBTRACT", 1.0, omega_z, location=(-1250, 900))),
+                        location=(-1100, 900))
+    # s − h = r (c + 1)/2 + (1 − r)/2 − h, so s′ is one clamped multiply-add of (c + 1)/2.
+    span = 1.0 - 2.0 * half_texel
+    radius_over_span = nodes.math("MULTIPLY", radius, 1.0 / span, location=(-950, 900))
+    offset = nodes.math("MULTIPLY_ADD", radius, -0.5 / span, (0.5 - half_texel) / span, location=(-950, 800))
+
+    def held(own, other, sign, location):
+        """clamp((s − h)/(1 − 2h), 0, 1) for s = (sign r c(own, other) + 1)/2."""
+        angle = nodes.math("ARCTAN2", own, nodes.math("ABSOLUTE", other, location=location), location=location)
+        half = _clamped(nodes.math("MULTIPLY_ADD", angle, sign * 2.0 / math.pi, 0.5, location=location))
+        return _clamped(nodes.math("MULTIPLY_ADD", half, radius_over_span, offset, location=location))
+
+    return nodes.node("ShaderNodeCombineXYZ", (-300, 1150),
+                      (held(omega_x, omega_y, 1.0, (-800, 1300)), held(omega_y, omega_x, -1.0, (-800, 1000)), 0.0)
+                      ).outputs[0]
 
 
-def _lobe_atlas_coordinates(nodes, view, exit_resolution: int):
-    """Blender image coordinates (v up) of ``view`` in the first tile of the lobe atlas
-    (``cloth_yarn_exit.osl``): the equal-area hemisphere map to the unit square, held inside the
-    tile's outermost pixel centres (``cl_tile_coordinates``).
-
-    The concentric map's inverse, per octant pair: with r = √(1 − ω_z), where |ω_x| ≥ |ω_y|
-    a = sign(ω_x) r and b = r (4/π) atan2(ω_y, |ω_x|); elsewhere b = sign(ω_y) r and
-    a = r (4/π) atan2(ω_x, |ω_y|); then (s, t) = ((a + 1)/2, (b + 1)/2)."""
-    lobe_count = len(import_precompute("closure_fit").LOBES)
-    split = nodes.node("ShaderNodeSeparateXYZ", (-1400, 1000), (view,))
-    x, y, z = (split.outputs[name] for name in "XYZ")
-    radius = nodes.math("SQRT", nodes.math("SUBTRACT", 1.0, z, location=(-1250, 900)), location=(-1100, 900))
-    abs_x = nodes.math("ABSOLUTE", x, location=(-1250, 1100))
-    abs_y = nodes.math("ABSOLUTE", y, location=(-1250, 1000))
-    x_major = nodes.math("GREATER_THAN", abs_x, abs_y, location=(-1100, 1200))  # 1 where |ω_x| > |ω_y|
-    y_major = nodes.math("SUBTRACT", 1.0, x_major, location=(-950, 1200))
-    scaled_radius = nodes.math("MULTIPLY", radius, 4.0 / math.pi, location=(-950, 900))
-
-    def coordinate(major, own, other_abs, other_major, location):
-        """a (or b): sign(own) r where ``own`` is the major axis, r (4/π) atan2(own, |other|) where not."""
-        edge = nodes.math("MULTIPLY", nodes.math("SIGN", own, location=location), radius,
-                          location=(location[0] + 150, location[1]))
-        angle = nodes.math("ARCTAN2", own, other_abs, location=(location[0], location[1] - 100))
-        inside = nodes.math("MULTIPLY", angle, scaled_radius, location=(location[0] + 150, location[1] - 100))
-        return nodes.math("ADD", nodes.math("MULTIPLY", edge, major, location=(location[0] + 300, location[1])),
-                          nodes.math("MULTIPLY", inside, other_major, location=(location[0] + 300, location[1] - 100)),
-                          location=(location[0] + 450, location[1]))
-
-    a = coordinate(x_major, x, abs_y, y_major, (-800, 1300))
-    b = coordinate(y_major, y, abs_x, x_major, (-800, 1000))
-    disk = nodes.node("ShaderNodeCombineXYZ", (-300, 1150), (a, b, 0.0))
-    square = nodes.vector_math("MULTIPLY_ADD", disk.outputs[0], (0.5, 0.5, 0.0), (0.5, 0.5, 0.0),
-                               location=(-150, 1150))
-    half_texel = 0.5 / exit_resolution
-    held = nodes.vector_math("MAXIMUM", square.outputs[0], (half_texel, half_texel, 0.0), location=(0, 1150))
-    held = nodes.vector_math("MINIMUM", held.outputs[0], (1.0 - half_texel, 1.0 - half_texel, 0.0),
-                             location=(150, 1150))
-    # u = s / tiles (tile 0), v = 1 − t (Blender's v runs up).
-    return nodes.vector_math("MULTIPLY_ADD", held.outputs[0], (1.0 / lobe_count, -1.0, 0.0), (0.0, 1.0, 0.0),
-                             location=(300, 1150)).outputs[0]
+def _clamped(socket):
+    """``socket``, a Math node's output, clamped to [0, 1] by its node."""
+    socket.node.use_clamp = True
+    return socket
 
 
 def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal) -> list:
@@ -160,9 +153,9 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal) -> list:
         return []
     facing = nodes.math("SIGN", nodes.vector_math("DOT_PRODUCT", cloth_normal, toward_view, location=(-1400, -700))
                         .outputs["Value"], location=(-1250, -700))
-    toward = nodes.vector_math("SCALE", cloth_normal, location=(-1100, -700))
+    toward = nodes.vector_math("SCALE", cloth_normal, location=(-1100, -700))  # unit: a closure normalises its normal
     nodes.link(facing, toward.inputs["Scale"])
-    toward = nodes.vector_math("NORMALIZE", toward.outputs[0], location=(-950, -700)).outputs[0]
+    toward = toward.outputs[0]
     face_on_side = nodes.math("GREATER_THAN", nodes.vector_math("DOT_PRODUCT", normal, toward, location=(-800, -800))
                               .outputs["Value"], 0.0, location=(-650, -800))
     copies = math.ceil(weight)

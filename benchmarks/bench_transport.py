@@ -78,11 +78,6 @@ def yarn_of(preset: str):
     return optics, YarnGeometry(0.1, optics.boundary_index)
 
 
-def paper_red_cotton():
-    """The paper's red cotton (paper_2008, the default when these figures were first taken) and its yarn."""
-    return yarn_of("paper_2008")
-
-
 def yarn() -> None:
     """Paths and collisions per second on the paper's thin medium and on the default (issue 24: the yarn's
     collisions/s within 2x of the slab's)."""
@@ -97,7 +92,7 @@ def yarn() -> None:
 
 
 def bake() -> None:
-    optics, geometry = paper_red_cotton()
+    optics, geometry = yarn_of("paper_2008")  # the default when these figures were first taken
     simulate_yarn(optics, geometry, TransportGrids(16, 8, 4), paths_per_cell=100)  # compile
     transport, wall, cpu = timed(lambda: simulate_yarn(optics, geometry, TransportGrids(16, 8, 12),
                                                        target_rel_stderr=0.01, seed=0))

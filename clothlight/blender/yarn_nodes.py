@@ -56,8 +56,8 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
     a yarn's far face lets every ray but the camera's pass (the tables hold the light through the
     yarn), and other yarns' front faces block shadow rays.
 
-    Cycles runs every node at every point it shades (30 math nodes cost about a quarter of a
-    Principled BSDF render), so the graph holds as few nodes as the formulas allow."""
+    Cycles runs every node at every point it shades, math nodes included, so the graph holds as
+    few nodes as the formulas allow."""
     nodes = NodeBuilder(tree)
     geometry = nodes.node("ShaderNodeNewGeometry", (-1600, 200))
     normal, toward_view = geometry.outputs["Normal"], geometry.outputs["Incoming"]

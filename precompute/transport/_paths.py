@@ -27,10 +27,6 @@ of the whole path it takes the same MIS ratio r_λ(x).
 Russian roulette: every ``ROULETTE_PERIOD`` collisions (every collision when
 r ≡ 1), a path whose largest weight fell below ``ROULETTE_THRESHOLD`` survives
 with probability ``ROULETTE_SURVIVAL`` and has its weights divided by it.  The
-check forms the L weights (L exponentials) only where a lower bound of the
-largest, from one exponential, does not already clear the threshold
-(:func:`surely_above_threshold`): the decisions, and so the random numbers, are
-those of the full check.  The
 decision depends only on the path so far, never on which wavelength is the
 hero, so it is a common factor of all k's densities: unbiased.  Without
 absorption the largest weight is ≥ 1 (Σ_k q_k r_k = 1) and roulette never
@@ -70,9 +66,6 @@ ROULETTE_PERIOD = 4
 #: A path still inside after this many interactions (collisions + internal reflections) is
 #: ended and its weight reported as lost, so nothing disappears unreported.
 MAX_INTERACTIONS = 1_000_000
-#: How far above ROULETTE_THRESHOLD a lower bound of a path's largest weight must be for the exact
-#: evaluation to be skipped: far above the bound's and the evaluation's round-off.
-BOUND_MARGIN = 1.0 + 1e-9
 #: Running phase ratios are rescaled when an upper bound of their largest exceeds RESCALE.
 RESCALE = 1e100
 
@@ -165,15 +158,6 @@ def update_phase_ratios(medium, hero, mu, ratio, bound):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def log_flight_ratio(medium, k, hero, n, length):
-    """ln of the free-flight densities' ratio μt_k^n e^{−μt_k length} / (μt_h^n e^{−μt_h length})."""
-    b = -(medium.mu_t[k] - medium.mu_t[hero]) * length
-    if n > 0:
-        b += n * (medium.log_mu_t[k] - medium.log_mu_t[hero])
-    return b
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
 def mis_ratios(medium, hero, ratio, n, length, hero_p, out):
     """r_λ = p_λ(x) / Σ_k q_k p_k(x) for the path so far (n collisions, ``length`` mm) into ``out``;
     q = ``hero_p``, the probabilities with which the hero wavelength was chosen.
@@ -188,7 +172,9 @@ def mis_ratios(medium, hero, ratio, n, length, hero_p, out):
         return
     top = -math.inf
     for k in range(n_wl):
-        b = log_flight_ratio(medium, k, hero, n, length)
+        b = -(medium.mu_t[k] - medium.mu_t[hero]) * length
+        if n > 0:
+            b += n * (medium.log_mu_t[k] - medium.log_mu_t[hero])
         out[k] = b
         top = max(top, b)
     total = 0.0
@@ -198,7 +184,9 @@ def mis_ratios(medium, hero, ratio, n, length, hero_p, out):
     if not 0.0 < total < math.inf:
         # every term underflowed (extreme phase ratios): the same sum in logarithms
         for k in range(n_wl):
-            b = log_flight_ratio(medium, k, hero, n, length)
+            b = -(medium.mu_t[k] - medium.mu_t[hero]) * length
+            if n > 0:
+                b += n * (medium.log_mu_t[k] - medium.log_mu_t[hero])
             out[k] = b + math.log(ratio[k]) if ratio[k] > 0.0 else -math.inf
         top = -math.inf
         for k in range(n_wl):
@@ -210,31 +198,6 @@ def mis_ratios(medium, hero, ratio, n, length, hero_p, out):
     scale = 1.0 / total
     for k in range(n_wl):
         out[k] *= scale
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def surely_above_threshold(medium, hero, ratio, n, length, hero_p, factor):
-    """Whether the path's largest weight max_λ r_λ α_λ^n times ``factor`` is surely at least
-    ROULETTE_THRESHOLD, from a lower bound that needs one exponential instead of L.
-
-    With b_k = n ln(μt_k/μt_h) − (μt_k − μt_h)·length (:func:`log_flight_ratio`) and B = max_k b_k,
-    the MIS ratio of the wavelength c of largest albedo is r_c = ratio_c e^{b_c} / Σ_k q_k ratio_k e^{b_k}
-    ≥ ratio_c e^{b_c − B} / Σ_k q_k ratio_k, and the largest weight is at least r_c α_c^n.  The bound
-    must clear the threshold by a margin far above round-off, so where it answers True the full
-    check would answer the same: the path's decisions and random numbers do not change."""
-    n_wl = ratio.shape[0]
-    top = -math.inf
-    total = 0.0
-    c = 0
-    for k in range(n_wl):
-        top = max(top, log_flight_ratio(medium, k, hero, n, length))
-        total += hero_p[k] * ratio[k]
-        if medium.albedo[k] > medium.albedo[c]:
-            c = k
-    if not 0.0 < total < math.inf:
-        return False
-    lower = ratio[c] * math.exp(log_flight_ratio(medium, c, hero, n, length) - top) / total * albedo_power(medium, c, n)
-    return lower * factor >= ROULETTE_THRESHOLD * BOUND_MARGIN
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -302,9 +265,7 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
             largest_albedo_power *= medium.max_albedo
             check = (n % ROULETTE_PERIOD == 0) if spectral else True
             if check:
-                if spectral and surely_above_threshold(medium, hero, ratio, n, length, hero_p, factor):
-                    largest = math.inf
-                elif spectral:
+                if spectral:
                     mis_ratios(medium, hero, ratio, n, length, hero_p, ratios)
                     largest = 0.0
                     for k in range(n_wl):

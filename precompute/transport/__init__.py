@@ -10,6 +10,16 @@ from .cylinder import TransportGrids, YarnGeometry, YarnTransport, simulate_yarn
 from .media import TransportMedium, henyey_greenstein_medium, medium_from_optics
 from .slab import SlabResult, simulate_hg_slab, simulate_slab
 
+
+def _flush_stale_kernels() -> None:
+    from .. import grids
+    from . import _interactions, _kernels, _paths, _rng, kernel_cache
+
+    kernel_cache.flush_stale_kernel_caches((grids, _interactions, _kernels, _paths, _rng))
+
+
+_flush_stale_kernels()
+
 __all__ = [
     "ParallelBeamRadiance",
     "SlabResult",

@@ -1,0 +1,33 @@
+"""numba keys a cached kernel by its own file only; precompute.transport.kernel_cache flushes every
+transport kernel's cache when any transport source (or the direction grids they inline) changes."""
+
+import pathlib
+
+from precompute import grids
+from precompute.transport import _kernels, _paths, kernel_cache
+
+
+def test_the_digest_covers_the_sources_that_kernels_inline_from_other_files():
+    names = {path.name for path in kernel_cache.kernel_sources()}
+    assert {"_paths.py", "_interactions.py", "_rng.py", "_kernels.py", "grids.py"} <= names
+
+
+def test_a_changed_source_flushes_every_kernel_cache_beside_it():
+    modules = (grids, _kernels, _paths)
+    kernels = kernel_cache.cached_kernels(modules)
+    assert _kernels.yarn_kernel in kernels and _paths.trace in kernels and grids.hemisphere_cell in kernels
+    current = kernel_cache.sources_digest()
+    kernel_cache.flush_stale_kernel_caches(modules, current)
+    assert not kernel_cache.flush_stale_kernel_caches(modules, current)  # up to date: nothing flushed
+    flushed = []
+    for kernel in kernels:
+        kernel._cache.flush = lambda kernel=kernel: flushed.append(kernel)  # record, keep the real cache
+    try:
+        assert kernel_cache.flush_stale_kernel_caches(modules, "a digest of other sources")
+    finally:
+        for kernel in kernels:
+            del kernel._cache.flush
+        kernel_cache.flush_stale_kernel_caches(modules, current)
+    assert set(flushed) == set(kernels)
+    for kernel in kernels:
+        assert (pathlib.Path(kernel._cache.cache_path) / kernel_cache.DIGEST_FILE).read_text() == current

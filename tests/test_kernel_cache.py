@@ -20,14 +20,16 @@ def test_a_changed_source_flushes_every_kernel_cache_beside_it():
     kernel_cache.flush_stale_kernel_caches(modules, current)
     assert not kernel_cache.flush_stale_kernel_caches(modules, current)  # up to date: nothing flushed
     flushed = []
+    markers = set()
     for kernel in kernels:
         kernel._cache.flush = lambda kernel=kernel: flushed.append(kernel)  # record, keep the real cache
     try:
         assert kernel_cache.flush_stale_kernel_caches(modules, "a digest of other sources")
+        markers = {pathlib.Path(kernel._cache.cache_path) / kernel_cache.DIGEST_FILE for kernel in kernels}
+        assert all(marker.read_text() == "a digest of other sources" for marker in markers)
     finally:
         for kernel in kernels:
             del kernel._cache.flush
-        kernel_cache.flush_stale_kernel_caches(modules, current)
+        for marker in markers:  # the caches were not flushed: they still match the current sources
+            marker.write_text(current)
     assert set(flushed) == set(kernels)
-    for kernel in kernels:
-        assert (pathlib.Path(kernel._cache.cache_path) / kernel_cache.DIGEST_FILE).read_text() == current

@@ -8,8 +8,8 @@ from precompute.transport import _kernels, _paths, kernel_cache
 
 
 def test_the_digest_covers_the_sources_that_kernels_inline_from_other_files():
-    names = {path.name for path in kernel_cache.kernel_sources()}
-    assert {"_paths.py", "_interactions.py", "_rng.py", "_kernels.py", "grids.py"} <= names
+    assert {"transport/_paths.py", "transport/_interactions.py", "transport/_rng.py", "transport/_kernels.py",
+            "grids.py"} <= set(kernel_cache.kernel_sources())
 
 
 def test_a_changed_source_flushes_every_kernel_cache_beside_it():

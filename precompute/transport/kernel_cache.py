@@ -9,28 +9,27 @@ the cache of every kernel when any of them changes, so the next call compiles af
 
 from __future__ import annotations
 
-import hashlib
 import pathlib
 
 from numba.core.registry import CPUDispatcher
 
+from ..cache import source_digest
+
 #: Where the digest of the sources is kept, in each folder of cached kernels.
 DIGEST_FILE = "clothlight-kernel-sources.sha256"
+#: The ``precompute`` package, which the sources are named relative to.
+PACKAGE_ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
-def kernel_sources() -> list[pathlib.Path]:
-    """The transport's source files and the direction grids they inline."""
-    package = pathlib.Path(__file__).resolve().parent
-    return sorted(package.glob("*.py")) + [package.parent / "grids.py"]
+def kernel_sources() -> list[str]:
+    """The transport's source files and the direction grids they inline, relative to the package."""
+    transport = sorted(path.relative_to(PACKAGE_ROOT).as_posix() for path in (PACKAGE_ROOT / "transport").glob("*.py"))
+    return transport + ["grids.py"]
 
 
 def sources_digest() -> str:
-    """SHA-256 over the names and contents of :func:`kernel_sources`."""
-    digest = hashlib.sha256()
-    for path in kernel_sources():
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
+    """:func:`precompute.cache.source_digest` of :func:`kernel_sources`."""
+    return source_digest(PACKAGE_ROOT, kernel_sources())
 
 
 def cached_kernels(modules) -> list:

@@ -176,3 +176,41 @@ def test_slab_command_prints_json_with_errors_and_parts():
 def test_bad_command_line_input_exits_2_naming_the_parameter():
     completed = run_cli("--albedo", "0.9", "--g", "1.5", "--tau", "2", "--paths", "100")
     assert completed.returncode == 2 and "g =" in completed.stderr
+
+
+def test_roulette_shortcut_skips_only_checks_the_full_check_passes():
+    """The lower bound that spares the roulette check its L exponentials (surely_above_threshold):
+    wherever it answers True the full check — the MIS ratios, then the largest r_λ α_λ^n — finds the
+    path's weight at or above ROULETTE_THRESHOLD too, within 1e-6 of the threshold included; and on
+    the default red cotton it answers True for most states clearly above it, or it would spare nothing."""
+    from precompute.medium import DEFAULT_PRESET, load_preset
+    from precompute.optics import medium_optics
+    from precompute.transport._paths import ROULETTE_THRESHOLD, largest_weight, mis_ratios, surely_above_threshold
+    from precompute.transport.media import medium_from_optics
+
+    medium = medium_from_optics(medium_optics(load_preset(DEFAULT_PRESET))).kernel()
+    n_wl = len(medium.mu_t)
+    brightest = int(np.argmax(medium.albedo))
+    rng = np.random.default_rng(7)
+    hero_p = rng.dirichlet(np.full(n_wl, 4.0))
+    clearly_above = spared = 0
+    for trial in range(400):
+        hero = int(rng.integers(n_wl))
+        n = int(rng.integers(1, 100)) * 4
+        length = n / medium.mu_t[hero] * rng.gamma(8.0, 1 / 8.0)
+        ratio = np.exp(rng.normal(0.0, 0.5, n_wl))
+        ratio /= ratio[hero]
+        ratios = np.empty(n_wl)
+        mis_ratios(medium.mu_t, medium.log_mu_t, False, hero, ratio, n, length, hero_p, ratios)
+        largest = largest_weight(medium.albedo, ratios, n)
+        # half the states anywhere from 100x below to 100x above the threshold, half within 1e-6 of it
+        scale = rng.uniform(0.01, 100.0) if trial % 2 else 1.0 + rng.uniform(-1e-6, 1e-6)
+        factor = ROULETTE_THRESHOLD / largest * scale
+        shortcut = surely_above_threshold(medium.mu_t, medium.log_mu_t, medium.albedo, brightest, hero, ratio, n,
+                                          length, hero_p, factor)
+        if shortcut:
+            assert largest * factor >= ROULETTE_THRESHOLD
+        if scale > 1.01:
+            clearly_above += 1
+            spared += shortcut
+    assert spared > 0.5 * clearly_above > 0

@@ -27,6 +27,10 @@ of the whole path it takes the same MIS ratio r_λ(x).
 Russian roulette: every ``ROULETTE_PERIOD`` collisions (every collision when
 r ≡ 1), a path whose largest weight fell below ``ROULETTE_THRESHOLD`` survives
 with probability ``ROULETTE_SURVIVAL`` and has its weights divided by it.  The
+check forms the L weights (L exponentials) only where a lower bound of the
+largest, from one exponential, does not already clear the threshold
+(:func:`surely_above_threshold`): the decisions, and so the random numbers, are
+those of the full check.  The
 decision depends only on the path so far, never on which wavelength is the
 hero, so it is a common factor of all k's densities: unbiased.  Without
 absorption the largest weight is ≥ 1 (Σ_k q_k r_k = 1) and roulette never
@@ -66,6 +70,9 @@ ROULETTE_PERIOD = 4
 #: A path still inside after this many interactions (collisions + internal reflections) is
 #: ended and its weight reported as lost, so nothing disappears unreported.
 MAX_INTERACTIONS = 1_000_000
+#: How far above ROULETTE_THRESHOLD a lower bound of a path's largest weight must be for the exact
+#: evaluation to be skipped: far above the bound's and the evaluation's round-off.
+BOUND_MARGIN = 1.0 + 1e-9
 #: Running phase ratios are rescaled when an upper bound of their largest exceeds RESCALE.
 RESCALE = 1e100
 
@@ -126,16 +133,20 @@ def boundary_normal(geometry, dims, pos, normal):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def update_phase_ratios(medium, hero, mu, ratio, bound):
+def update_phase_ratios(phase_kind, hg_g, table, phase_max, hero, mu, ratio, bound):
     """Multiply the running ratios Π p_k / p_h by this scattering's p_k(μ) / p_h(μ); return the
-    updated upper bound of their largest, rescaling them all when it would exceed RESCALE."""
+    updated upper bound of their largest, rescaling them all when it would exceed RESCALE.
+
+    The medium comes in as its arrays (``hg_g``, ``table``: :data:`KernelMedium`'s ``hg_g``,
+    ``phase_by_mu``), never as the tuple: a function inlined into a loop binds its arguments
+    anew at each call, and binding the tuple takes and drops a reference to each of its arrays.
+    """
     n_wl = ratio.shape[0]
-    if medium.phase_kind == PHASE_HG:
-        inv = 1.0 / hg_value(medium.hg_g[hero], mu)
+    if phase_kind == PHASE_HG:
+        inv = 1.0 / hg_value(hg_g[hero], mu)
         for k in range(n_wl):
-            ratio[k] *= hg_value(medium.hg_g[k], mu) * inv
+            ratio[k] *= hg_value(hg_g[k], mu) * inv
     else:
-        table = medium.phase_by_mu
         position = (mu + 1.0) * 0.5 * (table.shape[0] - 1)
         j = min(max(int(position), 0), table.shape[0] - 2)
         frac = position - j
@@ -145,7 +156,7 @@ def update_phase_ratios(medium, hero, mu, ratio, bound):
         inv = 1.0 / hero_value
         for k in range(n_wl):
             ratio[k] *= (table[j, k] + (table[j + 1, k] - table[j, k]) * frac) * inv
-    bound *= medium.phase_max * inv
+    bound *= phase_max * inv
     if bound > RESCALE:
         big = 0.0
         for k in range(n_wl):
@@ -158,23 +169,33 @@ def update_phase_ratios(medium, hero, mu, ratio, bound):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def mis_ratios(medium, hero, ratio, n, length, hero_p, out):
+def log_flight_ratio(mu_t, log_mu_t, mu_t_hero, log_mu_t_hero, n, length):
+    """ln of the free-flight densities' ratio μt^n e^{−μt·length} / (μt_h^n e^{−μt_h·length})."""
+    b = -(mu_t - mu_t_hero) * length
+    if n > 0:
+        b += n * (log_mu_t - log_mu_t_hero)
+    return b
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def mis_ratios(mu_t, log_mu_t, grey, hero, ratio, n, length, hero_p, out):
     """r_λ = p_λ(x) / Σ_k q_k p_k(x) for the path so far (n collisions, ``length`` mm) into ``out``;
-    q = ``hero_p``, the probabilities with which the hero wavelength was chosen.
+    q = ``hero_p``, the probabilities with which the hero wavelength was chosen; ``mu_t``,
+    ``log_mu_t``, ``grey``: the medium's (:data:`KernelMedium`).
 
     p_k / p_h = ratio_k · (μt_k / μt_h)^n · e^{−(μt_k − μt_h) length}; the exponential factors
     are scaled by their largest so that nothing overflows (``ratio`` ≤ RESCALE).
     """
     n_wl = out.shape[0]
-    if medium.grey:
+    if grey:
         for k in range(n_wl):
             out[k] = 1.0
         return
+    mu_t_hero = mu_t[hero]
+    log_mu_t_hero = log_mu_t[hero]
     top = -math.inf
     for k in range(n_wl):
-        b = -(medium.mu_t[k] - medium.mu_t[hero]) * length
-        if n > 0:
-            b += n * (medium.log_mu_t[k] - medium.log_mu_t[hero])
+        b = log_flight_ratio(mu_t[k], log_mu_t[k], mu_t_hero, log_mu_t_hero, n, length)
         out[k] = b
         top = max(top, b)
     total = 0.0
@@ -184,9 +205,7 @@ def mis_ratios(medium, hero, ratio, n, length, hero_p, out):
     if not 0.0 < total < math.inf:
         # every term underflowed (extreme phase ratios): the same sum in logarithms
         for k in range(n_wl):
-            b = -(medium.mu_t[k] - medium.mu_t[hero]) * length
-            if n > 0:
-                b += n * (medium.log_mu_t[k] - medium.log_mu_t[hero])
+            b = log_flight_ratio(mu_t[k], log_mu_t[k], mu_t_hero, log_mu_t_hero, n, length)
             out[k] = b + math.log(ratio[k]) if ratio[k] > 0.0 else -math.inf
         top = -math.inf
         for k in range(n_wl):
@@ -201,9 +220,45 @@ def mis_ratios(medium, hero, ratio, n, length, hero_p, out):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def albedo_power(medium, k, n):
-    """α_k^n (1 for n = 0), by repeated squaring."""
-    return medium.albedo[k] ** n
+def surely_above_threshold(mu_t, log_mu_t, albedo, brightest, hero, ratio, n, length, hero_p, factor):
+    """Whether the path's largest weight max_λ r_λ α_λ^n times ``factor`` is surely at least
+    ROULETTE_THRESHOLD, from a lower bound that needs one exponential instead of L;
+    ``brightest``: the wavelength of largest albedo.
+
+    With b_k = n ln(μt_k/μt_h) − (μt_k − μt_h)·length (:func:`log_flight_ratio`) and B = max_k b_k,
+    the MIS ratio of the brightest wavelength c is r_c = ratio_c e^{b_c} / Σ_k q_k ratio_k e^{b_k}
+    ≥ ratio_c e^{b_c − B} / Σ_k q_k ratio_k, and the largest weight is at least r_c α_c^n.  The bound
+    must clear the threshold by a margin far above round-off, so where it answers True the full
+    check would answer the same: the path's decisions and random numbers do not change."""
+    n_wl = ratio.shape[0]
+    mu_t_hero = mu_t[hero]
+    log_mu_t_hero = log_mu_t[hero]
+    top = -math.inf
+    total = 0.0
+    for k in range(n_wl):
+        top = max(top, log_flight_ratio(mu_t[k], log_mu_t[k], mu_t_hero, log_mu_t_hero, n, length))
+        total += hero_p[k] * ratio[k]
+    if not 0.0 < total < math.inf:
+        return False
+    c = brightest
+    b_c = log_flight_ratio(mu_t[c], log_mu_t[c], mu_t_hero, log_mu_t_hero, n, length)
+    lower = ratio[c] * math.exp(b_c - top) / total * albedo_power(albedo[c], n)
+    return lower * factor >= ROULETTE_THRESHOLD * BOUND_MARGIN
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def albedo_power(albedo, n):
+    """α^n (1 for n = 0), by repeated squaring."""
+    return albedo ** n
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def largest_weight(albedo, ratios, n):
+    """max_λ r_λ α_λ^n: the path's largest weight per unit factor, from its MIS ratios ``ratios``."""
+    largest = 0.0
+    for k in range(ratios.shape[0]):
+        largest = max(largest, ratios[k] * albedo_power(albedo[k], n))
+    return largest
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -212,10 +267,11 @@ def _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, aliv
     """Form the path's weights (``weights``, 0 if not ``alive``) and add its absorbed energy;
     ``fresh``: ``ratios`` already hold the whole path's MIS ratios."""
     if not fresh:
-        mis_ratios(medium, hero, ratio, n, length, hero_p, ratios)
+        mis_ratios(medium.mu_t, medium.log_mu_t, medium.grey, hero, ratio, n, length, hero_p, ratios)
+    albedo = medium.albedo
     for k in range(weights.shape[0]):
-        now = albedo_power(medium, k, n)
-        mark = albedo_power(medium, k, n_mark)
+        now = albedo_power(albedo[k], n)
+        mark = albedo_power(albedo[k], n_mark)
         absorbed[k] += ratios[k] * (banked[k] + factor * (mark - now))
         weights[k] = ratios[k] * factor * now if alive else 0.0
 
@@ -241,7 +297,19 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
         ratio[k] = 1.0
         banked[k] = 0.0
     spectral = (not medium.grey) and n_wl > 1
-    mu_t_hero = medium.mu_t[hero]
+    # the medium's arrays, bound once per path: the loop passes arrays, never the tuple (update_phase_ratios)
+    mu_t = medium.mu_t
+    log_mu_t = medium.log_mu_t
+    albedo = medium.albedo
+    hg_g = medium.hg_g
+    table = medium.phase_by_mu
+    cdf = medium.cdf
+    guide = medium.guide
+    brightest = 0
+    for k in range(n_wl):
+        if albedo[k] > albedo[brightest]:
+            brightest = k
+    mu_t_hero = mu_t[hero]
     n = 0
     n_mark = 0
     length = 0.0
@@ -265,11 +333,12 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
             largest_albedo_power *= medium.max_albedo
             check = (n % ROULETTE_PERIOD == 0) if spectral else True
             if check:
-                if spectral:
-                    mis_ratios(medium, hero, ratio, n, length, hero_p, ratios)
-                    largest = 0.0
-                    for k in range(n_wl):
-                        largest = max(largest, ratios[k] * albedo_power(medium, k, n))
+                if spectral and surely_above_threshold(mu_t, log_mu_t, albedo, brightest, hero, ratio, n, length,
+                                                       hero_p, factor):
+                    largest = math.inf
+                elif spectral:
+                    mis_ratios(mu_t, log_mu_t, False, hero, ratio, n, length, hero_p, ratios)
+                    largest = largest_weight(albedo, ratios, n)
                 else:
                     largest = largest_albedo_power
                 if largest * factor < ROULETTE_THRESHOLD:
@@ -277,15 +346,16 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
                         status = TERMINATED
                         break
                     for k in range(n_wl):
-                        banked[k] += factor * (albedo_power(medium, k, n_mark) - albedo_power(medium, k, n))
+                        banked[k] += factor * (albedo_power(albedo[k], n_mark) - albedo_power(albedo[k], n))
                     factor /= ROULETTE_SURVIVAL
                     n_mark = n
             if medium.phase_kind == PHASE_HG:
-                mu = sample_hg(medium.hg_g[hero], uniform(state))
+                mu = sample_hg(hg_g[hero], uniform(state))
             else:
-                mu = sample_table(medium.phase_by_mu, medium.cdf, medium.guide, hero, uniform(state))
+                mu = sample_table(table, cdf, guide, hero, uniform(state))
             if spectral:
-                ratio_bound = update_phase_ratios(medium, hero, mu, ratio, ratio_bound)
+                ratio_bound = update_phase_ratios(medium.phase_kind, hg_g, table, medium.phase_max, hero, mu, ratio,
+                                                  ratio_bound)
             turn(d, mu, state)
         else:
             pos[0] += to_boundary * d[0]

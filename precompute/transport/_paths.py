@@ -78,8 +78,8 @@ RESCALE = 1e100
 
 KernelMedium = namedtuple(
     "KernelMedium",
-    ["mu_t", "log_mu_t", "albedo", "max_albedo", "phase_kind", "hg_g", "phase_by_mu", "phase_max", "cdf", "guide",
-     "grey"],
+    ["mu_t", "log_mu_t", "albedo", "max_albedo", "brightest", "phase_kind", "hg_g", "phase_by_mu", "phase_max", "cdf",
+     "guide", "grey"],
 )
 
 
@@ -297,19 +297,7 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
         ratio[k] = 1.0
         banked[k] = 0.0
     spectral = (not medium.grey) and n_wl > 1
-    # the medium's arrays, bound once per path: the loop passes arrays, never the tuple (update_phase_ratios)
-    mu_t = medium.mu_t
-    log_mu_t = medium.log_mu_t
-    albedo = medium.albedo
-    hg_g = medium.hg_g
-    table = medium.phase_by_mu
-    cdf = medium.cdf
-    guide = medium.guide
-    brightest = 0
-    for k in range(n_wl):
-        if albedo[k] > albedo[brightest]:
-            brightest = k
-    mu_t_hero = mu_t[hero]
+    mu_t_hero = medium.mu_t[hero]
     n = 0
     n_mark = 0
     length = 0.0
@@ -333,12 +321,12 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
             largest_albedo_power *= medium.max_albedo
             check = (n % ROULETTE_PERIOD == 0) if spectral else True
             if check:
-                if spectral and surely_above_threshold(mu_t, log_mu_t, albedo, brightest, hero, ratio, n, length,
-                                                       hero_p, factor):
+                if spectral and surely_above_threshold(medium.mu_t, medium.log_mu_t, medium.albedo, medium.brightest,
+                                                       hero, ratio, n, length, hero_p, factor):
                     largest = math.inf
                 elif spectral:
-                    mis_ratios(mu_t, log_mu_t, False, hero, ratio, n, length, hero_p, ratios)
-                    largest = largest_weight(albedo, ratios, n)
+                    mis_ratios(medium.mu_t, medium.log_mu_t, False, hero, ratio, n, length, hero_p, ratios)
+                    largest = largest_weight(medium.albedo, ratios, n)
                 else:
                     largest = largest_albedo_power
                 if largest * factor < ROULETTE_THRESHOLD:
@@ -346,16 +334,17 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
                         status = TERMINATED
                         break
                     for k in range(n_wl):
-                        banked[k] += factor * (albedo_power(albedo[k], n_mark) - albedo_power(albedo[k], n))
+                        banked[k] += factor * (albedo_power(medium.albedo[k], n_mark)
+                                               - albedo_power(medium.albedo[k], n))
                     factor /= ROULETTE_SURVIVAL
                     n_mark = n
             if medium.phase_kind == PHASE_HG:
-                mu = sample_hg(hg_g[hero], uniform(state))
+                mu = sample_hg(medium.hg_g[hero], uniform(state))
             else:
-                mu = sample_table(table, cdf, guide, hero, uniform(state))
+                mu = sample_table(medium.phase_by_mu, medium.cdf, medium.guide, hero, uniform(state))
             if spectral:
-                ratio_bound = update_phase_ratios(medium.phase_kind, hg_g, table, medium.phase_max, hero, mu, ratio,
-                                                  ratio_bound)
+                ratio_bound = update_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, medium.phase_max,
+                                                  hero, mu, ratio, ratio_bound)
             turn(d, mu, state)
         else:
             pos[0] += to_boundary * d[0]

@@ -1,5 +1,5 @@
 # ClothLight developer entry points. Both README commands go through here:
-#   make demo   set up the environment and run the main job on the default (the paper's red cotton)
+#   make demo   set up the environment and run the main job on the default (red cotton fitted to a real fabric)
 #   make test   set up the environment and run the test suite
 # and for development:
 #   make test-fast  the pure-Python tier (no bpy, no renders, no bakes), in seconds

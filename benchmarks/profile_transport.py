@@ -36,7 +36,7 @@ NRT_PAGE_START = bytes.fromhex("b801000000f0480fc107")
 SAMPLES_PER_SECOND = 4000
 
 
-def trace(mode: str, paths: int, folder: pathlib.Path) -> None:
+def run_traced(mode: str, paths: int, folder: pathlib.Path) -> None:
     """The traced child: warm up, trace, and copy the executable anonymous mappings into ``folder``."""
     sys.path.insert(0, str(REPO))
     from precompute.medium import DEFAULT_PRESET
@@ -129,7 +129,7 @@ def main(arguments: list[str]) -> int:
     paths = int(arguments[arguments.index("--paths") + 1]) if "--paths" in arguments else (
         2_000_000 if mode == "slab" else 512)
     if CHILD in os.environ:
-        trace(mode, paths, pathlib.Path(os.environ[CHILD]))
+        run_traced(mode, paths, pathlib.Path(os.environ[CHILD]))
         return 0
     for tool in ("perf", "objdump"):
         if shutil.which(tool) is None:

@@ -1,6 +1,6 @@
 """The default bake (the paper's red cotton): wall time, cache hit, recolouring, and the Table 1 ratios.
 
-Bakes into a throw-away cache: the default settings (32 × 4 spatial cells, 12 × 12 angular grids,
+Bakes into a throw-away cache: the default settings (32 × 3 spatial cells, 12 × 12 angular grids,
 1 % target error of every cell's albedo) with seeds 0, 1, 2 for the spread of B/R and G/R, then
 the same inputs again (a cache hit) and under illuminant A (colour only).  Also prints the error
 half floats would add to the ρ table, which is why tables are float32.

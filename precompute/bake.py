@@ -24,7 +24,7 @@ Preset TOML tables owned here (defaults merged when absent)::
 
     [transport]
     n_around = 32              # spatial cells around the yarn (the paper: 16 × 8 = 128 cells)
-    n_along = 4                # spatial cells along the yarn, even
+    n_along = 3                # spatial cells along the yarn; odd: a quarter of the incidence cells traced
     angular_resolution = 12    # N of the N × N hemisphere grids of the BSSRDF (the paper: 144 cells)
     incidence_resolution = "auto"  # N_i of the tables' sphere grid of incidence: odd, or "auto"
     target_rel_stderr = 0.01   # relative standard error of every cell's albedo to reach, or

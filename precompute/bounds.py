@@ -162,12 +162,14 @@ GRID_SETTINGS = ("n_around", "n_along", "angular_resolution", "incidence_resolut
 SEED = Bound("transport.seed", 0, 2**63 - 1, integer=True)
 #: The ``[transport]`` defaults, the one place for them: the bake merges a preset's table over them,
 #: the transport's grids (:class:`precompute.transport.TransportGrids`) and the add-on's bake request
-#: (:class:`clothlight.jobs.BakeRequest`) take theirs from here.  32 × 4 cells around and along: a
-#: uniformly lit yarn reads only the sum along the axis (docs/transport.md); 12 × 12 angular cells as
+#: (:class:`clothlight.jobs.BakeRequest`) take theirs from here.  32 × 3 cells around and along: a
+#: uniformly lit yarn reads only the sum along the axis (docs/transport.md), and an odd count lets the
+#: transport use the yarn's mirror symmetry across its cross-section too, tracing a quarter of the
+#: incidence cells rather than a half (:mod:`precompute.transport.symmetry`); 12 × 12 angular cells as
 #: the paper's 144; the incidence grid chosen by the bake's accuracy checks.
 TRANSPORT_DEFAULTS = MappingProxyType({
     "n_around": 32,
-    "n_along": 4,
+    "n_along": 3,
     "angular_resolution": 12,
     "incidence_resolution": "auto",
     "paths_per_cell": None,

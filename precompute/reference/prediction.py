@@ -188,9 +188,10 @@ def transport_prediction(transport, light, *, bins: int = 16, edge: float = DEFA
     BSSRDF tallies directly: eq. (5) (``source_weights``) at every exact ω_i of the cap quadrature and
     sub-position, exit cells read bilinearly at ω_o as a table tile is read.
 
-    Every bin is a linear functional Σ A[c, δ, o] S[c, δ, o] of the axis-summed BSSRDF, and a path adds
-    to one (δ, o) bin of its incidence cell c only, so the standard error is exact:
-    Var = Σ_c (Σ_{δ,o} A² M2[c, δ, o] − (Σ_{δ,o} A S)²) / (N_c − 1).
+    Every bin is a linear functional Σ A[c, δ, o] S[c, δ, o] of the axis-summed BSSRDF; folded onto the
+    traced cells (``transport.symmetry.fold_exits``: an image cell's S is its source's, reflected) a path
+    adds to one (δ, o) bin of its incidence cell c only, so the standard error is exact:
+    Var = Σ_c (Σ_{δ,o} A² M2[c, δ, o] − (Σ_{δ,o} A S)²) / (N_c − 1), c over the traced cells.
     """
     from ..transport import source_weights
 
@@ -211,6 +212,8 @@ def transport_prediction(transport, light, *, bins: int = 16, edge: float = DEFA
         functionals[b] = a
     functionals[bins] = functionals[:bins].mean(axis=0)
     values = np.einsum("kido,ido->k", functionals, axial)
+    # on the traced cells only: a cell's tallies and its mirror images' are one set of paths
+    functionals = np.moveaxis(transport.symmetry.fold_exits(np.moveaxis(functionals, 0, -1)), -1, 0)
     per_cell = np.einsum("kido,ido->ki", functionals, axial)
     second_sum = np.einsum("kido,ido->ki", functionals**2, second)
     paths = transport.paths_per_cell.astype(float)

@@ -114,24 +114,40 @@ def yarn_brdf_at(transport: YarnTransport, directions: np.ndarray, *, interpolat
                  subsamples: int = CIRCUMFERENTIAL_SUBSAMPLES) -> tuple[np.ndarray, np.ndarray]:
     """ρ and its standard error (n_dirs, n_out, L), 1/sr, for light from ``directions`` (receiving frame).
 
-    The error is exact for the estimator: each incidence cell's paths are independent of
-    the others', and a path adds to one (offset, exit cell) bin of the axial sum only.
+    The error is exact for the estimator: the traced incidence cells' paths are independent of each
+    other's, and a path adds to one (offset, exit cell) bin of its cell's axial sum and, reflected, to
+    one bin of each of its cell's mirror images (``transport.symmetry``), whose terms therefore add
+    before they are squared.
     """
     weights = source_weights(transport, directions, interpolation=interpolation, subsamples=subsamples)
     axial = transport.axial_bssrdf()  # (n_in, n_around, n_out, L)
     n_in, n_around, n_out, n_wl = axial.shape
     rho = np.zeros((len(weights), n_out * n_wl))
     variance = np.zeros_like(rho)
-    for c in range(n_in):
+    for traced in np.flatnonzero(transport.symmetry.traced):
+        orbit = list(transport.symmetry.orbit(traced))
         # light from a direction reaches few incidence cells of the source frames: only those rows
-        lit = np.flatnonzero(weights[:, c, :].any(axis=1))
+        lit = np.flatnonzero(np.any([weights[:, cell, :].any(axis=1) for cell, _ in orbit], axis=0))
         if not len(lit):
             continue
-        w = weights[lit, c, :]
-        part = w @ axial[c].reshape(n_around, -1)
-        second = (w**2) @ transport.bssrdf_axial_second_moment[c].reshape(n_around, -1).astype(np.float64)
+        part = np.zeros((len(lit), n_out * n_wl))
+        # image cell c = g(traced) reads the traced cell's bin (g δ, g o) for its (δ, o): its weights
+        # on the traced cell's offsets, and the traced cell's exit cell that each of its own reads
+        terms = []
+        for cell, mirror in orbit:
+            w = weights[lit, cell, :]
+            part += w @ axial[cell].reshape(n_around, -1)
+            terms.append((w[:, mirror.around], mirror.cells))
+        moment = transport.bssrdf_axial_second_moment[traced].astype(np.float64)
+        second = np.zeros_like(part)
+        for w_a, cells_a in terms:
+            for w_b, cells_b in terms:
+                shared = cells_a == cells_b  # exit cells o for which both read the same bin
+                if shared.any():
+                    product = (w_a * w_b) @ moment[:, cells_a].reshape(n_around, -1)
+                    second += product * np.repeat(shared, n_wl)
         rho[lit] += part
-        variance[lit] += np.maximum(second - part**2, 0.0) / (transport.paths_per_cell[c] - 1)
+        variance[lit] += np.maximum(second - part**2, 0.0) / (transport.paths_per_cell[traced] - 1)
     shape = (len(weights), n_out, n_wl)
     return rho.reshape(shape), np.sqrt(variance).reshape(shape)
 

@@ -14,7 +14,9 @@ offset around the circumference, its axial cell offset (``n_along`` cells with
 the source at index ``n_along // 2``, and two overflow bins, below and above,
 so nothing that exits is dropped) and its direction cell in the exit point's
 local frame.  By the cylinder's symmetry one source cell stands for all of
-them (Fig. 8b).  Quantities and units: docs/transport.md.
+them (Fig. 8b), and by its mirror symmetries one incidence cell of each set of
+mirror images is traced (:mod:`.symmetry`).  Quantities and units:
+docs/transport.md.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from . import _kernels
 from ._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
 from ._threads import numba_threads
 from .media import TransportMedium, medium_from_optics
+from .symmetry import CellSymmetry
 
 #: Paths per random stream (task) of a yarn run; a cell's paths are a sequence of such tasks.
 TASK_PATHS = 2048
@@ -84,10 +87,11 @@ class TransportGrids:
     ``n_along`` along the axis (source at index ``n_along // 2``) plus two overflow
     bins, square cells of side ``2πR / n_around``; ``angular_resolution`` N of the
     N × N equal-solid-angle hemisphere grids of incidence and exit directions.  The
-    defaults keep the paper's 128 spatial and 144 angular cells, but as 32 × 4 rather than
-    its 16 × 8: a uniformly lit yarn reads only the sum along the axis, and eq. (5) with 16
+    defaults keep the paper's 144 angular cells, and 32 × 3 spatial cells rather than its
+    16 × 8: a uniformly lit yarn reads only the sum along the axis, and eq. (5) with 16
     cells around is 3.8 % high against a brute-force render of a thin yarn lit from the
-    front (24: 2.3 %, 32: 1.3 %, 48: 0.3 %; docs/transport.md).
+    front (24: 2.3 %, 32: 1.3 %, 48: 0.3 %; docs/transport.md).  With ``n_along`` odd and N
+    even the run traces a quarter of the incidence cells (:mod:`.symmetry`).
     """
 
     n_around: int = bounds.TRANSPORT_DEFAULTS["n_around"]
@@ -150,7 +154,13 @@ class YarnTransport:
         interaction limit.  They sum to 1 within noise.
     albedo_rel_stderr : (n_in, L)
         Relative standard error of ``exit_fraction`` (the hemispherical albedo of the cell).
-    paths_per_cell : (n_in,) int; ``events``: collisions simulated; ``wall_seconds``.
+    paths_per_cell : (n_in,) int
+        The paths behind each cell's tallies: its own, or its source's where ``symmetry`` gives
+        them as the mirror image of another cell's.
+    events : collisions simulated; ``wall_seconds``.
+    symmetry : :class:`.symmetry.CellSymmetry`
+        Which cells were traced, and which mirror which: the standard errors of anything summed over
+        several cells need it (the tallies of a cell and of its images are not independent).
     decayed : :class:`DecayedExits` or None
         The same exits tallied at more absorption (``simulate_yarn(extra_absorption_per_mm=...)``),
         from which :mod:`.absorption` reweights the tables to any absorption in between.
@@ -176,6 +186,7 @@ class YarnTransport:
     target_rel_stderr: float | None
     events: int
     wall_seconds: float
+    symmetry: CellSymmetry
     decayed: DecayedExits | None = None
     axial_sum: np.ndarray | None = None
 
@@ -208,6 +219,11 @@ class YarnTransport:
         n = self.paths_per_cell[:, None, None, None].astype(float)
         variance = np.maximum(self.bssrdf_axial_second_moment - mean**2, 0.0) / (n - 1)
         return np.sqrt(variance)
+
+    @property
+    def traced_paths(self) -> int:
+        """Paths traced: those of the traced cells."""
+        return int(self.paths_per_cell[self.symmetry.traced].sum())
 
     def counted_albedo_rel_stderr(self) -> np.ndarray:
         """``albedo_rel_stderr`` where the error target applies (see ALBEDO_FLOOR), 0 elsewhere."""
@@ -243,6 +259,7 @@ def simulate_yarn(
     progress: Callable[[float], None] | None = None,
     extra_absorption_per_mm: np.ndarray | None = None,
     executor=None,
+    mirror_symmetry: bool = True,
 ) -> YarnTransport:
     """Trace light through a yarn from every incidence cell (module docstring; eq. 4).
 
@@ -280,6 +297,10 @@ def simulate_yarn(
         axial sums of the BSSRDF come back (``bssrdf`` None, ``axial_sum`` set): bitwise the
         single-process run's sums and shares, whatever the number of workers.  ``threads`` then
         does not apply (each worker uses its own threads).
+    mirror_symmetry
+        Trace one incidence cell of each set that the yarn's reflections map onto each other and
+        give the others the mirror images of its tallies (:mod:`.symmetry`; exact, and with the
+        default grids a quarter of the paths).  False traces every cell, as a check of the symmetry.
     """
     medium = optics if isinstance(optics, TransportMedium) else medium_from_optics(optics)
     if not isinstance(geometry, YarnGeometry):
@@ -316,12 +337,15 @@ def simulate_yarn(
                             "extra_absorption_per_mm (steps) with the grids", (len(extra), grids))
 
     start = time.perf_counter()
-    run = _YarnRun(medium, geometry, grids, seed, extra, executor)
+    symmetry = (CellSymmetry.of_grids if mirror_symmetry else CellSymmetry.none)(
+        grids.n_around, grids.n_along, grids.angular_resolution)
+    run = _YarnRun(medium, geometry, grids, seed, extra, symmetry, executor)
     if hero_probabilities is not None:
         run.hero_p[:] = q / q.sum()
     with numba_threads(threads):
         if paths_per_cell is not None:
-            run.trace_round(_split(np.full(run.n_in, paths_per_cell)), progress, 0, run.n_in * paths_per_cell)
+            run.trace_round(run.traced_only(np.full(run.n_in, paths_per_cell)), progress, 0,
+                            int(run.traced.sum()) * paths_per_cell)
         else:
             run.trace_to_target(float(target_rel_stderr), max_paths_per_cell, progress)
     if progress is not None:
@@ -469,8 +493,10 @@ class _YarnRun:
     """The tallies of a yarn simulation while it runs, and the rounds of tasks that fill them."""
 
     def __init__(self, medium: TransportMedium, geometry: YarnGeometry, grids: TransportGrids, seed: int,
-                 extra_mu_a: np.ndarray, executor=None):
+                 extra_mu_a: np.ndarray, symmetry: CellSymmetry, executor=None):
         self.medium = medium
+        self.symmetry = symmetry
+        self.traced = symmetry.traced
         self.kernel_medium = medium.kernel()
         self.geometry = geometry
         self.grids = grids
@@ -484,9 +510,13 @@ class _YarnRun:
         if executor is None:
             self.table, self.table_sq, decay_bssrdf = _zeroed_block(self.n_in, grids, n_wl, n_decay)
         else:
-            # the large tallies live on the workers, per block of cells (rows: the block's cells, in order)
-            count = min(self.n_in, BLOCKS_PER_WORKER * executor.workers)
-            self.blocks = [np.arange(b, self.n_in, count) for b in range(count)]
+            # the large tallies live on the workers, per block of traced cells (rows: the block's cells, in order)
+            traced = np.flatnonzero(self.traced)
+            count = min(len(traced), BLOCKS_PER_WORKER * executor.workers)
+            self.blocks = [traced[b::count] for b in range(count)]
+            self.row_in_block = np.zeros(self.n_in, dtype=np.int64)
+            for block in self.blocks:
+                self.row_in_block[block] = np.arange(len(block))
             self.block_tallies = [None] * count
             self.shared_medium = executor.share(self.kernel_medium)
             decay_bssrdf = np.zeros((0, 0, 0, 0, 0), np.float32)
@@ -509,12 +539,23 @@ class _YarnRun:
             np.zeros((self.n_in, n_wl, n_decay)),
         )
 
+    def traced_only(self, paths: np.ndarray) -> list[list[int]]:
+        """The tasks of ``paths`` (n_in,) new paths per cell, for the traced cells only."""
+        return _split(np.where(self.traced, paths, 0))
+
+    def traced_paths(self, paths: np.ndarray) -> int:
+        return int(paths[self.traced].sum())
+
     def trace_round(self, new_tasks: list[list[int]], progress, done_before: int, total: int) -> None:
-        """Run every cell's new tasks: here, or on the executor's workers."""
+        """Run every cell's new tasks, here or on the executor's workers; then give the image cells
+        their sources' small tallies."""
         if self.executor is None:
             self.trace_round_here(new_tasks, progress, done_before, total)
         else:
             self.trace_round_on_workers(new_tasks, progress, done_before, total)
+        for values in (self.specular, self.exit_sum, self.exit_sq, self.unscattered, self.absorbed, self.lost,
+                       self.paths, self.decay.exit_sum, self.decay.exit_sq, self.decay.unscattered):
+            self.symmetry.copy_rows(values)
 
     def report(self, progress, done: int, total: int) -> None:
         if progress is not None:
@@ -558,7 +599,7 @@ class _YarnRun:
         and keeps its large ones on its worker for the next round."""
         work = [(b, block[[bool(new_tasks[c]) for c in block]]) for b, block in enumerate(self.blocks)]
         work = [(b, cells) for b, cells in work if len(cells)]
-        items = [(self.block_tallies[b], cells, cells // len(self.blocks), self.tasks[cells].copy(),
+        items = [(self.block_tallies[b], cells, self.row_in_block[cells], self.tasks[cells].copy(),
                   _task_sizes(cells, new_tasks), len(self.blocks[b]), self.seed, self.geometry, self.grids,
                   self.shared_medium, self.hero_p, self.decay.extra_mu_a) for b, cells in work]
         paths = [sum(sum(new_tasks[c]) for c in cells) for _, cells in work]
@@ -596,8 +637,8 @@ class _YarnRun:
         target by the 1/N law for the pooled mean, (N0 v + N v') / (N0 + N)² ≤ t², times
         ROUND_MARGIN.  Further rounds, rarely needed, top up from the measured error.
         """
-        total_guess = int(self.n_in * FIRST_ROUND_PATHS / FIRST_ROUND_SHARE)
-        self.trace_round(_split(np.full(self.n_in, FIRST_ROUND_PATHS)), progress, 0, total_guess)
+        total_guess = int(self.traced.sum() * FIRST_ROUND_PATHS / FIRST_ROUND_SHARE)
+        self.trace_round(self.traced_only(np.full(self.n_in, FIRST_ROUND_PATHS)), progress, 0, total_guess)
         if not np.any(self.worst_counted_error() > target):
             return
         counted = counted_wavelengths(self.exit_sum)
@@ -607,11 +648,11 @@ class _YarnRun:
         self.hero_p[:] = adapted_hero_probabilities(v0.mean(axis=0))
         # for the progress bar only: the need if the variance per path fell to v / (L q)
         guess = _paths_needed(v0, v0 / (len(self.hero_p[0]) * self.hero_p), n0, target)
-        before_sum, before_sq = self.exit_sum.copy(), self.exit_sq.copy()
+        before_sum, before_sq, before_paths = self.exit_sum.copy(), self.exit_sq.copy(), self.paths.copy()
         probe = np.minimum(PROBE_ROUND_PATHS, max_paths - self.paths)
-        self.trace_round(_split(probe), progress, int(self.paths.sum()),
-                         int(np.maximum(guess, self.paths + probe).sum()))
-        n1 = probe[:, None].astype(float)
+        self.trace_round(self.traced_only(probe), progress, self.traced_paths(self.paths),
+                         self.traced_paths(np.maximum(guess, self.paths + probe)))
+        n1 = (self.paths - before_paths)[:, None].astype(float)
         mean1 = (self.exit_sum - before_sum) / np.maximum(n1, 1)
         var1 = np.maximum((self.exit_sq - before_sq) / np.maximum(n1, 1) - mean1**2, 0.0) * n1 / np.maximum(n1 - 1, 1)
         v1 = np.where(counted & (mean > 0), var1 / np.where(mean > 0, mean, 1.0) ** 2, 0.0)
@@ -622,7 +663,8 @@ class _YarnRun:
                 return
             extra = np.where(pending, np.maximum(np.ceil(need) - self.paths, TASK_PATHS), 0).astype(np.int64)
             extra = np.minimum(extra, max_paths - self.paths)
-            self.trace_round(_split(extra), progress, int(self.paths.sum()), int(self.paths.sum() + extra.sum()))
+            done = self.traced_paths(self.paths)
+            self.trace_round(self.traced_only(extra), progress, done, done + self.traced_paths(extra))
             need = self.paths * (self.worst_counted_error() / target) ** 2 * ROUND_MARGIN
 
     def exits_from_workers(self, per_exit: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -652,9 +694,14 @@ class _YarnRun:
             bssrdf, axial_sum = self.table, None
             second = _normalise_exits(bssrdf, self.table_sq, self.decay.bssrdf, self.paths, per_exit)
             decayed_bssrdf = self.decay.bssrdf
+            self.symmetry.reflect_exits(bssrdf, axial=True)
         else:
             bssrdf = None
             axial_sum, second, decayed_bssrdf = self.exits_from_workers(per_exit)
+            self.symmetry.reflect_exits(axial_sum, axial=False)
+        self.symmetry.reflect_exits(second, axial=False)
+        if decayed_bssrdf.size:
+            self.symmetry.reflect_exits(decayed_bssrdf, axial=False)
         decayed = None
         if len(self.decay.extra_mu_a):
             decayed = DecayedExits(
@@ -682,6 +729,7 @@ class _YarnRun:
             target_rel_stderr=target,
             events=int(self.events.sum()),
             wall_seconds=seconds,
+            symmetry=self.symmetry,
             decayed=decayed,
             axial_sum=axial_sum,
         )

@@ -447,7 +447,9 @@ def _simulation_record(inputs: dict, key: str, optics, transport, brdf, checks, 
 def _paths_record(transport) -> dict:
     return {
         "per_incidence_cell": transport.paths_per_cell.tolist(),
-        "total": int(transport.paths_per_cell.sum()),
+        # traced: a cell that mirrors another's tallies (precompute/transport/symmetry.py) shares its paths
+        "total": transport.traced_paths,
+        "incidence_cells_traced": int(transport.symmetry.traced.sum()),
         "min": int(transport.paths_per_cell.min()),
         "max": int(transport.paths_per_cell.max()),
         "scattering_events": int(transport.events),

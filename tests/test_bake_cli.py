@@ -66,7 +66,9 @@ def test_header_carries_everything_needed_to_reproduce(baked):
     assert len(meta["medium"]["dye"]["mass_absorption_cm2_per_g"]) > 10  # the dye spectrum itself
     assert meta["transport"] == {"n_around": 8, "n_along": 4, "angular_resolution": N_O, "incidence_resolution": N_I,
                                  "paths_per_cell": PATHS, "target_rel_stderr": None, "seed": SEED}
-    assert meta["paths"]["per_incidence_cell"] == [PATHS] * N_O**2 and meta["paths"]["total"] == PATHS * N_O**2
+    assert meta["paths"]["per_incidence_cell"] == [PATHS] * N_O**2
+    # n_along even: the reflection across the plane of the axis only, which pairs the N_O² cells
+    assert meta["paths"]["incidence_cells_traced"] == N_O**2 // 2 and meta["paths"]["total"] == PATHS * N_O**2 // 2
     assert meta["layout"] == {"incidence_resolution": N_I, "exit_resolution": N_O}
     assert meta["colour"]["illuminant"] == "D65" and "1/sr" in meta["units"]["rho"]
     assert meta["wavelengths_nm"][0] == 390.0 and meta["host_index"] == pytest.approx(1.557)

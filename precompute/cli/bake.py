@@ -94,10 +94,10 @@ def run(args) -> int:
         low, high = summary["dye_series"]["dye_range_percent"]
         origin += f"; read from the dye series {low:g}–{high:g} %"
     print(f"tables:  {summary['folder']}  ({origin})")
-    print(f"paths:   {summary['paths']['total']:,} traced ({summary['paths']['min']:,} per incidence cell at least, "
-          f"{summary['paths']['incidence_cells_traced']} of {len(summary['paths']['per_incidence_cell'])} cells traced, "
-          "the others their mirror images), "
-          f"albedo rel. stderr <= {summary['paths']['albedo_rel_stderr_max']:.3g}")
+    paths = summary["paths"]
+    print(f"paths:   {paths['total']:,} traced on {paths['incidence_cells_traced']} of "
+          f"{len(paths['per_incidence_cell'])} incidence cells (the others their mirror images; "
+          f"{paths['min']:,} per cell at least), albedo rel. stderr <= {paths['albedo_rel_stderr_max']:.3g}")
     took = f"transport {seconds['transport']:.1f} s, BRDF {seconds['brdf']:.1f} s, tables {seconds['tables']:.1f} s"
     if "reweighting" in seconds:
         took = f"read from the dye series {seconds['reweighting']:.1f} s, tables {seconds['tables']:.1f} s"

@@ -146,6 +146,25 @@ def test_hero_probabilities_do_not_change_the_expectation():
     assert np.median(skewed.albedo_rel_stderr[:, 1]) < np.median(uniform.albedo_rel_stderr[:, 1])
 
 
+def test_roulette_by_importance_changes_the_path_lengths_not_the_expectation():
+    """Scaling wavelengths' weights in the roulette's test (as error-target runs do for the wavelengths
+    that need fewer paths than the hardest) ends paths sooner and leaves every albedo unbiased."""
+    medium = dyed_medium()
+    plain = simulate_yarn(medium, GEOMETRY, GRIDS, paths_per_cell=8000, seed=3)
+    weighed = simulate_yarn(medium, GEOMETRY, GRIDS, paths_per_cell=8000, seed=4,
+                            roulette_importance=[2e-3, 2e-3, 5e-4])
+    assert weighed.events < 0.8 * plain.events
+    traced = plain.symmetry.traced
+    a, b = plain.exit_fraction[traced].mean(axis=0), weighed.exit_fraction[traced].mean(axis=0)
+    sigma = np.hypot(plain.albedo_rel_stderr * plain.exit_fraction, weighed.albedo_rel_stderr * weighed.exit_fraction)
+    sigma = np.sqrt((sigma[traced] ** 2).sum(axis=0)) / traced.sum()
+    assert np.all(np.abs(a - b) < 4 * sigma)
+    # the clear wavelength, whose weight counts least, pays with noise
+    assert np.median(weighed.albedo_rel_stderr[:, 2]) > np.median(plain.albedo_rel_stderr[:, 2])
+    with pytest.raises(ParameterError, match="roulette_importance"):
+        simulate_yarn(medium, GEOMETRY, GRIDS, paths_per_cell=10, roulette_importance=[0.0, 0.0, 0.0])
+
+
 def test_same_seed_gives_identical_tables_whatever_the_thread_count():
     medium = dyed_medium()
     one = simulate_yarn(medium, GEOMETRY, GRIDS, paths_per_cell=300, seed=9, threads=1)

@@ -180,9 +180,10 @@ def test_bad_command_line_input_exits_2_naming_the_parameter():
 
 def test_roulette_shortcut_skips_only_checks_the_full_check_passes():
     """The lower bound that spares the roulette check its L exponentials (surely_above_threshold):
-    wherever it answers True the full check — the MIS ratios, then the largest r_λ α_λ^n — finds the
-    path's weight at or above ROULETTE_THRESHOLD too, within 1e-6 of the threshold included; and on
-    the default red cotton it answers True for most states clearly above it, or it would spare nothing."""
+    wherever it answers True the full check — the MIS ratios, then the largest r_λ α_λ^n s_λ — finds the
+    path's weight at or above ROULETTE_THRESHOLD too, within 1e-6 of the threshold included, with the
+    plain roulette (s ≡ 1) and with an error-target run's importance; and on the default red cotton
+    it answers True for most states clearly above it, or it would spare nothing."""
     from precompute.medium import DEFAULT_PRESET, load_preset
     from precompute.optics import medium_optics
     from precompute.transport._paths import ROULETTE_THRESHOLD, largest_weight, mis_ratios, surely_above_threshold
@@ -201,12 +202,15 @@ def test_roulette_shortcut_skips_only_checks_the_full_check_passes():
         ratio /= ratio[hero]
         ratios = np.empty(n_wl)
         mis_ratios(medium.mu_t, medium.log_mu_t, False, hero, ratio, n, length, hero_p, ratios)
-        largest = largest_weight(medium.albedo, ratios, n)
+        # the plain roulette, or importance as importance_from_errors gives it (shares of 0.25 … 1)
+        importance = np.ones(n_wl) if trial % 4 < 2 else rng.uniform(0.25, 1.0, n_wl) * 2e-3
+        neediest = int(np.argmax(importance))
+        largest = largest_weight(medium.albedo, ratios, n, importance)
         # half the states anywhere from 100x below to 100x above the threshold, half within 1e-6 of it
         scale = rng.uniform(0.01, 100.0) if trial % 2 else 1.0 + rng.uniform(-1e-6, 1e-6)
         factor = ROULETTE_THRESHOLD / largest * scale
-        shortcut = surely_above_threshold(medium.mu_t, medium.log_mu_t, medium.albedo, medium.brightest, hero, ratio, n,
-                                          length, hero_p, factor)
+        shortcut = surely_above_threshold(medium.mu_t, medium.log_mu_t, medium.albedo, medium.brightest, neediest,
+                                          hero, ratio, n, length, hero_p, factor, importance)
         if shortcut:
             assert largest * factor >= ROULETTE_THRESHOLD
         if scale > 1.01:

@@ -61,6 +61,7 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
     specular = fresnel_reflectance(1.0, 1.0 / eta)
     dims = np.array([thickness])
     hero_p, hero_cdf = _uniform_heroes(n_wl)
+    importance = np.ones(n_wl)
     for c in numba.prange(paths.shape[0]):
         # task-local tallies, copied out at the end: no cache line is shared between threads
         local = np.zeros((sums.shape[1], n_wl))
@@ -80,7 +81,8 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
             pos[0] = pos[1] = pos[2] = 0.0
             d[0] = d[1] = 0.0
             d[2] = 1.0
-            status, collisions, _ = trace(state, SLAB, dims, eta, medium, hero, hero_p, pos, d, 1.0 - specular,
+            status, collisions, _ = trace(state, SLAB, dims, eta, medium, hero, hero_p, importance, pos, d,
+                                          1.0 - specular,
                                           ratio, banked, ratios, normal, weights, absorbed)
             collisions_total += collisions
             if status == EXITED:
@@ -146,7 +148,7 @@ def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, inward):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p, in_res, cos_max, n_around,
+def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p, importance, in_res, cos_max, n_around,
                 n_along, cell_length, out_res, table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed,
                 lost, events, decay):
     """Run incidence cell ``cell``'s tasks ``first_task + t`` of ``sizes[t]`` paths (a 0 ends the list),
@@ -192,7 +194,7 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
             z = uniform(state) * cell_length
             reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, normal)
             hero = _pick_hero(state, hero_cdf)
-            status, collisions, length = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, pos, d,
+            status, collisions, length = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
                                                1.0 - reflectance, ratio, banked, ratios, normal, weights,
                                                cell_absorbed)
             cell_events += collisions
@@ -239,7 +241,8 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
 
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")
-def yarn_kernel(slots, cells, rows, task_first, task_sizes, seed, radius, eta, medium, hero_p, in_res, cos_max,
+def yarn_kernel(slots, cells, rows, task_first, task_sizes, seed, radius, eta, medium, hero_p, importance, in_res,
+                cos_max,
                 n_around, n_along, cell_length, out_res,
                 table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed, lost, events, decay):
     """Trace the tasks of incidence cells ``cells``: cell ``cells[i]`` runs, in order, tasks
@@ -270,7 +273,7 @@ def yarn_kernel(slots, cells, rows, task_first, task_sizes, seed, radius, eta, m
             if i < 0:
                 break
             _trace_cell(cells[i], rows[i], task_first[i], task_sizes[i], seed, radius, eta, medium, hero_p[cells[i]],
-                        in_res, cos_max, n_around, n_along, cell_length, out_res, table, table_sq, specular,
+                        importance[cells[i]], in_res, cos_max, n_around, n_along, cell_length, out_res, table, table_sq, specular,
                         exit_sum, exit_sq, unscattered, absorbed, lost, events, decay)
 
 
@@ -292,6 +295,7 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
     dpsi = 2.0 * math.pi / n_around
     dims = np.array([radius, radius])
     hero_p, hero_cdf = _uniform_heroes(n_wl)
+    importance = np.ones(n_wl)
     transverse = math.sqrt(toward_light[0] ** 2 + toward_light[1] ** 2)
     psi_light = math.atan2(toward_light[1], toward_light[0])
     for c in numba.prange(paths.shape[0]):
@@ -328,7 +332,7 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
             for k in range(n_wl):
                 task_specular[k] += reflectance
             hero = _pick_hero(state, hero_cdf)
-            status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, pos, d,
+            status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
                                           1.0 - reflectance, ratio, banked, ratios, normal, weights, task_absorbed)
             task_events += collisions
             if status == EXITED:

@@ -26,15 +26,18 @@ of the whole path it takes the same MIS ratio r_λ(x).
 
 Russian roulette: every ``ROULETTE_PERIOD`` collisions (every collision when
 r ≡ 1), a path whose largest weight fell below ``ROULETTE_THRESHOLD`` survives
-with probability ``ROULETTE_SURVIVAL`` and has its weights divided by it.  The
-check forms the L weights (L exponentials) only where a lower bound of the
-largest, from one exponential, does not already clear the threshold
-(:func:`surely_above_threshold`): the decisions, and so the random numbers, are
-those of the full check.  The
-decision depends only on the path so far, never on which wavelength is the
-hero, so it is a common factor of all k's densities: unbiased.  Without
-absorption the largest weight is ≥ 1 (Σ_k q_k r_k = 1) and roulette never
-plays.
+with probability max(ROULETTE_SURVIVAL, largest / ROULETTE_THRESHOLD) and has
+its weights divided by it (a weight window: a survivor carries the threshold's
+weight, or ten times what it had).  On a spectral path each wavelength's weight
+is scaled by its ``importance`` s_λ first (1: the plain roulette; error-target
+yarn runs lower it where a wavelength needs fewer paths than the hardest one,
+docs/transport.md).  The check forms the L weights (L exponentials) only where
+a lower bound of the largest, from two exponentials, does not already clear the
+threshold (:func:`surely_above_threshold`): the decisions, and so the random
+numbers, are those of the full check.  The decision depends only on the path so
+far, never on which wavelength is the hero, so it is a common factor of all
+k's densities: unbiased.  Without absorption and with s ≡ 1 the largest weight
+is ≥ 1 (Σ_k q_k r_k = 1) and roulette never plays.
 """
 
 from __future__ import annotations
@@ -220,14 +223,16 @@ def mis_ratios(mu_t, log_mu_t, grey, hero, ratio, n, length, hero_p, out):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def surely_above_threshold(mu_t, log_mu_t, albedo, brightest, hero, ratio, n, length, hero_p, factor):
-    """Whether the path's largest weight max_λ r_λ α_λ^n times ``factor`` is surely at least
-    ROULETTE_THRESHOLD, from a lower bound that needs one exponential instead of L;
-    ``brightest``: the wavelength of largest albedo.
+def surely_above_threshold(mu_t, log_mu_t, albedo, brightest, neediest, hero, ratio, n, length, hero_p, factor,
+                           importance):
+    """Whether the path's largest weight max_λ r_λ α_λ^n s_λ (``importance`` s) times ``factor`` is surely
+    at least ROULETTE_THRESHOLD, from a lower bound that needs two exponentials instead of L;
+    ``brightest``: the wavelength of largest albedo, ``neediest``: of largest importance.
 
     With b_k = n ln(μt_k/μt_h) − (μt_k − μt_h)·length (:func:`log_flight_ratio`) and B = max_k b_k,
-    the MIS ratio of the brightest wavelength c is r_c = ratio_c e^{b_c} / Σ_k q_k ratio_k e^{b_k}
-    ≥ ratio_c e^{b_c − B} / Σ_k q_k ratio_k, and the largest weight is at least r_c α_c^n.  The bound
+    the MIS ratio of any wavelength c is r_c = ratio_c e^{b_c} / Σ_k q_k ratio_k e^{b_k}
+    ≥ ratio_c e^{b_c − B} / Σ_k q_k ratio_k, and the largest weight is at least r_c α_c^n s_c, taken for
+    the brightest and the neediest wavelength.  The bound
     must clear the threshold by a margin far above round-off, so where it answers True the full
     check would answer the same: the path's decisions and random numbers do not change."""
     n_wl = ratio.shape[0]
@@ -240,9 +245,10 @@ def surely_above_threshold(mu_t, log_mu_t, albedo, brightest, hero, ratio, n, le
         total += hero_p[k] * ratio[k]
     if not 0.0 < total < math.inf:
         return False
-    c = brightest
-    b_c = log_flight_ratio(mu_t[c], log_mu_t[c], mu_t_hero, log_mu_t_hero, n, length)
-    lower = ratio[c] * math.exp(b_c - top) / total * albedo_power(albedo[c], n)
+    lower = 0.0
+    for c in (brightest, neediest):
+        b_c = log_flight_ratio(mu_t[c], log_mu_t[c], mu_t_hero, log_mu_t_hero, n, length)
+        lower = max(lower, ratio[c] * math.exp(b_c - top) / total * albedo_power(albedo[c], n) * importance[c])
     return lower * factor >= ROULETTE_THRESHOLD * BOUND_MARGIN
 
 
@@ -253,11 +259,12 @@ def albedo_power(albedo, n):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def largest_weight(albedo, ratios, n):
-    """max_λ r_λ α_λ^n: the path's largest weight per unit factor, from its MIS ratios ``ratios``."""
+def largest_weight(albedo, ratios, n, importance):
+    """max_λ r_λ α_λ^n s_λ: the path's largest weight per unit factor, from its MIS ratios ``ratios``,
+    each wavelength's scaled by its ``importance`` s_λ."""
     largest = 0.0
     for k in range(ratios.shape[0]):
-        largest = max(largest, ratios[k] * albedo_power(albedo[k], n))
+        largest = max(largest, ratios[k] * albedo_power(albedo[k], n) * importance[k])
     return largest
 
 
@@ -277,12 +284,13 @@ def _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, aliv
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight,
+def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, enter_weight,
           ratio, banked, ratios, normal, weights, absorbed):
     """Trace one path that has just entered the medium at ``pos`` going along unit ``d``.
 
     ``eta`` = n_inside / n_outside; ``enter_weight`` the flux it carries (per unit incident
-    flux).  On ``EXITED``: ``pos`` is the exit point, ``d``
+    flux); ``hero_p`` (L,) the hero wavelengths' probabilities, ``importance`` (L,) the roulette's
+    scale of each wavelength's weight.  On ``EXITED``: ``pos`` is the exit point, ``d``
     the refracted direction outside, ``weights`` (L,) the flux leaving per wavelength; on
     ``LOST`` ``weights`` holds the flux still inside; on ``TERMINATED`` (roulette) it is 0.
     ``absorbed`` (L,) is incremented by the absorbed flux in every case.  ``ratio``,
@@ -297,6 +305,10 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
         ratio[k] = 1.0
         banked[k] = 0.0
     spectral = (not medium.grey) and n_wl > 1
+    neediest = 0
+    for k in range(n_wl):
+        if importance[k] > importance[neediest]:
+            neediest = k
     mu_t_hero = medium.mu_t[hero]
     n = 0
     n_mark = 0
@@ -322,21 +334,23 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, pos, d, enter_weight
             check = (n % ROULETTE_PERIOD == 0) if spectral else True
             if check:
                 if spectral and surely_above_threshold(medium.mu_t, medium.log_mu_t, medium.albedo, medium.brightest,
-                                                       hero, ratio, n, length, hero_p, factor):
+                                                       neediest, hero, ratio, n, length, hero_p, factor, importance):
                     largest = math.inf
                 elif spectral:
                     mis_ratios(medium.mu_t, medium.log_mu_t, False, hero, ratio, n, length, hero_p, ratios)
-                    largest = largest_weight(medium.albedo, ratios, n)
+                    largest = largest_weight(medium.albedo, ratios, n, importance)
                 else:
                     largest = largest_albedo_power
                 if largest * factor < ROULETTE_THRESHOLD:
-                    if uniform(state) >= ROULETTE_SURVIVAL:
+                    # weight window: the survivors' scaled weight is the threshold, or 1 / ROULETTE_SURVIVAL of it
+                    survival = max(ROULETTE_SURVIVAL, largest * factor / ROULETTE_THRESHOLD)
+                    if uniform(state) >= survival:
                         status = TERMINATED
                         break
                     for k in range(n_wl):
                         banked[k] += factor * (albedo_power(medium.albedo[k], n_mark)
                                                - albedo_power(medium.albedo[k], n))
-                    factor /= ROULETTE_SURVIVAL
+                    factor /= survival
                     n_mark = n
             if medium.phase_kind == PHASE_HG:
                 mu = sample_hg(medium.hg_g[hero], uniform(state))

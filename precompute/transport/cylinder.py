@@ -35,6 +35,7 @@ from ..errors import ParameterError
 from ..grids import AngularGrid
 from . import _kernels
 from ._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
+from ._paths import ROULETTE_THRESHOLD
 from ._threads import numba_threads
 from .media import TransportMedium, medium_from_optics
 from .symmetry import CellSymmetry
@@ -56,6 +57,12 @@ HERO_DEFENSIVE = 0.25
 #: The error target applies at wavelengths whose hemispherical albedo is at least this share of the
 #: cell's largest: all that can show in any colour (docs/transport.md, "Error target").
 ALBEDO_FLOOR = 1e-6
+#: Error-target rounds after the probe roulette a path whose every wavelength's weight, times the share
+#: of its error budget that wavelength uses, is below this (:func:`importance_from_errors`) ...
+ROULETTE_WINDOW = 0.5
+#: ... counting every wavelength's share as at least this, which bounds any wavelength's weights
+#: (so its variance) to 1 / USAGE_FLOOR of the window.
+USAGE_FLOOR = 0.25
 #: Blocks of incidence cells per worker of a distributed run (``simulate_yarn(executor=...)``): a
 #: block's large tallies stay on one worker from round to round, and each round is one task per
 #: block, so that a task runs for seconds against the scheduler's milliseconds (docs/distributed.md).
@@ -254,6 +261,7 @@ def simulate_yarn(
     target_rel_stderr: float | None = None,
     max_paths_per_cell: int = 4_000_000,
     hero_probabilities: np.ndarray | None = None,
+    roulette_importance: np.ndarray | None = None,
     seed: int = 0,
     threads: int | None = None,
     progress: Callable[[float], None] | None = None,
@@ -280,6 +288,10 @@ def simulate_yarn(
         With ``paths_per_cell``: the probabilities (L,) of choosing each wavelength as a
         path's hero (default uniform).  Any choice with all of them > 0 is unbiased
         (docs/transport.md); error-target runs adapt them themselves.
+    roulette_importance
+        With ``paths_per_cell``: the importance s_λ ≥ 0 (L,) that scales each wavelength's weight in
+        the roulette's test (default 1: the plain roulette).  Any choice is unbiased; error-target
+        runs set it from the errors after their probe round (:func:`importance_from_errors`).
     seed
         Seed of every random stream.  The same seed gives bitwise-identical tables
         whatever ``threads`` is.
@@ -328,6 +340,13 @@ def simulate_yarn(
         if q.shape != (n_wl,) or not np.all(np.isfinite(q)) or np.any(q <= 0) or abs(q.sum() - 1.0) > 1e-9:
             raise ParameterError("hero_probabilities", hero_probabilities, f"{n_wl} values > 0 summing to 1")
 
+    if roulette_importance is not None:
+        if paths_per_cell is None:
+            raise ParameterError("roulette_importance", "given with target_rel_stderr", "only with paths_per_cell")
+        s = np.asarray(roulette_importance, float)
+        if s.shape != (n_wl,) or not np.all(np.isfinite(s)) or np.any(s < 0) or not np.any(s > 0):
+            raise ParameterError("roulette_importance", roulette_importance, f"{n_wl} finite values ≥ 0, not all 0")
+
     extra = np.zeros((0, n_wl))
     if extra_absorption_per_mm is not None:
         extra = np.asarray(extra_absorption_per_mm, float)
@@ -342,6 +361,8 @@ def simulate_yarn(
     run = _YarnRun(medium, geometry, grids, seed, extra, symmetry, executor)
     if hero_probabilities is not None:
         run.hero_p[:] = q / q.sum()
+    if roulette_importance is not None:
+        run.importance[:] = s
     with numba_threads(threads):
         if paths_per_cell is not None:
             run.trace_round(run.traced_only(np.full(run.n_in, paths_per_cell)), progress, 0,
@@ -410,7 +431,8 @@ def _normalise_exits(table: np.ndarray, table_sq: np.ndarray, decay_bssrdf: np.n
 
 def _trace_block(tallies: BlockTallies | None, cells: np.ndarray, rows: np.ndarray, task_first: np.ndarray,
                  sizes: np.ndarray, block_size: int, seed: int, geometry: YarnGeometry, grids: TransportGrids,
-                 kernel_medium, hero_p: np.ndarray, extra_mu_a: np.ndarray) -> tuple[BlockTallies, tuple]:
+                 kernel_medium, hero_p: np.ndarray, importance: np.ndarray,
+                 extra_mu_a: np.ndarray) -> tuple[BlockTallies, tuple]:
     """A distributed run's task (:meth:`_YarnRun.trace_round_on_workers`): the new tasks of ``cells``
     (rows ``rows`` of a block of ``block_size`` cells) added to a copy of the block's large tallies
     (zeroed when None).  Returns them and the cells' small tallies of this round alone: specular,
@@ -427,7 +449,8 @@ def _trace_block(tallies: BlockTallies | None, cells: np.ndarray, rows: np.ndarr
     res = grids.angular_resolution
     _kernels.yarn_kernel(
         _balanced_slots(sizes.sum(axis=1), numba.get_num_threads()), cells, rows, task_first, sizes, seed,
-        geometry.radius_mm, geometry.index, kernel_medium, hero_p, res, max_cos_per_cell(res), grids.n_around,
+        geometry.radius_mm, geometry.index, kernel_medium, hero_p, importance, res, max_cos_per_cell(res),
+        grids.n_around,
         grids.n_along, grids.cell_length_mm(geometry.radius_mm), res, tallies.table, tallies.table_sq, *small,
         decay,
     )
@@ -466,6 +489,18 @@ def adapted_hero_probabilities(relative_variance: np.ndarray) -> np.ndarray:
     if not total > 0:
         return np.full(n_wl, 1.0 / n_wl)
     return HERO_DEFENSIVE / n_wl + (1.0 - HERO_DEFENSIVE) * relative_variance / total
+
+
+def importance_from_errors(rel_stderr: np.ndarray, counted: np.ndarray) -> np.ndarray:
+    """The roulette's importance s_λ (n_in, L) of each cell's wavelengths from their albedos' relative
+    errors so far (docs/transport.md, "Roulette by need"): s_λ = max(u_λ, USAGE_FLOOR) ·
+    ROULETTE_THRESHOLD / ROULETTE_WINDOW with u_λ = (e_λ / max_λ e_λ)², the share of the error budget the
+    wavelength uses; 0 where the error target does not count.  A path whose every wavelength's weight
+    w_λ has u_λ w_λ below the window survives with probability max_λ u_λ w_λ / ROULETTE_WINDOW: a
+    wavelength that needs fewer paths than the hardest gives up its long tails."""
+    worst = np.max(np.where(counted, rel_stderr, 0.0), axis=1, keepdims=True)
+    usage = np.divide(rel_stderr, worst, out=np.ones_like(rel_stderr), where=worst > 0) ** 2
+    return np.where(counted, np.maximum(usage, USAGE_FLOOR), 0.0) * (ROULETTE_THRESHOLD / ROULETTE_WINDOW)
 
 
 def _paths_needed(v0: np.ndarray, v1: np.ndarray, n0: np.ndarray, target: float) -> np.ndarray:
@@ -530,6 +565,7 @@ class _YarnRun:
         self.paths = np.zeros(self.n_in, dtype=np.int64)
         self.tasks = np.zeros(self.n_in, dtype=np.int64)
         self.hero_p = np.full((self.n_in, n_wl), 1.0 / n_wl)
+        self.importance = np.ones((self.n_in, n_wl))
         self.reported = 0.0
         self.decay = _kernels.DecayTallies(
             np.ascontiguousarray(extra_mu_a),
@@ -577,7 +613,7 @@ class _YarnRun:
             ids = np.array(chunk, dtype=np.int64)
             _kernels.yarn_kernel(
                 _balanced_slots(sizes.sum(axis=1), threads), ids, ids, self.tasks[ids].copy(), sizes, self.seed,
-                self.geometry.radius_mm, self.geometry.index, self.kernel_medium, self.hero_p,
+                self.geometry.radius_mm, self.geometry.index, self.kernel_medium, self.hero_p, self.importance,
                 self.grids.angular_resolution,
                 self.cos_max, self.grids.n_around, self.grids.n_along,
                 self.grids.cell_length_mm(self.geometry.radius_mm), self.grids.angular_resolution, self.table,
@@ -601,7 +637,7 @@ class _YarnRun:
         work = [(b, cells) for b, cells in work if len(cells)]
         items = [(self.block_tallies[b], cells, self.row_in_block[cells], self.tasks[cells].copy(),
                   _task_sizes(cells, new_tasks), len(self.blocks[b]), self.seed, self.geometry, self.grids,
-                  self.shared_medium, self.hero_p, self.decay.extra_mu_a) for b, cells in work]
+                  self.shared_medium, self.hero_p, self.importance, self.decay.extra_mu_a) for b, cells in work]
         paths = [sum(sum(new_tasks[c]) for c in cells) for _, cells in work]
         done = [done_before]
 
@@ -635,7 +671,8 @@ class _YarnRun:
         HERO_DEFENSIVE), which spends paths where the error is.  Round 1 (PROBE_ROUND_PATHS)
         measures the variance per path v'_λ under q; round 2 then brings every cell to the
         target by the 1/N law for the pooled mean, (N0 v + N v') / (N0 + N)² ≤ t², times
-        ROUND_MARGIN.  Further rounds, rarely needed, top up from the measured error.
+        ROUND_MARGIN, with the roulette weighing each wavelength by its need
+        (:func:`importance_from_errors`).  Further rounds top up from the measured error.
         """
         total_guess = int(self.traced.sum() * FIRST_ROUND_PATHS / FIRST_ROUND_SHARE)
         self.trace_round(self.traced_only(np.full(self.n_in, FIRST_ROUND_PATHS)), progress, 0, total_guess)
@@ -657,6 +694,7 @@ class _YarnRun:
         var1 = np.maximum((self.exit_sq - before_sq) / np.maximum(n1, 1) - mean1**2, 0.0) * n1 / np.maximum(n1 - 1, 1)
         v1 = np.where(counted & (mean > 0), var1 / np.where(mean > 0, mean, 1.0) ** 2, 0.0)
         need = _paths_needed(v0, v1, n0, target) * ROUND_MARGIN
+        self.importance[:] = importance_from_errors(self.relative_stderr(), counted)
         while True:
             pending = (self.worst_counted_error() > target) & (self.paths < max_paths)
             if not np.any(pending):

@@ -11,10 +11,13 @@ import pytest
 from precompute.bake import bake, load_spectral
 from precompute.color import spectral_to_rgb
 from precompute.errors import ParameterError
+from precompute.transport.symmetry import CellSymmetry
 
 SMALL = ["transport.incidence_resolution=5", "transport.angular_resolution=4", "transport.n_around=8",
          "transport.n_along=4"]
 PATHS = 6000
+#: The incidence cells SMALL's transport traces (the others mirror them).
+TRACED = CellSymmetry.of_grids(8, 4, 4).traced
 RANGE = (0.5, 5.0)
 
 
@@ -65,8 +68,10 @@ def test_tables_read_from_the_series_agree_with_a_simulation_at_that_dye(cache, 
     sigma = np.hypot(arrays_a["albedo_rel_stderr"] * arrays_a["exit_fraction"],
                      arrays_b["albedo_rel_stderr"] * arrays_b["exit_fraction"])
     counted = arrays_b["exit_fraction"] > 1e-3 * arrays_b["exit_fraction"].max()
+    counted &= TRACED[:, None]  # an image cell's albedo is its source's: one sample, counted once
     deviation = np.abs(arrays_a["exit_fraction"] - arrays_b["exit_fraction"])[counted] / sigma[counted]
-    assert np.mean(deviation < 2) > 0.9 and deviation.max() < 5
+    # a cell's wavelengths share its paths, so whole cells deviate together: χ² over the few cells
+    assert np.mean(deviation**2) < 2.5 and deviation.max() < 5
 
 
 def test_a_dye_outside_the_range_or_an_undyed_medium_is_refused(cache):

@@ -273,8 +273,8 @@ def yarn_kernel(slots, cells, rows, task_first, task_sizes, seed, radius, eta, m
             if i < 0:
                 break
             _trace_cell(cells[i], rows[i], task_first[i], task_sizes[i], seed, radius, eta, medium, hero_p[cells[i]],
-                        importance[cells[i]], in_res, cos_max, n_around, n_along, cell_length, out_res, table, table_sq, specular,
-                        exit_sum, exit_sq, unscattered, absorbed, lost, events, decay)
+                        importance[cells[i]], in_res, cos_max, n_around, n_along, cell_length, out_res, table, table_sq,
+                        specular, exit_sum, exit_sq, unscattered, absorbed, lost, events, decay)
 
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")

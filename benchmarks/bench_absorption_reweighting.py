@@ -81,7 +81,7 @@ def main() -> None:
 
     start = time.perf_counter()
     series = simulate_yarn(reference, geometry, grids, seed=1, extra_absorption_per_mm=steps, **run_budget)
-    print(f"the series' simulation: {time.perf_counter() - start:.1f} s, {series.paths_per_cell.sum()} paths")
+    print(f"the series' simulation: {time.perf_counter() - start:.1f} s, {series.traced_paths} paths traced")
     print("dye %  reweight+eq5 s  fresh sim+eq5 s  speed-up   Σρ: reweighted / fresh − 1 (R, G, B)   in combined σ")
     for dye in dyes:
         optics = optics_at(dye)

@@ -1,7 +1,7 @@
 """Transport speed and the default bake's cost; figures are printed, never asserted.
 
 Targets (issue 4): ≥ 10 M scattering events/s per core; the paper's red-cotton tables (paper_2008)
-(32 × 4 spatial, 144 × 144 angular, 35 wavelengths) to ≤ 1 % relative standard error on
+(16 × 8 spatial, 144 × 144 angular, 35 wavelengths) to ≤ 1 % relative standard error on
 the hemispherical albedo of every incidence cell, at every wavelength, in ≤ 60 s on 2 cores.
 Per-core rates are given per second of wall time and per second of CPU time: the second
 does not depend on other programs sharing the machine (the load average is printed).
@@ -87,7 +87,7 @@ def yarn() -> None:
         for threads in sorted({1, ALL_THREADS}):
             transport, wall, cpu = timed(lambda: simulate_yarn(optics, geometry, TransportGrids(16, 8, 12),
                                                                paths_per_cell=8192, seed=2, threads=threads))
-            rates(f"{preset} yarn, 35 wavelengths, default grids", transport.paths_per_cell.sum(), transport.events,
+            rates(f"{preset} yarn, 35 wavelengths, default grids", transport.traced_paths, transport.events,
                   wall, cpu, threads)
 
 
@@ -99,8 +99,9 @@ def bake() -> None:
     brdf, brdf_wall, _ = timed(lambda: yarn_brdf(transport, 21))
     print(f"paper_2008 tables to 1 % on every incidence cell's albedo at all 35 wavelengths, "
           f"{numba.get_num_threads()} threads: transport {wall:.1f} s wall ({cpu:.1f} s CPU, load "
-          f"{os.getloadavg()[0]:.1f}), BRDF (eq. 5) {brdf_wall:.1f} s; {transport.paths_per_cell.sum():,} paths "
-          f"({transport.paths_per_cell.min():,} … {transport.paths_per_cell.max():,} per cell), "
+          f"{os.getloadavg()[0]:.1f}), BRDF (eq. 5) {brdf_wall:.1f} s; {transport.traced_paths:,} paths traced "
+          f"({transport.paths_per_cell.min():,} … {transport.paths_per_cell.max():,} per cell, "
+          f"{int(transport.symmetry.traced.sum())} of {len(transport.paths_per_cell)} cells traced), "
           f"{transport.events:,} events; worst albedo rel. error {transport.counted_albedo_rel_stderr().max():.4f}; "
           f"rho {brdf.rho.shape}")
     print(f"  peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")

@@ -57,8 +57,8 @@ HERO_DEFENSIVE = 0.25
 #: The error target applies at wavelengths whose hemispherical albedo is at least this share of the
 #: cell's largest: all that can show in any colour (docs/transport.md, "Error target").
 ALBEDO_FLOOR = 1e-6
-#: Error-target rounds after the probe roulette a path whose every wavelength's weight, times the share
-#: of its error budget that wavelength uses, is below this (:func:`importance_from_errors`) ...
+#: From its third round on, an error-target run plays roulette with a path once every wavelength's weight,
+#: times the share of its error budget that wavelength uses, is below this (:func:`importance_from_errors`) ...
 ROULETTE_WINDOW = 0.5
 #: ... counting every wavelength's share as at least this, which bounds any wavelength's weights
 #: (so its variance) to 1 / USAGE_FLOOR of the window.
@@ -450,9 +450,8 @@ def _trace_block(tallies: BlockTallies | None, cells: np.ndarray, rows: np.ndarr
     _kernels.yarn_kernel(
         _balanced_slots(sizes.sum(axis=1), numba.get_num_threads()), cells, rows, task_first, sizes, seed,
         geometry.radius_mm, geometry.index, kernel_medium, hero_p, importance, res, max_cos_per_cell(res),
-        grids.n_around,
-        grids.n_along, grids.cell_length_mm(geometry.radius_mm), res, tallies.table, tallies.table_sq, *small,
-        decay,
+        grids.n_around, grids.n_along, grids.cell_length_mm(geometry.radius_mm), res, tallies.table, tallies.table_sq,
+        *small, decay,
     )
     return tallies, tuple(values[rows] for values in (*small, *decay[2:]))
 
@@ -579,7 +578,7 @@ class _YarnRun:
         """The tasks of ``paths`` (n_in,) new paths per cell, for the traced cells only."""
         return _split(np.where(self.traced, paths, 0))
 
-    def traced_paths(self, paths: np.ndarray) -> int:
+    def traced_sum(self, paths: np.ndarray) -> int:
         return int(paths[self.traced].sum())
 
     def trace_round(self, new_tasks: list[list[int]], progress, done_before: int, total: int) -> None:
@@ -687,8 +686,8 @@ class _YarnRun:
         guess = _paths_needed(v0, v0 / (len(self.hero_p[0]) * self.hero_p), n0, target)
         before_sum, before_sq, before_paths = self.exit_sum.copy(), self.exit_sq.copy(), self.paths.copy()
         probe = np.minimum(PROBE_ROUND_PATHS, max_paths - self.paths)
-        self.trace_round(self.traced_only(probe), progress, self.traced_paths(self.paths),
-                         self.traced_paths(np.maximum(guess, self.paths + probe)))
+        self.trace_round(self.traced_only(probe), progress, self.traced_sum(self.paths),
+                         self.traced_sum(np.maximum(guess, self.paths + probe)))
         n1 = (self.paths - before_paths)[:, None].astype(float)
         mean1 = (self.exit_sum - before_sum) / np.maximum(n1, 1)
         var1 = np.maximum((self.exit_sq - before_sq) / np.maximum(n1, 1) - mean1**2, 0.0) * n1 / np.maximum(n1 - 1, 1)
@@ -701,8 +700,8 @@ class _YarnRun:
                 return
             extra = np.where(pending, np.maximum(np.ceil(need) - self.paths, TASK_PATHS), 0).astype(np.int64)
             extra = np.minimum(extra, max_paths - self.paths)
-            done = self.traced_paths(self.paths)
-            self.trace_round(self.traced_only(extra), progress, done, done + self.traced_paths(extra))
+            done = self.traced_sum(self.paths)
+            self.trace_round(self.traced_only(extra), progress, done, done + self.traced_sum(extra))
             need = self.paths * (self.worst_counted_error() / target) ** 2 * ROUND_MARGIN
 
     def exits_from_workers(self, per_exit: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -158,10 +158,10 @@ def main() -> None:
     base = rows[0]
     for workers, wall, _ in rows[1:]:
         print(f"speed-up {workers} workers against {base[0]}: {base[1] / wall:.2f}×")
-    scaling_model(*base, result.summary["paths"]["per_incidence_cell"])
+    scaling_model(*base, result.summary["paths"])
 
 
-def scaling_model(workers: int, wall: float, record: dict, paths_per_cell: list[int]) -> None:
+def scaling_model(workers: int, wall: float, record: dict, paths: dict) -> None:
     """Predicted bake time on W workers from the run on ``workers`` (docs/distributed.md, "Scaling").
 
     The run splits into the transport's compute C (its tasks' compute time: the same work on any
@@ -169,14 +169,15 @@ def scaling_model(workers: int, wall: float, record: dict, paths_per_cell: list[
     (the cluster's start, the optics, eq. (5), the tables, the gather of the tallies).  On W workers
     each of the R rounds runs B = min(cells, BLOCKS_PER_WORKER·W) blocks, the busiest worker ⌈B/W⌉
     of them: T(W) = S + C/W_eff + R·⌈B/W⌉·o with W_eff = B/⌈B/W⌉ (blocks of equal cost).  The
-    costliest cell bounds a round below: C · max/Σ of its paths.
+    costliest cell bounds a round below: C · max/Σ of its paths.  Cells: the traced ones (``paths``, the
+    bake summary's record; an image cell's paths are its source's).
     """
-    cells = len(paths_per_cell)
+    cells = paths["incidence_cells_traced"]
     compute, overhead = sum(record["task_seconds"]), record["overhead_per_task_s"]
     blocks = min(cells, BLOCKS_PER_WORKER * workers)
     rounds = len(record["task_seconds"]) / blocks
     serial = wall - compute / workers - overhead * len(record["task_seconds"]) / workers
-    floor = compute * max(paths_per_cell) / sum(paths_per_cell)
+    floor = compute * max(paths["per_incidence_cell"]) / paths["total"]
     print(f"scaling model from {workers} worker(s): compute C = {compute:.1f} s in {rounds:.0f} rounds of tasks, "
           f"serial S = {serial:.1f} s ({serial / wall:.1%} of the bake: the serial fraction), overhead "
           f"{1e3 * overhead:.1f} ms per task; the costliest of {cells} cells takes {floor:.2f} s")

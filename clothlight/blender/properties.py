@@ -324,7 +324,8 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         description="Spatial cells around the yarn's circumference in the BSSRDF (the paper: 16)")
     n_along: IntProperty(
         name="Cells Along", default=_REQUEST.n_along, **_bounds.N_ALONG.limits(), soft_max=64,
-        description="Spatial cells along the yarn in the BSSRDF, even (the paper: 8)")
+        description="Spatial cells along the yarn in the BSSRDF (the paper: 8); an odd count lets the bake "
+                    "trace a quarter of the incidence cells by mirror symmetry, an even count a half")
     angular_resolution: IntProperty(
         name="Angular Resolution", default=_REQUEST.angular_resolution, **_bounds.ANGULAR_RESOLUTION.limits(),
         soft_max=32,

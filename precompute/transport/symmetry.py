@@ -91,8 +91,8 @@ class CellSymmetry:
     @classmethod
     def none(cls, n_around: int, n_along: int, angular_resolution: int) -> CellSymmetry:
         """Every cell traced (no reflection used)."""
-        identity = yarn_mirrors(n_around, n_along, angular_resolution)[0]
         n_in = angular_resolution**2
+        identity = Mirror(np.arange(n_in), np.arange(n_around), np.arange(n_along + 2))
         return cls((identity,), np.arange(n_in), np.zeros(n_in, dtype=np.int64))
 
     @property

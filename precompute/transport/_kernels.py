@@ -72,7 +72,6 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
         banked = np.empty(n_wl)
         ratios = np.empty(n_wl)
         weights = np.empty(n_wl)
-        normal = np.empty(3)
         pos = np.empty(3)
         d = np.empty(3)
         absorbed = local[SLAB_ABSORBED]
@@ -83,7 +82,7 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
             d[2] = 1.0
             status, collisions, _ = trace(state, SLAB, dims, eta, medium, hero, hero_p, importance, pos, d,
                                           1.0 - specular,
-                                          ratio, banked, ratios, normal, weights, absorbed)
+                                          ratio, banked, ratios, weights, absorbed)
             collisions_total += collisions
             if status == EXITED:
                 if d[2] < 0.0:
@@ -126,7 +125,7 @@ def _exit_bins(pos, d, dpsi, n_around, n_along, cell_length, out_res):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, inward):
+def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d):
     """Put a ray arriving from local direction (wx, wy, wz) (toward the light, wz > 0) at
     azimuth ``psi``, height ``z`` of the yarn surface; refract it in.  Returns the Fresnel
     reflectance (the surface specular share)."""
@@ -136,15 +135,8 @@ def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, inward):
     pos[1] = radius * sp
     pos[2] = z
     # local (axis, n × t, n) → world, reversed: the ray travels away from the light
-    d[0] = -(wy * sp + wz * cp)
-    d[1] = -(-wy * cp + wz * sp)
-    d[2] = -wx
-    inward[0] = -cp
-    inward[1] = -sp
-    inward[2] = 0.0
-    reflectance = fresnel_reflectance(wz, 1.0 / eta)
-    refract(d, inward, wz, 1.0 / eta)
-    return reflectance
+    d[0], d[1], d[2] = refract(-(wy * sp + wz * cp), -(-wy * cp + wz * sp), -wx, -cp, -sp, 0.0, wz, 1.0 / eta)
+    return fresnel_reflectance(wz, 1.0 / eta)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -178,7 +170,6 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
     banked = np.empty(n_wl)
     ratios = np.empty(n_wl)
     weights = np.empty(n_wl)
-    normal = np.empty(3)
     pos = np.empty(3)
     d = np.empty(3)
     for t in range(sizes.shape[0]):
@@ -192,10 +183,10 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
                     break
             psi = uniform(state) * dpsi
             z = uniform(state) * cell_length
-            reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d, normal)
+            reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d)
             hero = _pick_hero(state, hero_cdf)
             status, collisions, length = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                               1.0 - reflectance, ratio, banked, ratios, normal, weights,
+                                               1.0 - reflectance, ratio, banked, ratios, weights,
                                                cell_absorbed)
             cell_events += collisions
             for k in range(n_wl):
@@ -309,7 +300,6 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
         banked = np.empty(n_wl)
         ratios = np.empty(n_wl)
         weights = np.empty(n_wl)
-        normal = np.empty(3)
         pos = np.empty(3)
         d = np.empty(3)
         for _ in range(paths[c]):
@@ -320,20 +310,15 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
             pos[0] = radius * cp
             pos[1] = radius * sp
             pos[2] = 0.0
-            d[0] = -toward_light[0]
-            d[1] = -toward_light[1]
-            d[2] = -toward_light[2]
             cos_i = transverse * math.sqrt(max(0.0, 1.0 - impact * impact))
-            normal[0] = -cp
-            normal[1] = -sp
-            normal[2] = 0.0
             reflectance = fresnel_reflectance(cos_i, 1.0 / eta)
-            refract(d, normal, cos_i, 1.0 / eta)
+            d[0], d[1], d[2] = refract(-toward_light[0], -toward_light[1], -toward_light[2], -cp, -sp, 0.0, cos_i,
+                                       1.0 / eta)
             for k in range(n_wl):
                 task_specular[k] += reflectance
             hero = _pick_hero(state, hero_cdf)
             status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                          1.0 - reflectance, ratio, banked, ratios, normal, weights, task_absorbed)
+                                          1.0 - reflectance, ratio, banked, ratios, weights, task_absorbed)
             task_events += collisions
             if status == EXITED:
                 around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)

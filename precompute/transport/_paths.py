@@ -57,7 +57,7 @@ from ._interactions import (
     sample_table,
     turn,
 )
-from ._rng import uniform
+from ._rng import exponential, uniform
 
 SLAB = 0  #: dims = (thickness,): medium 0 ≤ z ≤ thickness, light enters at z = 0 going +z
 CYLINDER = 1  #: dims = (a, b): elliptic cross-section x²/a² + y²/b² ≤ 1, axis z (a = b: circle)
@@ -87,21 +87,21 @@ KernelMedium = namedtuple(
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def boundary_distance(geometry, dims, pos, d):
-    """Distance from an interior point ``pos`` along unit ``d`` to the boundary (inf if never)."""
+def boundary_distance(geometry, dims, px, py, pz, dx, dy, dz):
+    """Distance from an interior point (px, py, pz) along unit (dx, dy, dz) to the boundary (inf if never)."""
     if geometry == SLAB:
-        if d[2] > 0.0:
-            return (dims[0] - pos[2]) / d[2]
-        if d[2] < 0.0:
-            return -pos[2] / d[2]
+        if dz > 0.0:
+            return (dims[0] - pz) / dz
+        if dz < 0.0:
+            return -pz / dz
         return math.inf
     ia2 = 1.0 / (dims[0] * dims[0])
     ib2 = 1.0 / (dims[1] * dims[1])
-    qa = d[0] * d[0] * ia2 + d[1] * d[1] * ib2
+    qa = dx * dx * ia2 + dy * dy * ib2
     if qa < 1e-300:
         return math.inf
-    qb = pos[0] * d[0] * ia2 + pos[1] * d[1] * ib2
-    qc = pos[0] * pos[0] * ia2 + pos[1] * pos[1] * ib2 - 1.0
+    qb = px * dx * ia2 + py * dy * ib2
+    qc = px * px * ia2 + py * py * ib2 - 1.0
     root = math.sqrt(max(0.0, qb * qb - qa * qc))
     # the far root, in the form without cancellation for either sign of qb
     if qb <= 0.0:
@@ -110,29 +110,22 @@ def boundary_distance(geometry, dims, pos, d):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def boundary_normal(geometry, dims, pos, normal):
-    """Put ``pos`` exactly on the boundary it reached and write the outward unit normal there."""
+def boundary_normal(geometry, dims, px, py, pz):
+    """The point (px, py, pz), which reached the boundary, put exactly on it, and the outward unit normal
+    there: (px, py, pz, nx, ny, nz)."""
     if geometry == SLAB:
-        if pos[2] > 0.5 * dims[0]:
-            pos[2] = dims[0]
-            normal[2] = 1.0
-        else:
-            pos[2] = 0.0
-            normal[2] = -1.0
-        normal[0] = 0.0
-        normal[1] = 0.0
-        return
+        if pz > 0.5 * dims[0]:
+            return px, py, dims[0], 0.0, 0.0, 1.0
+        return px, py, 0.0, 0.0, 0.0, -1.0
     ia2 = 1.0 / (dims[0] * dims[0])
     ib2 = 1.0 / (dims[1] * dims[1])
-    scale = 1.0 / math.sqrt(pos[0] * pos[0] * ia2 + pos[1] * pos[1] * ib2)
-    pos[0] *= scale
-    pos[1] *= scale
-    nx = pos[0] * ia2
-    ny = pos[1] * ib2
+    scale = 1.0 / math.sqrt(px * px * ia2 + py * py * ib2)
+    px *= scale
+    py *= scale
+    nx = px * ia2
+    ny = py * ib2
     inv = 1.0 / math.sqrt(nx * nx + ny * ny)
-    normal[0] = nx * inv
-    normal[1] = ny * inv
-    normal[2] = 0.0
+    return px, py, pz, nx * inv, ny * inv, 0.0
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -285,7 +278,7 @@ def _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, aliv
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, enter_weight,
-          ratio, banked, ratios, normal, weights, absorbed):
+          ratio, banked, ratios, weights, absorbed):
     """Trace one path that has just entered the medium at ``pos`` going along unit ``d``.
 
     ``eta`` = n_inside / n_outside; ``enter_weight`` the flux it carries (per unit incident
@@ -294,7 +287,9 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     the refracted direction outside, ``weights`` (L,) the flux leaving per wavelength; on
     ``LOST`` ``weights`` holds the flux still inside; on ``TERMINATED`` (roulette) it is 0.
     ``absorbed`` (L,) is incremented by the absorbed flux in every case.  ``ratio``,
-    ``banked``, ``ratios``, ``normal`` are scratch arrays ((L,), (L,), (L,), (3,)).
+    ``banked``, ``ratios`` are scratch arrays (L,).  The position and direction live in registers while
+    the path is traced (reading them back from memory at every collision lengthened its dependency
+    chain); ``pos`` and ``d`` are read at the start and written at the end.
 
     Returns ``(status, collisions, length)``, ``length`` the path's length inside the medium
     (mm): a path's weight under absorption μa + Δμa is its weight here times e^{−Δμa·length}
@@ -310,6 +305,8 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
         if importance[k] > importance[neediest]:
             neediest = k
     mu_t_hero = medium.mu_t[hero]
+    mean_free_path = 1.0 / mu_t_hero if mu_t_hero > 0.0 else math.inf  # mm
+    hg_g_hero = medium.hg_g[hero] if medium.phase_kind == PHASE_HG else 0.0
     n = 0
     n_mark = 0
     length = 0.0
@@ -318,17 +315,25 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     ratio_bound = 1.0  # an upper bound of max_k ratio[k]
     interactions = 0
     status = LOST
+    # the distance to the next collision (mm; < 0: none drawn yet).  A path reflected at the boundary
+    # goes on with what is left of it: in a homogeneous medium the free path along a broken line is
+    # exponential as along a straight one, and this saves a logarithm per internal reflection
+    flight = -1.0
+    px, py, pz = pos[0], pos[1], pos[2]
+    dx, dy, dz = d[0], d[1], d[2]
     while interactions < MAX_INTERACTIONS:
         interactions += 1
-        flight = -math.log(1.0 - uniform(state)) / mu_t_hero if mu_t_hero > 0.0 else math.inf
-        to_boundary = boundary_distance(geometry, dims, pos, d)
+        if flight < 0.0:
+            flight = exponential(state) * mean_free_path if mu_t_hero > 0.0 else math.inf
+        to_boundary = boundary_distance(geometry, dims, px, py, pz, dx, dy, dz)
         if flight == math.inf and to_boundary == math.inf:
             break
         if flight < to_boundary:
-            pos[0] += flight * d[0]
-            pos[1] += flight * d[1]
-            pos[2] += flight * d[2]
+            px += flight * dx
+            py += flight * dy
+            pz += flight * dz
             length += flight
+            flight = -1.0
             n += 1
             largest_albedo_power *= medium.max_albedo
             check = (n % ROULETTE_PERIOD == 0) if spectral else True
@@ -353,28 +358,29 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
                     factor /= survival
                     n_mark = n
             if medium.phase_kind == PHASE_HG:
-                mu = sample_hg(medium.hg_g[hero], uniform(state))
+                mu = sample_hg(hg_g_hero, uniform(state))
             else:
                 mu = sample_table(medium.phase_by_mu, medium.cdf, medium.guide, hero, uniform(state))
             if spectral:
                 ratio_bound = update_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, medium.phase_max,
                                                   hero, mu, ratio, ratio_bound)
-            turn(d, mu, state)
+            dx, dy, dz = turn(dx, dy, dz, mu, state)
         else:
-            pos[0] += to_boundary * d[0]
-            pos[1] += to_boundary * d[1]
-            pos[2] += to_boundary * d[2]
             length += to_boundary
-            boundary_normal(geometry, dims, pos, normal)
-            cos_i = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]
+            flight -= to_boundary
+            px, py, pz, nx, ny, nz = boundary_normal(geometry, dims, px + to_boundary * dx, py + to_boundary * dy,
+                                                     pz + to_boundary * dz)
+            cos_i = dx * nx + dy * ny + dz * nz
             if cos_i > 0.0:  # ≤ 0 only by round-off at a grazing hit: the path stays inside
                 reflectance = fresnel_reflectance(cos_i, eta)
                 if reflectance >= 1.0 or uniform(state) < reflectance:
-                    reflect(d, normal, cos_i)
+                    dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz, cos_i)
                 else:
-                    refract(d, normal, cos_i, eta)
+                    dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, cos_i, eta)
                     status = EXITED
                     break
+    pos[0], pos[1], pos[2] = px, py, pz
+    d[0], d[1], d[2] = dx, dy, dz
     # a path ended by roulette ends right after a check that formed its ratios
     _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, status != TERMINATED,
             status == TERMINATED and spectral, ratios, weights, absorbed)

@@ -31,8 +31,10 @@ SLAB_R_SQUARES, SLAB_T_SQUARES = 6, 7
 @numba.njit(cache=True, error_model="numpy")
 def _pick_hero(state, hero_cdf):
     """Wavelength k with probability hero_cdf[k] − hero_cdf[k − 1] (``hero_cdf[-1]`` = 1)."""
-    u = uniform(state)
     n_wl = hero_cdf.shape[0]
+    if n_wl == 1:
+        return 0
+    u = uniform(state)
     for k in range(n_wl - 1):
         if u < hero_cdf[k]:
             return k

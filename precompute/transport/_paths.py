@@ -87,16 +87,15 @@ KernelMedium = namedtuple(
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def boundary_distance(geometry, dims, px, py, pz, dx, dy, dz):
-    """Distance from an interior point (px, py, pz) along unit (dx, dy, dz) to the boundary (inf if never)."""
+def boundary_distance(geometry, thickness, ia2, ib2, px, py, pz, dx, dy, dz):
+    """Distance from an interior point (px, py, pz) along unit (dx, dy, dz) to the boundary (inf if never);
+    ``thickness`` (SLAB) or ``ia2``, ``ib2`` = 1/a², 1/b² (CYLINDER): :func:`boundary_shape`."""
     if geometry == SLAB:
         if dz > 0.0:
-            return (dims[0] - pz) / dz
+            return (thickness - pz) / dz
         if dz < 0.0:
             return -pz / dz
         return math.inf
-    ia2 = 1.0 / (dims[0] * dims[0])
-    ib2 = 1.0 / (dims[1] * dims[1])
     qa = dx * dx * ia2 + dy * dy * ib2
     if qa < 1e-300:
         return math.inf
@@ -110,15 +109,13 @@ def boundary_distance(geometry, dims, px, py, pz, dx, dy, dz):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def boundary_normal(geometry, dims, px, py, pz):
+def boundary_normal(geometry, thickness, ia2, ib2, px, py, pz):
     """The point (px, py, pz), which reached the boundary, put exactly on it, and the outward unit normal
     there: (px, py, pz, nx, ny, nz)."""
     if geometry == SLAB:
-        if pz > 0.5 * dims[0]:
-            return px, py, dims[0], 0.0, 0.0, 1.0
+        if pz > 0.5 * thickness:
+            return px, py, thickness, 0.0, 0.0, 1.0
         return px, py, 0.0, 0.0, 0.0, -1.0
-    ia2 = 1.0 / (dims[0] * dims[0])
-    ib2 = 1.0 / (dims[1] * dims[1])
     scale = 1.0 / math.sqrt(px * px * ia2 + py * py * ib2)
     px *= scale
     py *= scale
@@ -126,6 +123,15 @@ def boundary_normal(geometry, dims, px, py, pz):
     ny = py * ib2
     inv = 1.0 / math.sqrt(nx * nx + ny * ny)
     return px, py, pz, nx * inv, ny * inv, 0.0
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def boundary_shape(geometry, dims):
+    """(thickness, 1/a², 1/b²) of the medium ``dims``, taken once per path: (thickness, 0, 0) for a SLAB,
+    (0, 1/a², 1/b²) for a CYLINDER."""
+    if geometry == SLAB:
+        return dims[0], 0.0, 0.0
+    return 0.0, 1.0 / (dims[0] * dims[0]), 1.0 / (dims[1] * dims[1])
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -319,13 +325,14 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     # goes on with what is left of it: in a homogeneous medium the free path along a broken line is
     # exponential as along a straight one, and this saves a logarithm per internal reflection
     flight = -1.0
+    thickness, ia2, ib2 = boundary_shape(geometry, dims)
     px, py, pz = pos[0], pos[1], pos[2]
     dx, dy, dz = d[0], d[1], d[2]
     while interactions < MAX_INTERACTIONS:
         interactions += 1
         if flight < 0.0:
             flight = exponential(state) * mean_free_path if mu_t_hero > 0.0 else math.inf
-        to_boundary = boundary_distance(geometry, dims, px, py, pz, dx, dy, dz)
+        to_boundary = boundary_distance(geometry, thickness, ia2, ib2, px, py, pz, dx, dy, dz)
         if flight == math.inf and to_boundary == math.inf:
             break
         if flight < to_boundary:
@@ -368,8 +375,8 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
         else:
             length += to_boundary
             flight -= to_boundary
-            px, py, pz, nx, ny, nz = boundary_normal(geometry, dims, px + to_boundary * dx, py + to_boundary * dy,
-                                                     pz + to_boundary * dz)
+            px, py, pz, nx, ny, nz = boundary_normal(geometry, thickness, ia2, ib2, px + to_boundary * dx,
+                                                     py + to_boundary * dy, pz + to_boundary * dz)
             cos_i = dx * nx + dy * ny + dz * nz
             if cos_i > 0.0:  # ≤ 0 only by round-off at a grazing hit: the path stays inside
                 reflectance = fresnel_reflectance(cos_i, eta)

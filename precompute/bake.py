@@ -484,7 +484,9 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
         record = _simulation_record(inputs, key, optics, transport, brdf, checks,
                                     {"optics": optics_seconds, "transport": transport.wall_seconds,
                                      "brdf": time.perf_counter() - brdf_start})
-        np.savez_compressed(
+        # not compressed: ρ and its error are Monte-Carlo noise in float32, which zlib shrinks by ~12 %
+        # (15.6 MB against 17.9 MB at the default) in ~0.5 s of every bake
+        np.savez(
             folder / SPECTRAL_FILE,
             metadata=np.array(json.dumps(record, allow_nan=False)),
             wavelengths_nm=brdf.wavelengths_nm,

@@ -91,21 +91,22 @@ def boundary_distance(geometry, thickness, ia2, ib2, px, py, pz, dx, dy, dz):
     """Distance from an interior point (px, py, pz) along unit (dx, dy, dz) to the boundary (inf if never);
     ``thickness`` (SLAB) or ``ia2``, ``ib2`` = 1/a², 1/b² (CYLINDER): :func:`boundary_shape`."""
     if geometry == SLAB:
-        if dz > 0.0:
-            return (thickness - pz) / dz
-        if dz < 0.0:
-            return -pz / dz
-        return math.inf
+        if dz == 0.0:
+            return math.inf
+        # the face ahead chosen without a branch: which way a path goes is a coin toss, which a branch
+        # predictor loses half the time
+        face = thickness if dz > 0.0 else 0.0
+        return (face - pz) / dz
     qa = dx * dx * ia2 + dy * dy * ib2
     if qa < 1e-300:
         return math.inf
     qb = px * dx * ia2 + py * dy * ib2
     qc = px * px * ia2 + py * py * ib2 - 1.0
     root = math.sqrt(max(0.0, qb * qb - qa * qc))
-    # the far root, in the form without cancellation for either sign of qb
-    if qb <= 0.0:
-        return (root - qb) / qa
-    return max(0.0, -qc / (qb + root))
+    # the far root, in the form without cancellation for either sign of qb, chosen by selects (whether
+    # the path heads outward is a coin toss) into one division: (root − qb) / qa or −qc / (qb + root)
+    inward = qb <= 0.0
+    return max(0.0, (root - qb if inward else -qc) / (qa if inward else qb + root))
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -113,9 +114,8 @@ def boundary_normal(geometry, thickness, ia2, ib2, px, py, pz):
     """The point (px, py, pz), which reached the boundary, put exactly on it, and the outward unit normal
     there: (px, py, pz, nx, ny, nz)."""
     if geometry == SLAB:
-        if pz > 0.5 * thickness:
-            return px, py, thickness, 0.0, 0.0, 1.0
-        return px, py, 0.0, 0.0, 0.0, -1.0
+        top = pz > 0.5 * thickness
+        return px, py, (thickness if top else 0.0), 0.0, 0.0, (1.0 if top else -1.0)
     scale = 1.0 / math.sqrt(px * px * ia2 + py * py * ib2)
     px *= scale
     py *= scale

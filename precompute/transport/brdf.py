@@ -143,11 +143,17 @@ def yarn_brdf_at(transport: YarnTransport, directions: np.ndarray, *, interpolat
         for w_a, cells_a in terms:
             for w_b, cells_b in terms:
                 shared = cells_a == cells_b  # exit cells o for which both read the same bin
-                if shared.any():
+                if shared.all():
+                    second += (w_a * w_b) @ moment[:, cells_a].reshape(n_around, -1)
+                elif shared.any():
                     product = (w_a * w_b) @ moment[:, cells_a].reshape(n_around, -1)
                     second += product * np.repeat(shared, n_wl)
         rho[lit] += part
-        variance[lit] += np.maximum(second - part**2, 0.0) / (transport.paths_per_cell[traced] - 1)
+        part *= part
+        second -= part
+        np.maximum(second, 0.0, out=second)
+        second *= 1.0 / (transport.paths_per_cell[traced] - 1)
+        variance[lit] += second
     shape = (len(weights), n_out, n_wl)
     return rho.reshape(shape), np.sqrt(variance).reshape(shape)
 

@@ -40,7 +40,7 @@ def test_energy_bookkeeping(dyed):
     cell, within the noise of the exits and absorption (both carry the spectral MIS weights).  Only
     the traced cells are independent samples (the others are their mirror images), and with their
     spread as the error, the mean's deviation follows Student's t with n − 1 degrees of freedom: the
-    bound is its two-sided 10⁻³ quantile (at 8 cells, 4 such errors are exceeded by 0.5 % of the streams)."""
+    bound is its two-sided 10⁻³ quantile (at 8 cells, a bound of 4 would fail for 0.5 % of the streams)."""
     total = (dyed.specular + dyed.exit_fraction + dyed.unscattered_fraction + dyed.absorbed_fraction
              + dyed.lost_fraction)[dyed.symmetry.traced]
     cells = total.shape[0]

@@ -50,7 +50,7 @@ def fresnel_reflectance(cos_i, eta):
 def refract(dx, dy, dz, nx, ny, nz, cos_i, eta):
     """Unit direction (dx, dy, dz) refracted through an interface whose unit normal (nx, ny, nz) points
     to the side it goes to (``cos_i`` = d · n > 0), ``eta = n_from / n_to``; no TIR (checked by the
-    caller).  Returned as a tuple, like every direction of the path core: kept in registers."""
+    caller).  Returned as a tuple, like every direction of the path core."""
     if eta == 1.0:
         return dx, dy, dz
     cos_t = math.sqrt(max(0.0, 1.0 - eta * eta * (1.0 - cos_i * cos_i)))
@@ -75,7 +75,7 @@ def sample_hg(g, u):
     if abs(g) < 1e-6:
         return 2.0 * u - 1.0
     s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u)
-    # 0.5 / g is the same for every collision of a path: written apart, the compiler takes it out of the loop
+    # times 0.5 / g rather than over 2g: the reciprocal is the same at every collision of a path
     mu = (1.0 + g * g - s * s) * (0.5 / g)
     return min(1.0, max(-1.0, mu))
 

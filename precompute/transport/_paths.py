@@ -293,9 +293,8 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     the refracted direction outside, ``weights`` (L,) the flux leaving per wavelength; on
     ``LOST`` ``weights`` holds the flux still inside; on ``TERMINATED`` (roulette) it is 0.
     ``absorbed`` (L,) is incremented by the absorbed flux in every case.  ``ratio``,
-    ``banked``, ``ratios`` are scratch arrays (L,).  The position and direction live in registers while
-    the path is traced (reading them back from memory at every collision lengthened its dependency
-    chain); ``pos`` and ``d`` are read at the start and written at the end.
+    ``banked``, ``ratios`` are scratch arrays (L,).  The position and direction are local scalars while
+    the path is traced: ``pos`` and ``d`` are read at the start and written at the end.
 
     Returns ``(status, collisions, length)``, ``length`` the path's length inside the medium
     (mm): a path's weight under absorption μa + Δμa is its weight here times e^{−Δμa·length}

@@ -71,27 +71,28 @@ def uniform(state):
 #: common area of the layers (Marsaglia & Tsang 2000, 256 layers).
 _ZIGGURAT_R = 7.69711747013104972
 _ZIGGURAT_AREA = 3.949659822581572e-3
-#: A draw's 53 bits: the low 8 pick the layer, the 45 above them the point in it.
+#: A draw's 53 bits: the low 8 pick one of the 256 layers, the 45 above them the point in it.
 _LAYER_BITS = 8
-_POINT_SCALE = float(2**45)
+_LAYERS = 2**_LAYER_BITS
+_POINT_SCALE = float(2 ** (53 - _LAYER_BITS))
 
 
 def _exponential_ziggurat():
     """Per layer i: ``threshold[i]`` (below it a point lies under e^{−x} for sure), ``width[i]`` (the
     layer's right edge per unit of the point's integer) and ``height[i]`` = e^{−x_i}.  Layer 0 is the
     base, with the tail; layer 1 the top one (its inner edge is x = 0)."""
-    threshold = np.zeros(256, dtype=np.uint64)
-    width = np.zeros(256)
-    height = np.zeros(256)
+    threshold = np.zeros(_LAYERS, dtype=np.uint64)
+    width = np.zeros(_LAYERS)
+    height = np.zeros(_LAYERS)
     edge = _ZIGGURAT_R
     base = _ZIGGURAT_AREA / math.exp(-edge)  # the base layer's width as a rectangle of the common area
     threshold[0] = np.uint64(edge / base * _POINT_SCALE)
     width[0] = base / _POINT_SCALE
-    width[255] = edge / _POINT_SCALE
+    width[-1] = edge / _POINT_SCALE
     height[0] = 1.0
-    height[255] = math.exp(-edge)
+    height[-1] = math.exp(-edge)
     outer = edge
-    for i in range(254, 0, -1):
+    for i in range(_LAYERS - 2, 0, -1):
         edge = -math.log(_ZIGGURAT_AREA / edge + math.exp(-edge))
         threshold[i + 1] = np.uint64(edge / outer * _POINT_SCALE)
         outer = edge
@@ -108,7 +109,7 @@ def exponential(state):
     """Next number of the stream drawn from the unit exponential density e^{−x}, x ≥ 0."""
     while True:
         bits = _next_bits(state)
-        layer = bits & np.uint64(255)
+        layer = bits & np.uint64(_LAYERS - 1)
         point = bits >> np.uint64(_LAYER_BITS)
         x = float(point) * _ZIGGURAT_WIDTH[layer]
         if point < _ZIGGURAT_THRESHOLD[layer]:

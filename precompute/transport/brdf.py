@@ -143,11 +143,11 @@ def yarn_brdf_at(transport: YarnTransport, directions: np.ndarray, *, interpolat
         for w_a, cells_a in terms:
             for w_b, cells_b in terms:
                 shared = cells_a == cells_b  # exit cells o for which both read the same bin
-                if shared.all():
-                    second += (w_a * w_b) @ moment[:, cells_a].reshape(n_around, -1)
-                elif shared.any():
+                if shared.any():
                     product = (w_a * w_b) @ moment[:, cells_a].reshape(n_around, -1)
-                    second += product * np.repeat(shared, n_wl)
+                    if not shared.all():
+                        product *= np.repeat(shared, n_wl)
+                    second += product
         rho[lit] += part
         part *= part
         second -= part

@@ -1,10 +1,11 @@
 """Where the transport kernels spend their time: a sampling profile of the numba code (issue 24).
 
-    python benchmarks/profile_transport.py [yarn|slab] [--paths N]
+    python benchmarks/profile_transport.py [yarn|slab] [--paths N | --target E]
 
 Runs itself under ``perf record -e cpu-clock`` (the one event a virtual machine offers; skipped with
 the reason where perf is missing or not permitted) while tracing, on one thread, the default preset's
-yarn (``--paths`` per incidence cell, default 512) or the van de Hulst slab (``--paths`` in all, default
+yarn (``--paths`` per incidence cell, default 512; or, as a bake traces it, to the relative error ``--target`` on
+every cell's albedo: adapted hero wavelengths and the roulette by need) or the van de Hulst slab (``--paths`` in all, default
 2·10⁶).  numba's machine code is anonymous memory that perf cannot name, so the traced process copies
 its executable anonymous mappings out before it exits; the samples are then sorted into
 
@@ -36,7 +37,7 @@ NRT_PAGE_START = bytes.fromhex("b801000000f0480fc107")
 SAMPLES_PER_SECOND = 4000
 
 
-def run_traced(mode: str, paths: int, folder: pathlib.Path) -> None:
+def run_traced(mode: str, paths: int, target: float | None, folder: pathlib.Path) -> None:
     """The traced child: warm up, trace, and copy the executable anonymous mappings into ``folder``."""
     sys.path.insert(0, str(REPO))
     from precompute.medium import DEFAULT_PRESET
@@ -49,7 +50,8 @@ def run_traced(mode: str, paths: int, folder: pathlib.Path) -> None:
         simulate_yarn(optics, geometry, TransportGrids(8, 2, 3), paths_per_cell=16, threads=1)
 
         def work():
-            return simulate_yarn(optics, geometry, TransportGrids(), paths_per_cell=paths, seed=3, threads=1).events
+            amount = {"paths_per_cell": paths} if target is None else {"target_rel_stderr": target}
+            return simulate_yarn(optics, geometry, TransportGrids(), **amount, seed=3, threads=1).events
     else:
         simulate_hg_slab(0.9, 0.75, 2.0, 1.0, paths=1000)
 
@@ -128,8 +130,9 @@ def main(arguments: list[str]) -> int:
     mode = "slab" if "slab" in arguments else "yarn"
     paths = int(arguments[arguments.index("--paths") + 1]) if "--paths" in arguments else (
         2_000_000 if mode == "slab" else 512)
+    target = float(arguments[arguments.index("--target") + 1]) if "--target" in arguments else None
     if CHILD in os.environ:
-        run_traced(mode, paths, pathlib.Path(os.environ[CHILD]))
+        run_traced(mode, paths, target, pathlib.Path(os.environ[CHILD]))
         return 0
     for tool in ("perf", "objdump"):
         if shutil.which(tool) is None:
@@ -145,7 +148,8 @@ def main(arguments: list[str]) -> int:
             print(f"profile skipped: perf record failed (exit {run.returncode}; "
                   "kernel.perf_event_paranoid may forbid it)")
             return 0
-        what = (f"the default preset's yarn, {paths:,} paths per incidence cell" if mode == "yarn"
+        amount = f"{paths:,} paths per incidence cell" if target is None else f"to a {target:g} relative error"
+        what = (f"the default preset's yarn, {amount}" if mode == "yarn"
                 else f"the van de Hulst slab (a 0.9, g 0.75, tau 2, n 1), {paths:,} paths")
         print(f"{what}, one thread")
         report(folder, data)

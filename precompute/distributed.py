@@ -64,6 +64,11 @@ _ADDRESS = re.compile(r"^(tcp|tls)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):\d{1,5
 PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: This module, digested with every job's code: it runs the tasks on the workers.
 _LAYER_ENTRY = "precompute.distributed"
+#: dask's self-monitoring, switched off on the local cluster, whose dashboard is off so that nothing reads
+#: it: each worker's statistical profiler samples its threads' stacks every 10 ms, and every process times its
+#: event loop every 20 ms.  On an idle two-worker cluster that was ~0.1 of a core, CPU the bake's transport
+#: shares on a small machine (docs/distributed.md, "The local cluster's own cost").
+_LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.admin.tick.interval": "1s"}
 
 
 def dask_available() -> bool:
@@ -300,6 +305,7 @@ def open_executor(scheduler: str, *, code: dict, workers: int | None = None,
     only with ``"local"``.  An address that does not answer within ``connect_timeout_s`` (default
     CONNECT_TIMEOUT_S): SchedulerUnreachable.  The local cluster is closed at the end, whatever happened.
     """
+    import dask
     from distributed import Client, LocalCluster
 
     connect_timeout_s = CONNECT_TIMEOUT_S if connect_timeout_s is None else connect_timeout_s
@@ -313,7 +319,8 @@ def open_executor(scheduler: str, *, code: dict, workers: int | None = None,
     with contextlib.ExitStack() as stack:
         if scheduler == LOCAL:
             stack.enter_context(_sys_path_without_blender_scripts())
-            with _children_ignore_ctrl_c():
+            # the nannies hand the configuration of their creation to their workers
+            with _children_ignore_ctrl_c(), dask.config.set(_LOCAL_CLUSTER_CONFIG):
                 cluster = LocalCluster(
                     n_workers=workers or len(os.sched_getaffinity(0)), threads_per_worker=1, processes=True,
                     # CRITICAL: a worker's heartbeat racing the close logs an ERROR; a task's error reaches the client

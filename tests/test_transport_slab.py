@@ -205,11 +205,12 @@ def test_roulette_shortcut_skips_only_checks_the_full_check_passes():
         # the plain roulette, or importance as importance_from_errors gives it (shares of 0.25 … 1)
         importance = np.ones(n_wl) if trial % 4 < 2 else rng.uniform(0.25, 1.0, n_wl) * 2e-3
         neediest = int(np.argmax(importance))
-        largest = largest_weight(medium.albedo, ratios, n, importance)
+        albedo_n = medium.albedo**n
+        largest = largest_weight(albedo_n, ratios, importance)
         # half the states anywhere from 100x below to 100x above the threshold, half within 1e-6 of it
         scale = rng.uniform(0.01, 100.0) if trial % 2 else 1.0 + rng.uniform(-1e-6, 1e-6)
         factor = ROULETTE_THRESHOLD / largest * scale
-        shortcut = surely_above_threshold(medium.mu_t, medium.log_mu_t, medium.albedo, medium.brightest, neediest,
+        shortcut = surely_above_threshold(medium.mu_t, medium.log_mu_t, albedo_n, medium.brightest, neediest,
                                           hero, ratio, n, length, hero_p, factor, importance)
         if shortcut:
             assert largest * factor >= ROULETTE_THRESHOLD

@@ -72,6 +72,8 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
         seed_stream(state, seed, c, 0)
         ratio = np.empty(n_wl)
         banked = np.empty(n_wl)
+        albedo_n = np.empty(n_wl)
+        albedo_mark = np.empty(n_wl)
         ratios = np.empty(n_wl)
         weights = np.empty(n_wl)
         pos = np.empty(3)
@@ -84,7 +86,7 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
             d[2] = 1.0
             status, collisions, _ = trace(state, SLAB, dims, eta, medium, hero, hero_p, importance, pos, d,
                                           1.0 - specular,
-                                          ratio, banked, ratios, weights, absorbed)
+                                          ratio, banked, albedo_n, albedo_mark, ratios, weights, absorbed)
             collisions_total += collisions
             if status == EXITED:
                 if d[2] < 0.0:
@@ -170,6 +172,8 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
     state = np.empty(2, dtype=np.uint64)
     ratio = np.empty(n_wl)
     banked = np.empty(n_wl)
+    albedo_n = np.empty(n_wl)
+    albedo_mark = np.empty(n_wl)
     ratios = np.empty(n_wl)
     weights = np.empty(n_wl)
     pos = np.empty(3)
@@ -188,7 +192,7 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
             reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d)
             hero = _pick_hero(state, hero_cdf)
             status, collisions, length = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                               1.0 - reflectance, ratio, banked, ratios, weights,
+                                               1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, weights,
                                                cell_absorbed)
             cell_events += collisions
             for k in range(n_wl):
@@ -300,6 +304,8 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
         seed_stream(state, seed, c, 1)
         ratio = np.empty(n_wl)
         banked = np.empty(n_wl)
+        albedo_n = np.empty(n_wl)
+        albedo_mark = np.empty(n_wl)
         ratios = np.empty(n_wl)
         weights = np.empty(n_wl)
         pos = np.empty(3)
@@ -320,7 +326,7 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
                 task_specular[k] += reflectance
             hero = _pick_hero(state, hero_cdf)
             status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                          1.0 - reflectance, ratio, banked, ratios, weights, task_absorbed)
+                                          1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, weights, task_absorbed)
             task_events += collisions
             if status == EXITED:
                 around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)

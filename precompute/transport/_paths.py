@@ -81,7 +81,7 @@ RESCALE = 1e100
 
 KernelMedium = namedtuple(
     "KernelMedium",
-    ["mu_t", "log_mu_t", "albedo", "max_albedo", "brightest", "phase_kind", "hg_g", "phase_by_mu", "phase_max", "cdf",
+    ["mu_t", "log_mu_t", "albedo", "brightest", "phase_kind", "hg_g", "phase_by_mu", "phase_max", "cdf",
      "guide", "grey"],
 )
 
@@ -222,11 +222,11 @@ def mis_ratios(mu_t, log_mu_t, grey, hero, ratio, n, length, hero_p, out):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def surely_above_threshold(mu_t, log_mu_t, albedo, brightest, neediest, hero, ratio, n, length, hero_p, factor,
+def surely_above_threshold(mu_t, log_mu_t, albedo_n, brightest, neediest, hero, ratio, n, length, hero_p, factor,
                            importance):
-    """Whether the path's largest weight max_λ r_λ α_λ^n s_λ (``importance`` s) times ``factor`` is surely
-    at least ROULETTE_THRESHOLD, from a lower bound that needs two exponentials instead of L;
-    ``brightest``: the wavelength of largest albedo, ``neediest``: of largest importance.
+    """Whether the path's largest weight max_λ r_λ α_λ^n s_λ (``albedo_n``: α_λ^n, ``importance``: s) times
+    ``factor`` is surely at least ROULETTE_THRESHOLD, from a lower bound that needs two exponentials instead
+    of L; ``brightest``: the wavelength of largest albedo, ``neediest``: of largest importance.
 
     With b_k = n ln(μt_k/μt_h) − (μt_k − μt_h)·length (:func:`log_flight_ratio`) and B = max_k b_k,
     the MIS ratio of any wavelength c is r_c = ratio_c e^{b_c} / Σ_k q_k ratio_k e^{b_k}
@@ -247,44 +247,35 @@ def surely_above_threshold(mu_t, log_mu_t, albedo, brightest, neediest, hero, ra
     lower = 0.0
     for c in (brightest, neediest):
         b_c = log_flight_ratio(mu_t[c], log_mu_t[c], mu_t_hero, log_mu_t_hero, n, length)
-        lower = max(lower, ratio[c] * math.exp(b_c - top) / total * albedo_power(albedo[c], n) * importance[c])
+        lower = max(lower, ratio[c] * math.exp(b_c - top) / total * albedo_n[c] * importance[c])
     return lower * factor >= ROULETTE_THRESHOLD * BOUND_MARGIN
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def albedo_power(albedo, n):
-    """α^n (1 for n = 0), by repeated squaring."""
-    return albedo ** n
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def largest_weight(albedo, ratios, n, importance):
-    """max_λ r_λ α_λ^n s_λ: the path's largest weight per unit factor, from its MIS ratios ``ratios``,
-    each wavelength's scaled by its ``importance`` s_λ."""
+def largest_weight(albedo_n, ratios, importance):
+    """max_λ r_λ α_λ^n s_λ: the path's largest weight per unit factor, from its MIS ratios ``ratios`` and
+    albedo powers ``albedo_n``, each wavelength's scaled by its ``importance`` s_λ."""
     largest = 0.0
     for k in range(ratios.shape[0]):
-        largest = max(largest, ratios[k] * albedo_power(albedo[k], n) * importance[k])
+        largest = max(largest, ratios[k] * albedo_n[k] * importance[k])
     return largest
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, alive, fresh, ratios, weights,
-            absorbed):
+def _finish(medium, hero, hero_p, ratio, n, length, factor, banked, albedo_n, albedo_mark, alive, fresh, ratios,
+            weights, absorbed):
     """Form the path's weights (``weights``, 0 if not ``alive``) and add its absorbed energy;
     ``fresh``: ``ratios`` already hold the whole path's MIS ratios."""
     if not fresh:
         mis_ratios(medium.mu_t, medium.log_mu_t, medium.grey, hero, ratio, n, length, hero_p, ratios)
-    albedo = medium.albedo
     for k in range(weights.shape[0]):
-        now = albedo_power(albedo[k], n)
-        mark = albedo_power(albedo[k], n_mark)
-        absorbed[k] += ratios[k] * (banked[k] + factor * (mark - now))
-        weights[k] = ratios[k] * factor * now if alive else 0.0
+        absorbed[k] += ratios[k] * (banked[k] + factor * (albedo_mark[k] - albedo_n[k]))
+        weights[k] = ratios[k] * factor * albedo_n[k] if alive else 0.0
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, enter_weight,
-          ratio, banked, ratios, weights, absorbed):
+          ratio, banked, albedo_n, albedo_mark, ratios, weights, absorbed):
     """Trace one path that has just entered the medium at ``pos`` going along unit ``d``.
 
     ``eta`` = n_inside / n_outside; ``enter_weight`` the flux it carries (per unit incident
@@ -293,7 +284,7 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     the refracted direction outside, ``weights`` (L,) the flux leaving per wavelength; on
     ``LOST`` ``weights`` holds the flux still inside; on ``TERMINATED`` (roulette) it is 0.
     ``absorbed`` (L,) is incremented by the absorbed flux in every case.  ``ratio``,
-    ``banked``, ``ratios`` are scratch arrays (L,).  The position and direction are local scalars while
+    ``banked``, ``albedo_n``, ``albedo_mark``, ``ratios`` are scratch arrays (L,).  The position and direction are local scalars while
     the path is traced: ``pos`` and ``d`` are read at the start and written at the end.
 
     Returns ``(status, collisions, length)``, ``length`` the path's length inside the medium
@@ -304,6 +295,10 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     for k in range(n_wl):
         ratio[k] = 1.0
         banked[k] = 0.0
+        # α_λ^n and α_λ^m (m: the collisions at the last roulette survival), kept up as n grows: each is
+        # needed at every roulette check and exit, where powers by squaring cost L loops of log₂ n steps
+        albedo_n[k] = 1.0
+        albedo_mark[k] = 1.0
     spectral = (not medium.grey) and n_wl > 1
     neediest = 0
     for k in range(n_wl):
@@ -313,10 +308,8 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     mean_free_path = 1.0 / mu_t_hero if mu_t_hero > 0.0 else math.inf  # mm
     hg_g_hero = medium.hg_g[hero] if medium.phase_kind == PHASE_HG else 0.0
     n = 0
-    n_mark = 0
     length = 0.0
     factor = enter_weight  # roulette factor times entering flux
-    largest_albedo_power = 1.0  # max_λ α_λ^n, the largest weight when r ≡ 1
     ratio_bound = 1.0  # an upper bound of max_k ratio[k]
     interactions = 0
     status = LOST
@@ -341,17 +334,18 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
             length += flight
             flight = -1.0
             n += 1
-            largest_albedo_power *= medium.max_albedo
+            for k in range(n_wl):
+                albedo_n[k] *= medium.albedo[k]
             check = (n % ROULETTE_PERIOD == 0) if spectral else True
             if check:
-                if spectral and surely_above_threshold(medium.mu_t, medium.log_mu_t, medium.albedo, medium.brightest,
+                if spectral and surely_above_threshold(medium.mu_t, medium.log_mu_t, albedo_n, medium.brightest,
                                                        neediest, hero, ratio, n, length, hero_p, factor, importance):
                     largest = math.inf
                 elif spectral:
                     mis_ratios(medium.mu_t, medium.log_mu_t, False, hero, ratio, n, length, hero_p, ratios)
-                    largest = largest_weight(medium.albedo, ratios, n, importance)
+                    largest = largest_weight(albedo_n, ratios, importance)
                 else:
-                    largest = largest_albedo_power
+                    largest = albedo_n[medium.brightest]  # r ≡ 1: the largest weight is the brightest's
                 if largest * factor < ROULETTE_THRESHOLD:
                     # weight window: the survivors' scaled weight is the threshold, or 1 / ROULETTE_SURVIVAL of it
                     survival = max(ROULETTE_SURVIVAL, largest * factor / ROULETTE_THRESHOLD)
@@ -359,10 +353,9 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
                         status = TERMINATED
                         break
                     for k in range(n_wl):
-                        banked[k] += factor * (albedo_power(medium.albedo[k], n_mark)
-                                               - albedo_power(medium.albedo[k], n))
+                        banked[k] += factor * (albedo_mark[k] - albedo_n[k])
+                        albedo_mark[k] = albedo_n[k]
                     factor /= survival
-                    n_mark = n
             if medium.phase_kind == PHASE_HG:
                 mu = sample_hg(hg_g_hero, uniform(state))
             else:
@@ -388,6 +381,6 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     pos[0], pos[1], pos[2] = px, py, pz
     d[0], d[1], d[2] = dx, dy, dz
     # a path ended by roulette ends right after a check that formed its ratios
-    _finish(medium, hero, hero_p, ratio, n, n_mark, length, factor, banked, status != TERMINATED,
+    _finish(medium, hero, hero_p, ratio, n, length, factor, banked, albedo_n, albedo_mark, status != TERMINATED,
             status == TERMINATED and spectral, ratios, weights, absorbed)
     return status, n, length

@@ -95,7 +95,7 @@ class TransportMedium:
             phase_max = float(table.max())
             table = np.ascontiguousarray(table.T)  # (M, L): all wavelengths at one μ side by side
         grey = same_phase and bool(np.all(mu_t == mu_t[0]))
-        return KernelMedium(mu_t, np.log(mu_t), albedo, float(albedo.max()), int(np.argmax(albedo)), kind, hg_g, table,
+        return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), kind, hg_g, table,
                             phase_max, cdf, guide, grey)
 
 

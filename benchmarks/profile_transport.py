@@ -4,10 +4,11 @@
 
 Runs itself under ``perf record -e cpu-clock`` (the one event a virtual machine offers; skipped with
 the reason where perf is missing or not permitted) while tracing, on one thread, the default preset's
-yarn (``--paths`` per incidence cell, default 512; or, as a bake traces it, to the relative error ``--target`` on
-every cell's albedo: adapted hero wavelengths and the roulette by need) or the van de Hulst slab (``--paths`` in all, default
-2·10⁶).  numba's machine code is anonymous memory that perf cannot name, so the traced process copies
-its executable anonymous mappings out before it exits; the samples are then sorted into
+yarn (``--paths`` per incidence cell, default 512; or, as a bake traces it, to the relative error
+``--target`` on every cell's albedo: adapted hero wavelengths and the roulette by need) or the van de
+Hulst slab (``--paths`` in all, default 2·10⁶).  numba's machine code is anonymous memory that perf
+cannot name, so the traced process copies its executable anonymous mappings out before it exits; the
+samples are then sorted into
 
 * numba's reference counting (``NRT_incref`` / ``NRT_decref``, atomic; recognised by their code),
 * the rest of the compiled kernels,

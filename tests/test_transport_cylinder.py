@@ -158,14 +158,15 @@ def test_roulette_by_importance_changes_the_path_lengths_not_the_expectation():
     medium = dyed_medium()
     plain = simulate_yarn(medium, GEOMETRY, GRIDS, paths_per_cell=8000, seed=3)
     weighed = simulate_yarn(medium, GEOMETRY, GRIDS, paths_per_cell=8000, seed=4,
-                            roulette_importance=[2e-3, 2e-3, 5e-4])
+                            roulette_importance=[2e-3, 2e-3, 1e-4])
     assert weighed.events < 0.8 * plain.events
     traced = plain.symmetry.traced
     a, b = plain.exit_fraction[traced].mean(axis=0), weighed.exit_fraction[traced].mean(axis=0)
     sigma = np.hypot(plain.albedo_rel_stderr * plain.exit_fraction, weighed.albedo_rel_stderr * weighed.exit_fraction)
     sigma = np.sqrt((sigma[traced] ** 2).sum(axis=0)) / traced.sum()
     assert np.all(np.abs(a - b) < 4 * sigma)
-    # the clear wavelength, whose weight counts least, pays with noise
+    # the clear wavelength, whose weight counts 20 times less, pays with noise (5.8 % more at seeds 3 and 4; with
+    # 4 times less, 0.8 % less: a path meets its first check at its 16th collision, and its last ones are few)
     assert np.median(weighed.albedo_rel_stderr[:, 2]) > np.median(plain.albedo_rel_stderr[:, 2])
     with pytest.raises(ParameterError, match="roulette_importance"):
         simulate_yarn(medium, GEOMETRY, GRIDS, paths_per_cell=10, roulette_importance=[0.0, 0.0, 0.0])

@@ -154,10 +154,14 @@ def test_brdf_error_counts_images_as_the_same_paths(mirrored):
 
 def test_prediction_error_counts_images_as_the_same_paths(mirrored):
     """The reference prediction's error (a sum over all cells) is the folded one: larger than the sum
-    over cells taken as independent, which the images are not."""
+    over cells taken as independent, which the images are not, in the middle bins, where a path's images
+    add to the same bin (11 % larger at seed 5).  In the outer bins they add to the other side's bin, and
+    the two errors differ only by the covariance of a path's exits into one or the other: the same within
+    0.02 % at seed 5."""
     light = np.array([0.0, 0.0, 1.0])
     folded = transport_prediction(mirrored, light, bins=4, sub_positions=4)
     independent = transport_prediction(dataclasses.replace(mirrored, symmetry=CellSymmetry.none(
         GRIDS.n_around, GRIDS.n_along, GRIDS.angular_resolution)), light, bins=4, sub_positions=4)
     np.testing.assert_array_equal(folded.rho, independent.rho)
-    assert np.all(folded.rho_stderr > independent.rho_stderr)
+    assert np.all(folded.rho_stderr[1:-1] > 1.05 * independent.rho_stderr[1:-1])
+    np.testing.assert_allclose(folded.rho_stderr[[0, -1]], independent.rho_stderr[[0, -1]], rtol=0.01)

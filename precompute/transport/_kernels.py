@@ -326,7 +326,8 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
                 task_specular[k] += reflectance
             hero = _pick_hero(state, hero_cdf)
             status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                          1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, weights, task_absorbed)
+                                          1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, weights,
+                                          task_absorbed)
             task_events += collisions
             if status == EXITED:
                 around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)

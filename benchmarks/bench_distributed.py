@@ -1,6 +1,6 @@
 """The default bake on a LocalCluster of 1 and of 2 workers, side by side: speed-up, task sizes, the
 scheduler's overhead per task and the bytes moved (docs/distributed.md); and a draft cloth BSDF
-measurement (18 views of the paper's red cotton) the same way.
+measurement (18 views of the paper's red cotton) the same way; and what an idle local cluster costs in CPU.
 
 Each bake runs into a throw-away cache, so both simulate.  The transport's tasks are timed from
 dask's task stream (compute time of every task on its worker); the scheduler's overhead per task
@@ -9,12 +9,15 @@ submitted as the bake submits its own (a task and its two getters, ``map(..., ke
 the workers; the bytes are the NumPy arrays sent in tasks' arguments and shared values, and
 received as results (:class:`precompute.distributed.ClusterExecutor`).
 
-    python benchmarks/bench_distributed.py [--workers 1 2] [--job bake cloth] [--preset red_cotton]
+    python benchmarks/bench_distributed.py [--workers 1 2] [--job bake cloth idle] [--preset red_cotton]
         [--set KEY=VALUE ...] [--paths N] [--single-process]
 
 ``--paths N``: N paths per incidence cell instead of the error target (one round);
 ``--single-process``: also the single-process bake on as many numba threads, for the machine's own
-scaling beside the cluster's.
+scaling beside the cluster's.  ``--job idle``: the CPU time of this process and of its children while a
+local cluster of the largest ``--workers`` opens, idles IDLE_SECONDS and closes, with dask's own monitoring
+switched off as ClothLight's local cluster has it (``precompute.distributed._LOCAL_CLUSTER_CONFIG``) and
+with dask's defaults, alternately; the CPU a bake's transport shares with it on a small machine.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ import argparse
 import contextlib
 import os
 import pathlib
+import resource
 import statistics
 import sys
 import tempfile
@@ -36,6 +40,9 @@ from precompute.transport.cylinder import BLOCKS_PER_WORKER
 
 #: Trivial tasks timed for the scheduler's overhead.
 OVERHEAD_TASKS = 400
+#: Seconds a local cluster idles in ``--job idle``; and how many times each configuration is timed.
+IDLE_SECONDS = 20.0
+IDLE_REPEATS = 2
 #: Cluster sizes the scaling model predicts.
 PREDICTED_WORKERS = (8, 32, 128)
 
@@ -111,6 +118,29 @@ def _overhead_per_task(executor) -> float:
     return (time.perf_counter() - started) * executor.workers / OVERHEAD_TASKS
 
 
+def _cpu_seconds() -> tuple[float, float]:
+    """User + system CPU seconds of this process and of its children that have ended."""
+    own, children = (resource.getrusage(who) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
+    return own.ru_utime + own.ru_stime, children.ru_utime + children.ru_stime
+
+
+def bench_idle(workers: int) -> None:
+    from precompute import distributed
+
+    quiet = distributed._LOCAL_CLUSTER_CONFIG
+    print(f"a local cluster of {workers} worker(s) opened, idle {IDLE_SECONDS:g} s, closed: CPU seconds", flush=True)
+    for _ in range(IDLE_REPEATS):
+        for name, config in (("monitoring off (ClothLight's)", quiet), ("dask's defaults", {})):
+            distributed._LOCAL_CLUSTER_CONFIG = config
+            own, children = _cpu_seconds()
+            with distributed.open_executor("local", code=bake_module.SPECTRAL_SOURCES, workers=workers):
+                time.sleep(IDLE_SECONDS)
+            own_after, children_after = _cpu_seconds()
+            print(f"  {name}: this process {own_after - own:.2f}, workers and nannies {children_after - children:.2f}",
+                  flush=True)
+    distributed._LOCAL_CLUSTER_CONFIG = quiet
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
@@ -118,9 +148,12 @@ def main() -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=[])
     parser.add_argument("--paths", type=int)
     parser.add_argument("--single-process", action="store_true")
-    parser.add_argument("--job", nargs="+", choices=("bake", "cloth"), default=["bake", "cloth"],
-                        help="what to time: the default bake, a draft cloth measurement (default: both)")
+    parser.add_argument("--job", nargs="+", choices=("bake", "cloth", "idle"), default=["bake", "cloth"],
+                        help="what to time: the default bake, a draft cloth measurement (default: both), an idle "
+                        "local cluster's CPU")
     args = parser.parse_args()
+    if "idle" in args.job:
+        bench_idle(max(args.workers))
     if "cloth" in args.job:
         bench_cloth(args.workers)
     if "bake" not in args.job:

@@ -14,10 +14,11 @@ received as results (:class:`precompute.distributed.ClusterExecutor`).
 
 ``--paths N``: N paths per incidence cell instead of the error target (one round);
 ``--single-process``: also the single-process bake on as many numba threads, for the machine's own
-scaling beside the cluster's.  ``--job idle``: the CPU time of this process and of its children while a
-local cluster of the largest ``--workers`` opens, idles IDLE_SECONDS and closes, with dask's own monitoring
-switched off as ClothLight's local cluster has it (``precompute.distributed._LOCAL_CLUSTER_CONFIG``) and
-with dask's defaults, alternately; the CPU a bake's transport shares with it on a small machine.
+scaling beside the cluster's.  ``--job idle``: the CPU time of this process and of its workers and
+nannies while a local cluster of the largest ``--workers`` idles IDLE_SECONDS, with dask's own
+monitoring switched off as ClothLight's local cluster has it
+(``precompute.distributed._LOCAL_CLUSTER_CONFIG``) and with dask's defaults, alternately: the CPU a
+bake's transport shares with the cluster itself on a small machine.
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ import argparse
 import contextlib
 import os
 import pathlib
-import resource
 import statistics
 import sys
 import tempfile
@@ -119,25 +119,32 @@ def _overhead_per_task(executor) -> float:
 
 
 def _cpu_seconds() -> tuple[float, float]:
-    """User + system CPU seconds of this process and of its children that have ended."""
-    own, children = (resource.getrusage(who) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
-    return own.ru_utime + own.ru_stime, children.ru_utime + children.ru_stime
+    """User + system CPU seconds so far of this process and of its live descendants (workers, nannies)."""
+    import psutil
+
+    def used(process):
+        times = process.cpu_times()
+        return times.user + times.system
+
+    me = psutil.Process()
+    return used(me), sum(used(child) for child in me.children(recursive=True))
 
 
 def bench_idle(workers: int) -> None:
     from precompute import distributed
 
     quiet = distributed._LOCAL_CLUSTER_CONFIG
-    print(f"a local cluster of {workers} worker(s) opened, idle {IDLE_SECONDS:g} s, closed: CPU seconds", flush=True)
+    print(f"a local cluster of {workers} worker(s), idle for {IDLE_SECONDS:g} s after it opened: CPU used meanwhile",
+          flush=True)
     for _ in range(IDLE_REPEATS):
         for name, config in (("monitoring off (ClothLight's)", quiet), ("dask's defaults", {})):
             distributed._LOCAL_CLUSTER_CONFIG = config
-            own, children = _cpu_seconds()
             with distributed.open_executor("local", code=bake_module.SPECTRAL_SOURCES, workers=workers):
+                own, children = _cpu_seconds()
                 time.sleep(IDLE_SECONDS)
-            own_after, children_after = _cpu_seconds()
-            print(f"  {name}: this process {own_after - own:.2f}, workers and nannies {children_after - children:.2f}",
-                  flush=True)
+                own_after, children_after = _cpu_seconds()
+            print(f"  {name}: this process {own_after - own:.2f} s, workers and nannies {children_after - children:.2f}"
+                  f" s: {(own_after - own + children_after - children) / IDLE_SECONDS:.3f} of a core", flush=True)
     distributed._LOCAL_CLUSTER_CONFIG = quiet
 
 

@@ -57,6 +57,14 @@ def compare(transport, beam):
     return (a_s - a_b) / a_b, (a_s - a_b) / np.hypot(e_s, e_b), a_s, a_b
 
 
+def test_eq5_without_its_error_gives_the_same_rho(transport, beams):
+    directions = beams[0].receiving_directions()
+    rho, stderr = yarn_brdf_at(transport, directions)
+    rho_alone, none = yarn_brdf_at(transport, directions, with_stderr=False)
+    np.testing.assert_array_equal(rho_alone, rho)
+    assert none is None and np.all(stderr > 0)
+
+
 def test_beam_energy_bookkeeping(beams):
     for beam in beams:
         total = (beam.specular + beam.exit_fraction + beam.unscattered_fraction + beam.absorbed_fraction

@@ -24,7 +24,7 @@ Absorbed energy: a λ-analog path deposits ``α^{j−1}(1 − α)`` at its j-th
 collision, ``1 − α^n`` in all (times Russian-roulette factors); as a function
 of the whole path it takes the same MIS ratio r_λ(x).
 
-Russian roulette: every ``ROULETTE_PERIOD`` collisions (every collision when
+Russian roulette: every :func:`roulette_interval` collisions (every collision when
 r ≡ 1), a path whose largest weight fell below ``ROULETTE_THRESHOLD`` survives
 with probability max(ROULETTE_SURVIVAL, largest / ROULETTE_THRESHOLD) and has
 its weights divided by it (a weight window: a survivor carries the threshold's
@@ -68,11 +68,12 @@ LOST = 2
 
 ROULETTE_THRESHOLD = 1e-3
 ROULETTE_SURVIVAL = 0.1
-#: Collisions between roulette checks where the check costs a spectral evaluation (L exponentials where
-#: the bound cannot settle it).  Any period is unbiased; on the default yarn's bake, where most of a
-#: long path's checks need the full evaluation, 16 reached the error target in 0.75–0.8 of the CPU time
-#: of 4, with 5 % fewer paths (docs/transport.md, "Where a collision's time goes").
-ROULETTE_PERIOD = 16
+#: Collisions between roulette checks on a spectral path, where a check costs L exponentials wherever the
+#: bound cannot settle it (:func:`roulette_interval`).  Any interval is unbiased.
+ROULETTE_INTERVAL_SCATTERING = 16
+ROULETTE_INTERVAL_ABSORBING = 4
+#: The mean single-scattering albedo over the wavelengths from which a medium counts as scattering.
+SCATTERING_MEDIUM = 0.5
 #: A path still inside after this many interactions (collisions + internal reflections) is
 #: ended and its weight reported as lost, so nothing disappears unreported.
 MAX_INTERACTIONS = 1_000_000
@@ -84,9 +85,20 @@ RESCALE = 1e100
 
 KernelMedium = namedtuple(
     "KernelMedium",
-    ["mu_t", "log_mu_t", "albedo", "brightest", "phase_kind", "hg_g", "phase_by_mu", "phase_max", "cdf",
-     "guide", "grey"],
+    ["mu_t", "log_mu_t", "albedo", "brightest", "roulette_interval", "phase_kind", "hg_g", "phase_by_mu", "phase_max",
+     "cdf", "guide", "grey"],
 )
+
+
+def roulette_interval(albedo) -> int:
+    """Collisions between a spectral path's roulette checks in a medium of single-scattering albedos
+    ``albedo`` (L,).  In a scattering medium (mean albedo at least SCATTERING_MEDIUM) paths are long and
+    their largest weight falls slowly: checks every ROULETTE_INTERVAL_SCATTERING collisions reached the
+    default yarn's error target in 0.75–0.8 of the CPU time of checks every 4.  In a medium that mostly
+    absorbs, most paths' weights collapse within a few collisions, and a path left unchecked for 16 goes on
+    for nothing: the paper's yarn took 1.5 times the CPU time at 16 (docs/transport.md, "Where a
+    collision's time goes")."""
+    return ROULETTE_INTERVAL_SCATTERING if float(albedo.mean()) >= SCATTERING_MEDIUM else ROULETTE_INTERVAL_ABSORBING
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -339,7 +351,7 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
             n += 1
             for k in range(n_wl):
                 albedo_n[k] *= medium.albedo[k]
-            check = (n % ROULETTE_PERIOD == 0) if spectral else True
+            check = (n % medium.roulette_interval == 0) if spectral else True
             if check:
                 if spectral and surely_above_threshold(medium.mu_t, medium.log_mu_t, albedo_n, medium.brightest,
                                                        neediest, hero, ratio, n, length, hero_p, factor, importance):

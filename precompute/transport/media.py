@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
 from ._interactions import PHASE_HG, PHASE_TABLE
-from ._paths import KernelMedium
+from ._paths import KernelMedium, roulette_interval
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,7 +95,8 @@ class TransportMedium:
             phase_max = float(table.max())
             table = np.ascontiguousarray(table.T)  # (M, L): all wavelengths at one μ side by side
         grey = same_phase and bool(np.all(mu_t == mu_t[0]))
-        return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), kind, hg_g, table,
+        return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), roulette_interval(albedo), kind, hg_g,
+                            table,
                             phase_max, cdf, guide, grey)
 
 

@@ -136,16 +136,19 @@ def bench_idle(workers: int) -> None:
     quiet = distributed._LOCAL_CLUSTER_CONFIG
     print(f"a local cluster of {workers} worker(s), idle for {IDLE_SECONDS:g} s after it opened: CPU used meanwhile",
           flush=True)
-    for _ in range(IDLE_REPEATS):
-        for name, config in (("monitoring off (ClothLight's)", quiet), ("dask's defaults", {})):
-            distributed._LOCAL_CLUSTER_CONFIG = config
-            with distributed.open_executor("local", code=bake_module.SPECTRAL_SOURCES, workers=workers):
-                own, children = _cpu_seconds()
-                time.sleep(IDLE_SECONDS)
-                own_after, children_after = _cpu_seconds()
-            print(f"  {name}: this process {own_after - own:.2f} s, workers and nannies {children_after - children:.2f}"
-                  f" s: {(own_after - own + children_after - children) / IDLE_SECONDS:.3f} of a core", flush=True)
-    distributed._LOCAL_CLUSTER_CONFIG = quiet
+    try:
+        for _ in range(IDLE_REPEATS):
+            for name, config in (("monitoring off (ClothLight's)", quiet), ("dask's defaults", {})):
+                distributed._LOCAL_CLUSTER_CONFIG = config
+                with distributed.open_executor("local", code=bake_module.SPECTRAL_SOURCES, workers=workers):
+                    own, children = _cpu_seconds()
+                    time.sleep(IDLE_SECONDS)
+                    own_after, children_after = _cpu_seconds()
+                print(f"  {name}: this process {own_after - own:.2f} s, workers and nannies "
+                      f"{children_after - children:.2f} s: "
+                      f"{(own_after - own + children_after - children) / IDLE_SECONDS:.3f} of a core", flush=True)
+    finally:
+        distributed._LOCAL_CLUSTER_CONFIG = quiet
 
 
 def main() -> None:

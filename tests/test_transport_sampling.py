@@ -1,5 +1,5 @@
-"""The path core's sampling primitives: free paths (the exponential ziggurat), the scattering turn and
-the Fresnel reflectance, each against its definition."""
+"""The path core's sampling primitives: free paths (the exponential ziggurat), tabulated phase functions
+(alias tables), the scattering turn and the Fresnel reflectance, each against its definition."""
 
 import math
 
@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 import scipy.stats
 
-from precompute.transport._interactions import fresnel_reflectance, turn
+from precompute.transport._interactions import alias_tables, fresnel_reflectance, sample_table, turn
 from precompute.transport._rng import _ZIGGURAT_R, exponential, seed_stream
+from precompute.transport.media import phase_sampling_tables
 
 
 @numba.njit
@@ -20,6 +21,25 @@ def _exponentials(count, seed):
     for i in range(count):
         out[i] = exponential(state)
     return out
+
+
+@numba.njit
+def _table_draws(table, threshold, alias, k, count, seed):
+    state = np.empty(2, dtype=np.uint64)
+    seed_stream(state, seed, 0, 0)
+    out = np.empty(count)
+    for i in range(count):
+        out[i] = sample_table(table, threshold, alias, k, state)
+    return out
+
+
+def _drawn_probabilities(threshold, alias):
+    """Each entry's probability under the alias tables (one row): kept with its threshold, plus what the
+    entries that alias it pass on, over the number of entries."""
+    drawn = threshold.copy()
+    np.add.at(drawn, alias, 1.0 - threshold)
+    drawn[alias == np.arange(len(alias))] -= 1.0 - threshold[alias == np.arange(len(alias))]
+    return drawn / len(alias)
 
 
 @numba.njit
@@ -56,6 +76,52 @@ def test_free_paths_are_exactly_exponential():
     tail = np.mean(draws > _ZIGGURAT_R)
     assert abs(tail - math.exp(-_ZIGGURAT_R)) < 4 * math.sqrt(math.exp(-_ZIGGURAT_R) / len(draws))
     assert draws.min() >= 0.0
+
+
+def test_alias_tables_draw_each_segment_with_its_probability():
+    """Rows with zero entries, a single entry and a sharp peak (as a Mie table's forward diffraction):
+    the alias tables give every entry its probability to round-off, and an entry of probability 0 is
+    never drawn."""
+    rng = np.random.default_rng(7)
+    random_row = rng.random(300)
+    random_row[::5] = 0.0
+    single = np.zeros(300)
+    single[123] = 1.0
+    peak = np.exp(-0.5 * ((np.arange(300) - 290.0) / 1.5) ** 2) + 1e-9
+    rows = np.array([random_row, single, peak])
+    rows /= rows.sum(axis=1, keepdims=True)
+    threshold, alias = alias_tables(rows)
+    assert threshold.shape == alias.shape == rows.shape
+    for row, kept, to in zip(rows, threshold, alias):
+        assert np.all((kept >= 0.0) & (kept <= 1.0))
+        drawn = _drawn_probabilities(kept, to)
+        np.testing.assert_allclose(drawn, row, rtol=0, atol=1e-15)
+        assert np.all(drawn[row == 0.0] == 0.0)
+
+
+def test_a_table_is_sampled_from_its_piecewise_linear_density():
+    """4·10⁶ draws from a coarse, forward-peaked table (21 points: the segments' slopes matter) against
+    the integral of the piecewise-linear density over 200 bins that cut across the segments: χ²."""
+    mu = np.linspace(-1.0, 1.0, 21)
+    phase = np.exp(3.0 * mu) + 0.05
+    table, threshold, alias = phase_sampling_tables(phase[None, :])
+    draws = _table_draws(np.ascontiguousarray(table.T), threshold, alias, 0, 4_000_000, 5)
+    assert draws.min() >= -1.0 and draws.max() <= 1.0
+    edges = np.linspace(-1.0, 1.0, 201)
+    # the density is linear between grid points, so its integral up to x is exact from the trapezoid
+    # to the grid point below and the exact area of the part segment
+    def cumulative(x):
+        j = np.minimum(((x + 1.0) / 0.1).astype(int), 19)
+        p0, p1 = table[0, j], table[0, j + 1]
+        t = (x - mu[j]) / 0.1
+        whole = np.concatenate([[0.0], np.cumsum(0.5 * (table[0, 1:] + table[0, :-1]) * 0.1)])
+        return 2.0 * np.pi * (whole[j] + 0.1 * (p0 * t + 0.5 * (p1 - p0) * t * t))
+
+    expected = len(draws) * np.diff(cumulative(edges))
+    assert abs(cumulative(np.array([1.0]))[0] - 1.0) < 1e-12
+    counts, _ = np.histogram(draws, edges)
+    chi2 = ((counts - expected) ** 2 / expected).sum()
+    assert scipy.stats.chi2.sf(chi2, len(counts) - 1) > 1e-4
 
 
 @pytest.mark.parametrize("d", [(0.0, 0.0, 1.0), (0.0, 0.0, -1.0), (0.6, 0.0, 0.8), (0.36, -0.48, -0.8)])

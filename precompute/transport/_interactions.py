@@ -8,8 +8,8 @@ wavelength must be the one its sampler draws from (docs/transport.md).
 * Table: ``p(μ)`` given on a uniform grid of μ over [−1, 1] and linear between
   grid points, normalised so that ``2π ∫ p dμ = 1`` for that piecewise-linear
   function (the trapezoidal rule of :mod:`precompute.phase`).  Sampling picks a
-  segment from its cumulative table (with a guide table, O(1) expected) and
-  inverts the linear density inside the segment.
+  segment by Walker's alias method (:func:`alias_tables`: one draw and one pair
+  of loads, no search) and a point inside it from the segment's linear density.
 * Henyey–Greenstein with asymmetry g: analytic inversion and evaluation.
 """
 
@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 from ._rng import uniform
 
@@ -88,27 +89,80 @@ def hg_value(g, mu):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def sample_table(table, cdf, guide, k, u):
+def sample_table(table, alias_threshold, alias, k, state):
     """cos θ drawn exactly from the piecewise-linear phase ``table[:, k]`` on the uniform μ grid.
 
     ``table`` (M, L) is laid out by μ so that evaluating every wavelength at one μ reads
-    contiguous memory; ``cdf[k]``: cumulative probability at the M grid points (0 … 1);
-    ``guide[k, b]``: the last segment starting at or below cumulative probability b / G.
+    contiguous memory; ``alias_threshold[k]``, ``alias[k]`` (M − 1,): wavelength k's alias tables of
+    its segments' probabilities (:func:`alias_tables`).  Within segment j, at t ∈ [0, 1) along it,
+    the density ∝ (1 − t) p_j + t p_{j+1} is the mixture of the triangular densities 2(1 − t) and 2t
+    with weights p_j and p_{j+1}: t is the smaller or the larger of two uniform numbers.  No division,
+    no square root, no dependent search: only the alias pair's and the two table values' loads.
     """
-    m = table.shape[0]
-    n_guide = guide.shape[1]
-    j = guide[k, min(int(u * n_guide), n_guide - 1)]
-    while j < m - 2 and cdf[k, j + 1] <= u:
-        j += 1
-    mass = cdf[k, j + 1] - cdf[k, j]
-    v = (u - cdf[k, j]) / mass if mass > 0.0 else 0.5
+    segments = alias.shape[1]
+    x = uniform(state) * segments
+    i = min(int(x), segments - 1)
+    # x − i is uniform on [0, 1) and independent of i; the alias is loaded whether it is taken or not,
+    # so that the choice is a select rather than a branch that is mispredicted half the time
+    other = alias[k, i]
+    j = i if x - i < alias_threshold[k, i] else other
     p0 = table[j, k]
     p1 = table[j + 1, k]
-    # inverse of the linear density's CDF on the segment, in the form stable for p1 ≈ p0
-    c = v * (p0 + p1)
-    denom = p0 + math.sqrt(max(0.0, p0 * p0 + (p1 - p0) * c))
-    t = c / denom if denom > 0.0 else v
-    return min(1.0, max(-1.0, -1.0 + (j + min(1.0, t)) * (2.0 / (m - 1))))
+    a = uniform(state)
+    b = uniform(state)
+    t = max(a, b) if uniform(state) * (p0 + p1) < p1 else min(a, b)
+    return min(1.0, max(-1.0, -1.0 + (j + t) * (2.0 / segments)))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def alias_tables(probabilities):
+    """Walker's alias tables of each row of ``probabilities`` (L, S), rows summing to 1, built by
+    Vose's method (M. D. Vose, "A linear algorithm for generating random numbers with a given
+    distribution", IEEE Trans. Softw. Eng. 17(9), 1991): (``threshold`` (L, S), ``alias`` (L, S)
+    int32) such that drawing i uniformly from 0 … S − 1, keeping it with probability
+    ``threshold[i]`` and else taking ``alias[i]`` draws j with probability ``probabilities[j]``.
+    A segment of zero probability is never drawn: it is never an alias, and its threshold is 0.
+    """
+    rows, s = probabilities.shape
+    threshold = np.ones((rows, s))
+    alias = np.empty((rows, s), dtype=np.int32)
+    scaled = np.empty(s)
+    small = np.empty(s, dtype=np.int64)
+    large = np.empty(s, dtype=np.int64)
+    for r in range(rows):
+        n_small = 0
+        n_large = 0
+        heaviest = 0
+        for i in range(s):
+            scaled[i] = probabilities[r, i] * s
+            alias[r, i] = i
+            if probabilities[r, i] > probabilities[r, heaviest]:
+                heaviest = i
+            if scaled[i] < 1.0:
+                small[n_small] = i
+                n_small += 1
+            else:
+                large[n_large] = i
+                n_large += 1
+        while n_small > 0 and n_large > 0:
+            n_small -= 1
+            light = small[n_small]
+            heavy = large[n_large - 1]
+            threshold[r, light] = scaled[light]
+            alias[r, light] = heavy
+            # in this order the round-off stays at the level of one addition
+            scaled[heavy] = (scaled[heavy] + scaled[light]) - 1.0
+            if scaled[heavy] < 1.0:
+                n_large -= 1
+                small[n_small] = heavy
+                n_small += 1
+        # what is left is within round-off of 1 (threshold 1), except a segment of zero probability
+        # left over by that round-off, which must still never be drawn
+        for i in range(n_small):
+            if probabilities[r, small[i]] == 0.0:
+                threshold[r, small[i]] = 0.0
+                alias[r, small[i]] = heaviest
+    return threshold, alias
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")

@@ -86,7 +86,7 @@ RESCALE = 1e100
 KernelMedium = namedtuple(
     "KernelMedium",
     ["mu_t", "log_mu_t", "albedo", "brightest", "roulette_interval", "phase_kind", "hg_g", "phase_by_mu", "phase_max",
-     "cdf", "guide", "grey"],
+     "alias_threshold", "alias", "grey"],
 )
 
 
@@ -374,7 +374,7 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
             if medium.phase_kind == PHASE_HG:
                 mu = sample_hg(hg_g_hero, uniform(state))
             else:
-                mu = sample_table(medium.phase_by_mu, medium.cdf, medium.guide, hero, uniform(state))
+                mu = sample_table(medium.phase_by_mu, medium.alias_threshold, medium.alias, hero, state)
             if spectral:
                 ratio_bound = update_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, medium.phase_max,
                                                   hero, mu, ratio, ratio_bound)

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
-from ._interactions import PHASE_HG, PHASE_TABLE
+from ._interactions import PHASE_HG, PHASE_TABLE, alias_tables
 from ._paths import KernelMedium, roulette_interval
 
 
@@ -84,43 +84,37 @@ class TransportMedium:
         albedo = self.albedo
         if self.hg_g is not None:
             kind, hg_g = PHASE_HG, self.hg_g
-            table = cdf = np.zeros((1, 2))
-            guide = np.zeros((1, 1), dtype=np.int64)
+            table = alias_threshold = np.zeros((1, 2))
+            alias = np.zeros((1, 1), dtype=np.int32)
             same_phase = bool(np.all(hg_g == hg_g[0]))
             phase_max = float(np.max((1 - hg_g**2) / (4 * np.pi * (1 - np.abs(hg_g)) ** 3)))
         else:
             kind, hg_g = PHASE_TABLE, np.zeros(1)
-            table, cdf, guide = phase_sampling_tables(self.phase_table)
+            table, alias_threshold, alias = phase_sampling_tables(self.phase_table)
             same_phase = bool(np.all(table == table[0]))
             phase_max = float(table.max())
             table = np.ascontiguousarray(table.T)  # (M, L): all wavelengths at one μ side by side
         grey = same_phase and bool(np.all(mu_t == mu_t[0]))
         return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), roulette_interval(albedo), kind, hg_g,
                             table,
-                            phase_max, cdf, guide, grey)
+                            phase_max, alias_threshold, alias, grey)
 
 
 def phase_sampling_tables(phase: np.ndarray):
-    """Exactly normalised piecewise-linear phase tables (L, M), their CDFs (L, M) and guide tables.
+    """Exactly normalised piecewise-linear phase tables (L, M) and the alias tables of their segments'
+    probabilities (``threshold`` (L, M − 1), ``alias`` (L, M − 1): :func:`._interactions.alias_tables`).
 
     The phase function is taken linear in cos θ between the M uniform grid points and scaled
     so that 2π ∫ p dμ = 1 for that function (the trapezoidal rule, as in
-    :func:`precompute.phase.normalize_phase`).  ``guide[k, b]`` is the last segment whose
-    cumulative probability at its start is ≤ b / (M − 1).
+    :func:`precompute.phase.normalize_phase`).
     """
     phase = np.asarray(phase, float)
     m = phase.shape[1]
     segment = 0.5 * (phase[:, 1:] + phase[:, :-1]) * (2.0 / (m - 1))
     total = segment.sum(axis=1)
     table = np.ascontiguousarray(phase / (2.0 * np.pi * total[:, None]))
-    cdf = np.zeros_like(table)
-    cdf[:, 1:] = np.cumsum(segment / total[:, None], axis=1)
-    cdf[:, -1] = 1.0
-    levels = np.arange(m - 1) / (m - 1)
-    guide = np.empty((len(table), m - 1), dtype=np.int64)
-    for k in range(len(table)):
-        guide[k] = np.clip(np.searchsorted(cdf[k], levels, side="right") - 1, 0, m - 2)
-    return table, np.ascontiguousarray(cdf), guide
+    threshold, alias = alias_tables(np.ascontiguousarray(segment / total[:, None]))
+    return table, threshold, alias
 
 
 def medium_from_optics(optics) -> TransportMedium:

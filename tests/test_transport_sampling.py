@@ -27,10 +27,12 @@ def _exponentials(count, seed):
 def _table_draws(table, threshold, alias, k, count, seed):
     state = np.empty(2, dtype=np.uint64)
     seed_stream(state, seed, 0, 0)
-    out = np.empty(count)
+    mus = np.empty(count)
+    segments = np.empty(count, dtype=np.int64)
+    alongs = np.empty(count)
     for i in range(count):
-        out[i] = sample_table(table, threshold, alias, k, state)
-    return out
+        mus[i], segments[i], alongs[i] = sample_table(table, threshold, alias, k, state)
+    return mus, segments, alongs
 
 
 def _drawn_probabilities(threshold, alias):
@@ -101,12 +103,15 @@ def test_alias_tables_draw_each_segment_with_its_probability():
 
 def test_a_table_is_sampled_from_its_piecewise_linear_density():
     """4·10⁶ draws from a coarse, forward-peaked table (21 points: the segments' slopes matter) against
-    the integral of the piecewise-linear density over 200 bins that cut across the segments: χ²."""
+    the integral of the piecewise-linear density over 200 bins that cut across the segments: χ²; and the
+    segment and the place in it that the sampler reports are those of the μ it returns."""
     mu = np.linspace(-1.0, 1.0, 21)
     phase = np.exp(3.0 * mu) + 0.05
     table, threshold, alias = phase_sampling_tables(phase[None, :])
-    draws = _table_draws(np.ascontiguousarray(table.T), threshold, alias, 0, 4_000_000, 5)
-    assert draws.min() >= -1.0 and draws.max() <= 1.0
+    draws, segments, alongs = _table_draws(np.ascontiguousarray(table.T), threshold, alias, 0, 4_000_000, 5)
+    # where the sampler says it put μ (the phase ratios are evaluated there) is where μ is
+    assert np.all((segments >= 0) & (segments < 20) & (alongs >= 0.0) & (alongs < 1.0))
+    np.testing.assert_allclose(draws, -1.0 + (segments + alongs) * 0.1, rtol=0, atol=1e-15)
     edges = np.linspace(-1.0, 1.0, 201)
     # the density is linear between grid points, so its integral up to x is exact from the trapezoid
     # to the grid point below and the exact area of the part segment

@@ -90,7 +90,8 @@ def hg_value(g, mu):
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def sample_table(table, alias_threshold, alias, k, state):
-    """cos θ drawn exactly from the piecewise-linear phase ``table[:, k]`` on the uniform μ grid.
+    """cos θ drawn exactly from the piecewise-linear phase ``table[:, k]`` on the uniform μ grid:
+    ``(mu, segment, along)``, μ at ``along`` ∈ [0, 1) of the way through grid segment ``segment``.
 
     ``table`` (M, L) is laid out by μ so that evaluating every wavelength at one μ reads
     contiguous memory; ``alias_threshold[k]``, ``alias[k]`` (M − 1,): wavelength k's alias tables of
@@ -111,7 +112,7 @@ def sample_table(table, alias_threshold, alias, k, state):
     a = uniform(state)
     b = uniform(state)
     t = max(a, b) if uniform(state) * (p0 + p1) < p1 else min(a, b)
-    return min(1.0, max(-1.0, -1.0 + (j + t) * (2.0 / segments)))
+    return min(1.0, max(-1.0, -1.0 + (j + t) * (2.0 / segments))), j, t
 
 
 @numba.njit(cache=True, error_model="numpy")

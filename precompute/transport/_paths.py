@@ -150,9 +150,11 @@ def boundary_shape(geometry, dims):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def update_phase_ratios(phase_kind, hg_g, table, phase_max, hero, mu, ratio, bound):
+def update_phase_ratios(phase_kind, hg_g, table, phase_max, hero, mu, segment, along, ratio, bound):
     """Multiply the running ratios Π p_k / p_h by this scattering's p_k(μ) / p_h(μ); return the
     updated upper bound of their largest, rescaling them all when it would exceed RESCALE.
+    A table is evaluated where its sampler put μ: ``along`` ∈ [0, 1) within ``segment``
+    (:func:`._interactions.sample_table`), so that no round-off moves it to the next segment.
 
     The medium comes in as its arrays (``hg_g``, ``table``: :data:`KernelMedium`'s ``hg_g``,
     ``phase_by_mu``), never as the tuple: a function inlined into a loop binds its arguments
@@ -164,15 +166,13 @@ def update_phase_ratios(phase_kind, hg_g, table, phase_max, hero, mu, ratio, bou
         for k in range(n_wl):
             ratio[k] *= hg_value(hg_g[k], mu) * inv
     else:
-        position = (mu + 1.0) * 0.5 * (table.shape[0] - 1)
-        j = min(max(int(position), 0), table.shape[0] - 2)
-        frac = position - j
-        hero_value = table[j, hero] + (table[j + 1, hero] - table[j, hero]) * frac
-        if hero_value <= 0.0:  # only where the hero's own density vanishes: never drawn
+        j = segment
+        hero_value = table[j, hero] + (table[j + 1, hero] - table[j, hero]) * along
+        if hero_value <= 0.0:  # only at the zero end of a segment, with probability 2⁻⁵³
             return bound
         inv = 1.0 / hero_value
         for k in range(n_wl):
-            ratio[k] *= (table[j, k] + (table[j + 1, k] - table[j, k]) * frac) * inv
+            ratio[k] *= (table[j, k] + (table[j + 1, k] - table[j, k]) * along) * inv
     bound *= phase_max * inv
     if bound > RESCALE:
         big = 0.0
@@ -373,11 +373,13 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
                     factor /= survival
             if medium.phase_kind == PHASE_HG:
                 mu = sample_hg(hg_g_hero, uniform(state))
+                segment, along = 0, 0.0
             else:
-                mu = sample_table(medium.phase_by_mu, medium.alias_threshold, medium.alias, hero, state)
+                mu, segment, along = sample_table(medium.phase_by_mu, medium.alias_threshold, medium.alias, hero,
+                                                  state)
             if spectral:
                 ratio_bound = update_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, medium.phase_max,
-                                                  hero, mu, ratio, ratio_bound)
+                                                  hero, mu, segment, along, ratio, ratio_bound)
             dx, dy, dz = turn(dx, dy, dz, mu, state)
         else:
             length += to_boundary

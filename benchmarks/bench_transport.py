@@ -11,6 +11,11 @@ unscattered light is exact, precompute/ballistic.py, docs/transport.md).
 
     python benchmarks/bench_transport.py [slab] [yarn] [bake] [mcml] [--mcml-source DIR]
 
+``yarn`` also times the kernels alone, on one thread (the CPU seconds inside the slab's and the yarn's
+kernel calls, without the tallies' allocation and normalisation around them, which a bake pays once and
+a short run pays in full), and prints what a yarn collision costs against a slab collision (issue 24:
+within 2x).
+
 ``mcml`` (issue 24) times MCML 1.2 beside ClothLight in the same run (benchmarks/mcml_reference.py: built
 from its public source when a C compiler is there, skipped with the reason otherwise) and prints the
 ratios the issue asks for: the kernel's photons/s per core on the van de Hulst slab (n 1 and 1.5,
@@ -31,6 +36,8 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
+import contextlib
+
 import numba
 import numpy as np
 
@@ -45,9 +52,33 @@ from precompute.transport import (
     yarn_brdf,
     yarn_brdf_at,
 )
+from precompute.transport import _kernels
 from precompute.transport.cylinder import mean_cos_per_cell
 
 ALL_THREADS = numba.config.NUMBA_NUM_THREADS
+
+
+@contextlib.contextmanager
+def kernel_cpu_seconds():
+    """The CPU seconds spent inside the slab's and the yarn's kernel calls while in the block (a list
+    that fills when it ends): the kernels' entry points are wrapped for that time."""
+    spent = [0.0]
+    originals = {name: getattr(_kernels, name) for name in ("slab_kernel", "yarn_kernel")}
+
+    def timing(kernel):
+        def call(*args):
+            start = time.process_time()
+            kernel(*args)
+            spent[0] += time.process_time() - start
+        return call
+
+    for name, kernel in originals.items():
+        setattr(_kernels, name, timing(kernel))
+    try:
+        yield spent
+    finally:
+        for name, kernel in originals.items():
+            setattr(_kernels, name, kernel)
 
 
 def timed(function):
@@ -81,15 +112,26 @@ def yarn_of(preset: str):
 
 def yarn() -> None:
     """Paths and collisions per second on the paper's thin medium and on the default (issue 24: the yarn's
-    collisions/s within 2x of the slab's)."""
+    collisions/s within 2x of the slab's), with and without what surrounds the kernel."""
+    simulate_hg_slab(0.9, 0.75, 2.0, 1.0, paths=1000)  # compile
+    with kernel_cpu_seconds() as spent:
+        slab_run = simulate_hg_slab(0.9, 0.75, 2.0, 1.0, paths=4_000_000, seed=4, threads=1)
+    slab_rate = slab_run.events / spent[0]
+    print(f"van de Hulst slab kernel alone, 1 thread: {slab_rate / 1e6:.2f} M events per CPU-second")
     for preset in ("paper_2008", DEFAULT_PRESET):
         optics, geometry = yarn_of(preset)
         simulate_yarn(optics, geometry, TransportGrids(16, 8, 4), paths_per_cell=100)  # compile
         for threads in sorted({1, ALL_THREADS}):
-            transport, wall, cpu = timed(lambda: simulate_yarn(optics, geometry, TransportGrids(16, 8, 12),
-                                                               paths_per_cell=8192, seed=2, threads=threads))
+            with kernel_cpu_seconds() as spent:
+                transport, wall, cpu = timed(lambda: simulate_yarn(optics, geometry, TransportGrids(16, 8, 12),
+                                                                   paths_per_cell=8192, seed=2, threads=threads))
             rates(f"{preset} yarn, 35 wavelengths, default grids", transport.traced_paths, transport.events,
                   wall, cpu, threads)
+            if threads == 1:
+                yarn_rate = transport.events / spent[0]
+                print(f"  kernel alone: {yarn_rate / 1e6:.2f} M events per CPU-second ({spent[0]:.2f} of "
+                      f"{cpu:.2f} CPU-s); a collision costs {slab_rate / yarn_rate:.2f}x the slab kernel's "
+                      f"(target <= 2)")
 
 
 def bake() -> None:

@@ -168,7 +168,7 @@ def update_phase_ratios(phase_kind, hg_g, table, phase_max, hero, mu, segment, a
     else:
         j = segment
         hero_value = table[j, hero] + (table[j + 1, hero] - table[j, hero]) * along
-        if hero_value <= 0.0:  # only at the zero end of a segment, with probability 2⁻⁵³
+        if hero_value <= 0.0:  # the sampler puts μ where the hero's density is 0 only by round-off
             return bound
         inv = 1.0 / hero_value
         for k in range(n_wl):

@@ -1,5 +1,6 @@
 """The path core's sampling primitives: free paths (the exponential ziggurat), tabulated phase functions
-(alias tables), the scattering turn and the Fresnel reflectance, each against its definition."""
+(alias tables), the scattering turn, the Fresnel reflectance and where a flight ends, each against its
+definition."""
 
 import math
 
@@ -9,6 +10,7 @@ import pytest
 import scipy.stats
 
 from precompute.transport._interactions import alias_tables, fresnel_reflectance, sample_table, turn
+from precompute.transport._paths import CYLINDER, SLAB, boundary_distance, boundary_shape, inside
 from precompute.transport._rng import _ZIGGURAT_R, exponential, seed_stream
 from precompute.transport.media import phase_sampling_tables
 
@@ -166,3 +168,48 @@ def test_fresnel_reflectance_is_the_mean_of_the_two_polarisations(eta):
             rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
             expected = 0.5 * (rs**2 + rp**2)
         assert _fresnel(cos_i, eta) == pytest.approx(expected, rel=1e-12, abs=1e-15)
+
+
+@numba.njit
+def _ends_inside_agrees(geometry, dims, points, directions, flights):
+    """For each interior point, direction and flight: 1 where :func:`inside` at the flight's end and
+    ``flight < boundary_distance`` agree, 0 where they do not."""
+    thickness, ia2, ib2 = boundary_shape(geometry, dims)
+    out = np.empty(points.shape[0], dtype=np.int64)
+    for i in range(points.shape[0]):
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
+        f = flights[i]
+        ends_inside = inside(geometry, thickness, ia2, ib2, px + f * dx, py + f * dy, pz + f * dz)
+        shorter = f < boundary_distance(geometry, thickness, ia2, ib2, px, py, pz, dx, dy, dz)
+        out[i] = ends_inside == shorter
+    return out
+
+
+@pytest.mark.parametrize("geometry, dims", [(SLAB, (0.3,)), (CYLINDER, (0.1, 0.1)), (CYLINDER, (0.12, 0.05))])
+def test_a_flight_ends_inside_exactly_when_it_is_shorter_than_the_way_out(geometry, dims):
+    """The path core tests where a flight ends before it asks how far the boundary is (the medium is
+    convex): the two answers agree for 10⁵ random interior points, directions and flights of up to
+    the medium's size, but for flights within round-off of the boundary."""
+    rng = np.random.default_rng(11)
+    n = 100_000
+    directions = rng.normal(size=(n, 3))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    if geometry == SLAB:
+        points = np.column_stack([rng.uniform(-1, 1, n), rng.uniform(-1, 1, n), rng.uniform(0, dims[0], n)])
+        size = dims[0]
+    else:
+        radius = np.sqrt(rng.uniform(0, 1, n))
+        angle = rng.uniform(0, 2 * np.pi, n)
+        points = np.column_stack([dims[0] * radius * np.cos(angle), dims[1] * radius * np.sin(angle),
+                                  rng.uniform(-1, 1, n)])
+        size = 2 * max(dims)
+    flights = rng.uniform(0, size, n)
+    thickness, ia2, ib2 = boundary_shape(geometry, np.array(dims))
+    distances = np.array([boundary_distance(geometry, thickness, ia2, ib2, *p, *d)
+                          for p, d in zip(points, directions)])
+    clear = np.abs(flights - distances) > 1e-9 * size
+    agree = _ends_inside_agrees(geometry, np.array(dims), points, directions, flights)
+    assert clear.sum() > 0.99 * n
+    assert np.all(agree[clear] == 1)
+    assert 0.1 < np.mean(flights < distances) < 0.9  # both answers occur

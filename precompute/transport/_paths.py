@@ -125,6 +125,15 @@ def boundary_distance(geometry, thickness, ia2, ib2, px, py, pz, dx, dy, dz):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
+def inside(geometry, thickness, ia2, ib2, x, y, z):
+    """Whether the point (x, y, z) lies in the medium (:func:`boundary_shape`'s ``thickness``, ``ia2``,
+    ``ib2``); False for a point at infinity or not a number."""
+    if geometry == SLAB:
+        return 0.0 <= z <= thickness
+    return x * x * ia2 + y * y * ib2 <= 1.0
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def boundary_normal(geometry, thickness, ia2, ib2, px, py, pz):
     """The point (px, py, pz), which reached the boundary, put exactly on it, and the outward unit normal
     there: (px, py, pz, nx, ny, nz)."""
@@ -339,13 +348,20 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
         interactions += 1
         if flight < 0.0:
             flight = exponential(state) * mean_free_path if mu_t_hero > 0.0 else math.inf
-        to_boundary = boundary_distance(geometry, thickness, ia2, ib2, px, py, pz, dx, dy, dz)
-        if flight == math.inf and to_boundary == math.inf:
-            break
+        # where the flight ends, if it ends inside: the medium is convex, so a flight that ends inside
+        # meets no boundary on the way, and most flights in a scattering medium do.  Only the others need
+        # the distance to the boundary (a square root and a division on the cylinder).
+        qx = px + flight * dx
+        qy = py + flight * dy
+        qz = pz + flight * dz
+        if inside(geometry, thickness, ia2, ib2, qx, qy, qz):
+            to_boundary = math.inf
+        else:
+            to_boundary = boundary_distance(geometry, thickness, ia2, ib2, px, py, pz, dx, dy, dz)
+            if flight == math.inf and to_boundary == math.inf:
+                break
         if flight < to_boundary:
-            px += flight * dx
-            py += flight * dy
-            pz += flight * dz
+            px, py, pz = qx, qy, qz
             length += flight
             flight = -1.0
             n += 1

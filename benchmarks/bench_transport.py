@@ -26,6 +26,7 @@ machine's cores over MCML's 4·10⁶ van de Hulst photons on one thread, timed b
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pathlib
 import resource
@@ -35,8 +36,6 @@ import tempfile
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
-import contextlib
 
 import numba
 import numpy as np

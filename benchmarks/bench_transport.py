@@ -44,7 +44,9 @@ from precompute.medium import DEFAULT_PRESET
 from precompute.optics import load_preset, medium_optics
 from precompute.transport import (
     TransportGrids,
+    TransportMedium,
     YarnGeometry,
+    medium_from_optics,
     simulate_hg_slab,
     simulate_parallel_beam,
     simulate_yarn,
@@ -131,6 +133,27 @@ def yarn() -> None:
                 print(f"  kernel alone: {yarn_rate / 1e6:.2f} M events per CPU-second ({spent[0]:.2f} of "
                       f"{cpu:.2f} CPU-s); a collision costs {slab_rate / yarn_rate:.2f}x the slab kernel's "
                       f"(target <= 2)")
+    one_wavelength()
+
+
+def one_wavelength() -> None:
+    """Where a yarn collision's cost lies: the default yarn's medium at one wavelength (550 nm, its own phase
+    table) has the same geometry, phase sampling and exit binning and none of the spectral bookkeeping."""
+    optics, geometry = yarn_of(DEFAULT_PRESET)
+    medium = medium_from_optics(optics)
+    k = int(np.argmin(np.abs(medium.wavelengths_nm - 550.0)))
+    single = TransportMedium(medium.wavelengths_nm[k:k + 1], medium.mu_s[k:k + 1], medium.mu_a[k:k + 1],
+                             phase_table=medium.phase_table[k:k + 1])
+    runs = {}
+    for name, run_medium in (("35 wavelengths", medium), (f"{medium.wavelengths_nm[k]:.0f} nm alone", single)):
+        simulate_yarn(run_medium, geometry, TransportGrids(16, 8, 4), paths_per_cell=16, threads=1)  # compile
+        with kernel_cpu_seconds() as spent:
+            transport = simulate_yarn(run_medium, geometry, TransportGrids(16, 8, 12), paths_per_cell=8192, seed=2,
+                                      threads=1)
+        runs[name] = transport.events / spent[0]
+    (full_name, full), (single_name, alone) = runs.items()
+    print(f"{DEFAULT_PRESET} yarn kernel alone, 1 thread: {full_name} {full / 1e6:.2f} M events per CPU-second, "
+          f"{single_name} {alone / 1e6:.2f} M: the spectral bookkeeping makes a collision {alone / full:.2f}x dearer")
 
 
 def bake() -> None:

@@ -1,6 +1,6 @@
 """The path core's sampling primitives: free paths (the exponential ziggurat), tabulated phase functions
-(alias tables), the scattering turn, the Fresnel reflectance, where a flight ends and the deferred phase
-ratios, each against its definition."""
+(alias tables), the scattering turn, the Fresnel reflectance and where a flight ends, each against its
+definition."""
 
 import math
 
@@ -10,18 +10,7 @@ import pytest
 import scipy.stats
 
 from precompute.transport._interactions import alias_tables, fresnel_reflectance, sample_table, turn
-from precompute.transport._interactions import PHASE_HG, PHASE_TABLE, hg_value
-from precompute.transport._paths import (
-    CYLINDER,
-    PENDING_SCATTERINGS,
-    RESCALE,
-    SLAB,
-    apply_phase_ratios,
-    boundary_distance,
-    boundary_shape,
-    defer_phase_ratio,
-    inside,
-)
+from precompute.transport._paths import CYLINDER, SLAB, boundary_distance, boundary_shape, inside
 from precompute.transport._rng import _ZIGGURAT_R, exponential, seed_stream
 from precompute.transport.media import phase_sampling_tables
 
@@ -221,58 +210,3 @@ def test_a_flight_ends_inside_exactly_when_it_is_shorter_than_the_way_out(geomet
     assert clear.sum() > 0.99 * n
     np.testing.assert_array_equal(ends_inside[clear], (flights < distances)[clear])
     assert 0.1 < np.mean(flights < distances) < 0.9  # both answers occur
-
-
-@numba.njit
-def _deferred_ratios(kind, hg_g, table, phase_max, hero, mus, segments, alongs, flush_every):
-    """The running ratios after the scatterings (mus, segments, alongs), queued and applied as trace()
-    does, with extra flushes every ``flush_every`` scatterings, and how many rescales happened."""
-    ratio = np.ones(table.shape[1] if kind == PHASE_TABLE else hg_g.shape[0])
-    pending = np.empty((PENDING_SCATTERINGS, 4))
-    queued, bound, rescales = 0, 1.0, 0
-    for i in range(mus.shape[0]):
-        queued, bound = defer_phase_ratio(kind, hg_g, table, phase_max, hero, mus[i], segments[i], alongs[i],
-                                          pending, queued, bound)
-        if bound > RESCALE or queued == PENDING_SCATTERINGS or (i + 1) % flush_every == 0:
-            rescales += bound > RESCALE
-            bound = apply_phase_ratios(kind, hg_g, table, pending, queued, ratio, bound)
-            queued = 0
-    apply_phase_ratios(kind, hg_g, table, pending, queued, ratio, bound)
-    return ratio, rescales
-
-
-def _sequential_ratios(values, hero, phase_max):
-    """Π p_k / p_h, one scattering at a time, rescaled as the kernel does (``values``: (scatterings, L) p_k)."""
-    ratio, bound = np.ones(values.shape[1]), 1.0
-    for row in values:
-        inv = 1.0 / row[hero]
-        ratio *= row * inv
-        bound *= phase_max * inv
-        if bound > RESCALE:
-            ratio *= 1.0 / ratio.max()
-            bound = 1.0
-    return ratio
-
-
-@pytest.mark.parametrize("kind", [PHASE_TABLE, PHASE_HG])
-def test_deferred_phase_ratios_are_the_per_scattering_products(kind):
-    """Queued ratios, flushed at checks, rescales or a full queue, are the same products in the same order as
-    one update per scattering, bit for bit: the queue changes when the work is done, not what it computes."""
-    rng = np.random.default_rng(7)
-    n_wl, scatterings, hero = 6, 400, 2
-    table = rng.uniform(1e-3, 50.0, (41, n_wl))  # (M, L); ratios of 1e4 overflow RESCALE within ~25 scatterings
-    hg_g = np.array([0.9, -0.3, 0.5, 0.0, 0.99, 0.7])
-    segments = rng.integers(0, table.shape[0] - 1, scatterings)
-    alongs = rng.uniform(0.0, 1.0, scatterings)
-    mus = rng.uniform(-1.0, 1.0, scatterings)
-    if kind == PHASE_TABLE:
-        values = table[segments] + (table[segments + 1] - table[segments]) * alongs[:, None]
-        phase_max = table.max()
-    else:
-        values = np.array([[hg_value(g, mu) for g in hg_g] for mu in mus])
-        phase_max = max(hg_value(g, 1.0) for g in hg_g)
-    expected = _sequential_ratios(values, hero, phase_max)
-    for flush_every in (1, 5, PENDING_SCATTERINGS):
-        ratio, rescales = _deferred_ratios(kind, hg_g, table, phase_max, hero, mus, segments, alongs, flush_every)
-        assert rescales > 0
-        np.testing.assert_array_equal(ratio, expected)

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..grids import hemisphere_cell, square_to_hemisphere
 from ._interactions import fresnel_reflectance, refract
-from ._paths import CYLINDER, EXITED, LOST, PENDING_SCATTERINGS, SLAB, trace
+from ._paths import CYLINDER, EXITED, LOST, SLAB, trace
 from ._rng import seed_stream, uniform
 
 #: The yarn kernel's absorption-reweighting tallies (:func:`yarn_kernel`).
@@ -75,7 +75,6 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
         albedo_n = np.empty(n_wl)
         albedo_mark = np.empty(n_wl)
         ratios = np.empty(n_wl)
-        pending = np.empty((PENDING_SCATTERINGS, 4))
         weights = np.empty(n_wl)
         pos = np.empty(3)
         d = np.empty(3)
@@ -87,7 +86,7 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
             d[2] = 1.0
             status, collisions, _ = trace(state, SLAB, dims, eta, medium, hero, hero_p, importance, pos, d,
                                           1.0 - specular,
-                                          ratio, banked, albedo_n, albedo_mark, ratios, pending, weights, absorbed)
+                                          ratio, banked, albedo_n, albedo_mark, ratios, weights, absorbed)
             collisions_total += collisions
             if status == EXITED:
                 if d[2] < 0.0:
@@ -176,7 +175,6 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
     albedo_n = np.empty(n_wl)
     albedo_mark = np.empty(n_wl)
     ratios = np.empty(n_wl)
-    pending = np.empty((PENDING_SCATTERINGS, 4))
     weights = np.empty(n_wl)
     pos = np.empty(3)
     d = np.empty(3)
@@ -194,8 +192,8 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
             reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d)
             hero = _pick_hero(state, hero_cdf)
             status, collisions, length = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                               1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, pending,
-                                               weights, cell_absorbed)
+                                               1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, weights,
+                                               cell_absorbed)
             cell_events += collisions
             for k in range(n_wl):
                 cell_specular[k] += reflectance
@@ -309,7 +307,6 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
         albedo_n = np.empty(n_wl)
         albedo_mark = np.empty(n_wl)
         ratios = np.empty(n_wl)
-        pending = np.empty((PENDING_SCATTERINGS, 4))
         weights = np.empty(n_wl)
         pos = np.empty(3)
         d = np.empty(3)
@@ -329,8 +326,8 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
                 task_specular[k] += reflectance
             hero = _pick_hero(state, hero_cdf)
             status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                          1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, pending,
-                                          weights, task_absorbed)
+                                          1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, weights,
+                                          task_absorbed)
             task_events += collisions
             if status == EXITED:
                 around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)

@@ -82,9 +82,6 @@ MAX_INTERACTIONS = 1_000_000
 BOUND_MARGIN = 1.0 + 1e-9
 #: Running phase ratios are rescaled when an upper bound of their largest exceeds RESCALE.
 RESCALE = 1e100
-#: Scatterings whose phase ratios wait to be applied together, at most: one roulette interval's, since a
-#: check needs the ratios whole (:func:`defer_phase_ratio`).
-PENDING_SCATTERINGS = ROULETTE_INTERVAL_SCATTERING
 
 KernelMedium = namedtuple(
     "KernelMedium",
@@ -162,52 +159,30 @@ def boundary_shape(geometry, dims):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def defer_phase_ratio(phase_kind, hg_g, table, phase_max, hero, mu, segment, along, pending, count, bound):
-    """Queue this scattering's factor p_k(μ) / p_h(μ) of the running ratios as row ``count`` of ``pending``
-    (μ, segment, along, 1 / p_h(μ)); return the new count and the updated upper bound of the ratios' largest.
+def update_phase_ratios(phase_kind, hg_g, table, phase_max, hero, mu, segment, along, ratio, bound):
+    """Multiply the running ratios Π p_k / p_h by this scattering's p_k(μ) / p_h(μ); return the
+    updated upper bound of their largest, rescaling them all when it would exceed RESCALE.
     A table is evaluated where its sampler put μ: ``along`` ∈ [0, 1) within ``segment``
     (:func:`._interactions.sample_table`), so that no round-off moves it to the next segment.
-
-    Nothing reads the ratios between roulette checks, so the L-wide updates wait and are applied in
-    one loop (:func:`apply_phase_ratios`) at the next check, at the path's end, or when the bound
-    calls for a rescale: the same products in the same order, a collision's body without the
-    L-wide loop (docs/transport.md, "What changed on the yarn's collision").
-    """
-    if phase_kind == PHASE_HG:
-        hero_value = hg_value(hg_g[hero], mu)
-    else:
-        hero_value = table[segment, hero] + (table[segment + 1, hero] - table[segment, hero]) * along
-        if hero_value <= 0.0:  # the sampler puts μ where the hero's density is 0 only by round-off
-            return count, bound
-    inv = 1.0 / hero_value
-    pending[count, 0] = mu
-    pending[count, 1] = segment
-    pending[count, 2] = along
-    pending[count, 3] = inv
-    return count + 1, bound * phase_max * inv
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def apply_phase_ratios(phase_kind, hg_g, table, pending, count, ratio, bound):
-    """Multiply the running ratios Π p_k / p_h by the ``count`` queued factors (:func:`defer_phase_ratio`),
-    in the order of their scatterings, then rescale them all if ``bound`` exceeds RESCALE; return the bound.
 
     The medium comes in as its arrays (``hg_g``, ``table``: :data:`KernelMedium`'s ``hg_g``,
     ``phase_by_mu``), never as the tuple: a function inlined into a loop binds its arguments
     anew at each call, and binding the tuple takes and drops a reference to each of its arrays.
     """
     n_wl = ratio.shape[0]
-    for c in range(count):
-        inv = pending[c, 3]
-        if phase_kind == PHASE_HG:
-            mu = pending[c, 0]
-            for k in range(n_wl):
-                ratio[k] *= hg_value(hg_g[k], mu) * inv
-        else:
-            j = int(pending[c, 1])
-            along = pending[c, 2]
-            for k in range(n_wl):
-                ratio[k] *= (table[j, k] + (table[j + 1, k] - table[j, k]) * along) * inv
+    if phase_kind == PHASE_HG:
+        inv = 1.0 / hg_value(hg_g[hero], mu)
+        for k in range(n_wl):
+            ratio[k] *= hg_value(hg_g[k], mu) * inv
+    else:
+        j = segment
+        hero_value = table[j, hero] + (table[j + 1, hero] - table[j, hero]) * along
+        if hero_value <= 0.0:  # the sampler puts μ where the hero's density is 0 only by round-off
+            return bound
+        inv = 1.0 / hero_value
+        for k in range(n_wl):
+            ratio[k] *= (table[j, k] + (table[j + 1, k] - table[j, k]) * along) * inv
+    bound *= phase_max * inv
     if bound > RESCALE:
         big = 0.0
         for k in range(n_wl):
@@ -324,7 +299,7 @@ def _finish(medium, hero, hero_p, ratio, n, length, factor, banked, albedo_n, al
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, enter_weight,
-          ratio, banked, albedo_n, albedo_mark, ratios, pending, weights, absorbed):
+          ratio, banked, albedo_n, albedo_mark, ratios, weights, absorbed):
     """Trace one path that has just entered the medium at ``pos`` going along unit ``d``.
 
     ``eta`` = n_inside / n_outside; ``enter_weight`` the flux it carries (per unit incident
@@ -333,8 +308,7 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     the refracted direction outside, ``weights`` (L,) the flux leaving per wavelength; on
     ``LOST`` ``weights`` holds the flux still inside; on ``TERMINATED`` (roulette) it is 0.
     ``absorbed`` (L,) is incremented by the absorbed flux in every case.  ``ratio``, ``banked``,
-    ``albedo_n``, ``albedo_mark``, ``ratios`` are scratch arrays (L,), ``pending`` (PENDING_SCATTERINGS, 4)
-    the scatterings whose phase ratios wait to be applied (:func:`defer_phase_ratio`).  The position and direction are
+    ``albedo_n``, ``albedo_mark``, ``ratios`` are scratch arrays (L,).  The position and direction are
     local scalars while the path is traced: ``pos`` and ``d`` are read at the start and written at the end.
 
     Returns ``(status, collisions, length)``, ``length`` the path's length inside the medium
@@ -361,7 +335,6 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     length = 0.0
     factor = enter_weight  # roulette factor times entering flux
     ratio_bound = 1.0  # an upper bound of max_k ratio[k]
-    queued = 0  # scatterings in ``pending``, not yet in ``ratio``
     interactions = 0
     status = LOST
     # the distance to the next collision (mm; < 0: none drawn yet).  A path reflected at the boundary
@@ -396,10 +369,6 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
                 albedo_n[k] *= medium.albedo[k]
             check = (n % medium.roulette_interval == 0) if spectral else True
             if check:
-                if queued:
-                    ratio_bound = apply_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, pending,
-                                                     queued, ratio, ratio_bound)
-                    queued = 0
                 if spectral and surely_above_threshold(medium.mu_t, medium.log_mu_t, albedo_n, medium.brightest,
                                                        neediest, hero, ratio, n, length, hero_p, factor, importance):
                     largest = math.inf
@@ -425,13 +394,8 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
                 mu, segment, along = sample_table(medium.phase_by_mu, medium.alias_threshold, medium.alias, hero,
                                                   state)
             if spectral:
-                queued, ratio_bound = defer_phase_ratio(medium.phase_kind, medium.hg_g, medium.phase_by_mu,
-                                                        medium.phase_max, hero, mu, segment, along, pending, queued,
-                                                        ratio_bound)
-                if ratio_bound > RESCALE or queued == PENDING_SCATTERINGS:
-                    ratio_bound = apply_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, pending,
-                                                     queued, ratio, ratio_bound)
-                    queued = 0
+                ratio_bound = update_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, medium.phase_max,
+                                                  hero, mu, segment, along, ratio, ratio_bound)
             dx, dy, dz = turn(dx, dy, dz, mu, state)
         else:
             length += to_boundary
@@ -449,8 +413,6 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
                     break
     pos[0], pos[1], pos[2] = px, py, pz
     d[0], d[1], d[2] = dx, dy, dz
-    if queued:
-        apply_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, pending, queued, ratio, ratio_bound)
     # a path ended by roulette ends right after a check that formed its ratios
     _finish(medium, hero, hero_p, ratio, n, length, factor, banked, albedo_n, albedo_mark, status != TERMINATED,
             status == TERMINATED and spectral, ratios, weights, absorbed)

@@ -14,7 +14,8 @@ unscattered light is exact, precompute/ballistic.py, docs/transport.md).
 ``yarn`` also times the kernels alone, on one thread (the CPU seconds inside the slab's and the yarn's
 kernel calls, without the tallies' allocation and normalisation around them, which a bake pays once and
 a short run pays in full), and prints what a yarn collision costs against a slab collision (issue 24:
-within 2x).
+within 2x); then the default yarn's medium at one wavelength beside its 35: what the spectral
+bookkeeping alone costs.
 
 ``mcml`` (issue 24) times MCML 1.2 beside ClothLight in the same run (benchmarks/mcml_reference.py: built
 from its public source when a C compiler is there, skipped with the reason otherwise) and prints the

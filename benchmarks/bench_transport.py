@@ -146,7 +146,8 @@ def one_wavelength() -> None:
     single = TransportMedium(medium.wavelengths_nm[k:k + 1], medium.mu_s[k:k + 1], medium.mu_a[k:k + 1],
                              phase_table=medium.phase_table[k:k + 1])
     runs = {}
-    for name, run_medium in (("35 wavelengths", medium), (f"{medium.wavelengths_nm[k]:.0f} nm alone", single)):
+    for name, run_medium in ((f"{len(medium.wavelengths_nm)} wavelengths", medium),
+                             (f"{medium.wavelengths_nm[k]:.0f} nm alone", single)):
         simulate_yarn(run_medium, geometry, TransportGrids(16, 8, 4), paths_per_cell=16, threads=1)  # compile
         with kernel_cpu_seconds() as spent:
             transport = simulate_yarn(run_medium, geometry, TransportGrids(16, 8, 12), paths_per_cell=8192, seed=2,

@@ -3,7 +3,10 @@
 Every kernel runs independent tasks in parallel (``prange``); a task draws from
 its own random stream (:mod:`._rng`) and writes only its own tally slots, so
 the tallies are bitwise identical whatever the number of threads.  The paths
-themselves are traced by :func:`._paths.trace`.  Inputs are validated by the
+themselves are traced by :func:`._paths.trace`.  A task's paths run in a function of
+their own (``_slab_task``, ``_trace_cell``, ``_beam_task``), which takes every array it
+reads from its caller and works on :mod:`._borrow` views of them: its caller holds the
+arrays for the whole call.  Inputs are validated by the
 Python callers (slab.py, cylinder.py, beam.py).
 """
 
@@ -16,8 +19,9 @@ import numba
 import numpy as np
 
 from ..grids import hemisphere_cell, square_to_hemisphere
+from ._borrow import borrowed, borrowed_medium, borrowed_path_arrays
 from ._interactions import fresnel_reflectance, refract
-from ._paths import CYLINDER, EXITED, LOST, SLAB, trace
+from ._paths import CYLINDER, EXITED, LOST, SLAB, path_arrays, trace
 from ._rng import seed_stream, uniform
 
 #: The yarn kernel's absorption-reweighting tallies (:func:`yarn_kernel`).
@@ -67,42 +71,43 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
     for c in numba.prange(paths.shape[0]):
         # task-local tallies, copied out at the end: no cache line is shared between threads
         local = np.zeros((sums.shape[1], n_wl))
-        collisions_total = 0
-        state = np.empty(2, dtype=np.uint64)
-        seed_stream(state, seed, c, 0)
-        ratio = np.empty(n_wl)
-        banked = np.empty(n_wl)
-        albedo_n = np.empty(n_wl)
-        albedo_mark = np.empty(n_wl)
-        ratios = np.empty(n_wl)
-        weights = np.empty(n_wl)
-        pos = np.empty(3)
-        d = np.empty(3)
-        absorbed = local[SLAB_ABSORBED]
-        for _ in range(paths[c]):
-            hero = _pick_hero(state, hero_cdf)
-            pos[0] = pos[1] = pos[2] = 0.0
-            d[0] = d[1] = 0.0
-            d[2] = 1.0
-            status, collisions, _ = trace(state, SLAB, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                          1.0 - specular,
-                                          ratio, banked, albedo_n, albedo_mark, ratios, weights, absorbed)
-            collisions_total += collisions
-            if status == EXITED:
-                if d[2] < 0.0:
-                    row = SLAB_R_DIFFUSE if collisions else SLAB_R_UNSCATTERED
-                    square = SLAB_R_SQUARES
-                else:
-                    row = SLAB_T_DIFFUSE if collisions else SLAB_T_UNSCATTERED
-                    square = SLAB_T_SQUARES
-                for k in range(n_wl):
-                    local[row, k] += weights[k]
-                    local[square, k] += weights[k] * weights[k]
-            elif status == LOST:
-                for k in range(n_wl):
-                    local[SLAB_LOST, k] += weights[k]
+        arrays = path_arrays(n_wl)
+        seed_stream(arrays.state, seed, c, 0)
+        events[c] = _slab_task(paths[c], dims, eta, medium, specular, hero_p, hero_cdf, importance, arrays, local)
         sums[c] = local
-        events[c] = collisions_total
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _slab_task(count, dims, eta, medium, specular, hero_p, hero_cdf, importance, arrays, local):
+    """:func:`slab_kernel`'s task: ``count`` paths into its tallies ``local`` (8, L); returns the collisions."""
+    medium, arrays, dims = borrowed_medium(medium), borrowed_path_arrays(arrays), borrowed(dims)
+    hero_p, hero_cdf, importance, local = borrowed(hero_p), borrowed(hero_cdf), borrowed(importance), borrowed(local)
+    n_wl = local.shape[1]
+    pos, d, weights = arrays.pos, arrays.d, arrays.weights
+    absorbed = local[SLAB_ABSORBED]
+    collisions_total = 0
+    for _ in range(count):
+        hero = _pick_hero(arrays.state, hero_cdf)
+        pos[0] = pos[1] = pos[2] = 0.0
+        d[0] = d[1] = 0.0
+        d[2] = 1.0
+        status, collisions, _ = trace(SLAB, dims, eta, medium, hero, hero_p, importance, 1.0 - specular, arrays,
+                                      absorbed)
+        collisions_total += collisions
+        if status == EXITED:
+            if d[2] < 0.0:
+                row = SLAB_R_DIFFUSE if collisions else SLAB_R_UNSCATTERED
+                square = SLAB_R_SQUARES
+            else:
+                row = SLAB_T_DIFFUSE if collisions else SLAB_T_UNSCATTERED
+                square = SLAB_T_SQUARES
+            for k in range(n_wl):
+                local[row, k] += weights[k]
+                local[square, k] += weights[k] * weights[k]
+        elif status == LOST:
+            for k in range(n_wl):
+                local[SLAB_LOST, k] += weights[k]
+    return collisions_total
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -146,9 +151,13 @@ def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d):
 @numba.njit(cache=True, error_model="numpy")
 def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p, importance, in_res, cos_max, n_around,
                 n_along, cell_length, out_res, table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed,
-                lost, events, decay):
+                lost, events, decay, arrays):
     """Run incidence cell ``cell``'s tasks ``first_task + t`` of ``sizes[t]`` paths (a 0 ends the list),
-    choosing hero wavelengths with probabilities ``hero_p`` (L,), into the tallies' row ``row``."""
+    choosing hero wavelengths with probabilities ``hero_p`` (L,), into the tallies' row ``row``;
+    ``arrays``: :data:`._paths.PathArrays` to work in."""
+    medium, arrays = borrowed_medium(medium), borrowed_path_arrays(arrays)
+    hero_p, importance = borrowed(hero_p), borrowed(importance)
+    state, pos, d, weights = arrays.state, arrays.pos, arrays.d, arrays.weights
     n_wl = exit_sum.shape[1]
     n_decay = decay.extra_mu_a.shape[0]
     cell_decayed_exit = np.zeros((n_wl, n_decay))
@@ -169,15 +178,6 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
     cell_absorbed = np.zeros(n_wl)
     cell_lost = np.zeros(n_wl)
     cell_events = 0
-    state = np.empty(2, dtype=np.uint64)
-    ratio = np.empty(n_wl)
-    banked = np.empty(n_wl)
-    albedo_n = np.empty(n_wl)
-    albedo_mark = np.empty(n_wl)
-    ratios = np.empty(n_wl)
-    weights = np.empty(n_wl)
-    pos = np.empty(3)
-    d = np.empty(3)
     for t in range(sizes.shape[0]):
         if sizes[t] == 0:
             break
@@ -191,9 +191,8 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
             z = uniform(state) * cell_length
             reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d)
             hero = _pick_hero(state, hero_cdf)
-            status, collisions, length = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                               1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, weights,
-                                               cell_absorbed)
+            status, collisions, length = trace(CYLINDER, dims, eta, medium, hero, hero_p, importance,
+                                               1.0 - reflectance, arrays, cell_absorbed)
             cell_events += collisions
             for k in range(n_wl):
                 cell_specular[k] += reflectance
@@ -266,12 +265,13 @@ def yarn_kernel(slots, cells, rows, task_first, task_sizes, seed, radius, eta, m
     ``unscattered`` (n_in, L, K).  K = 0 tallies nothing.
     """
     for s in numba.prange(slots.shape[0]):
+        arrays = path_arrays(exit_sum.shape[1])
         for i in slots[s]:
             if i < 0:
                 break
             _trace_cell(cells[i], rows[i], task_first[i], task_sizes[i], seed, radius, eta, medium, hero_p[cells[i]],
                         importance[cells[i]], in_res, cos_max, n_around, n_along, cell_length, out_res, table, table_sq,
-                        specular, exit_sum, exit_sq, unscattered, absorbed, lost, events, decay)
+                        specular, exit_sum, exit_sq, unscattered, absorbed, lost, events, decay, arrays)
 
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")
@@ -299,52 +299,59 @@ def beam_kernel(paths, seed, radius, eta, medium, toward_light, n_around, out_re
         task_specular = np.zeros(n_wl)
         task_absorbed = np.zeros(n_wl)
         task_lost = np.zeros(n_wl)
-        task_events = 0
-        state = np.empty(2, dtype=np.uint64)
-        seed_stream(state, seed, c, 1)
-        ratio = np.empty(n_wl)
-        banked = np.empty(n_wl)
-        albedo_n = np.empty(n_wl)
-        albedo_mark = np.empty(n_wl)
-        ratios = np.empty(n_wl)
-        weights = np.empty(n_wl)
-        pos = np.empty(3)
-        d = np.empty(3)
-        for _ in range(paths[c]):
-            impact = 2.0 * uniform(state) - 1.0
-            psi = psi_light + math.asin(impact)
-            cp = math.cos(psi)
-            sp = math.sin(psi)
-            pos[0] = radius * cp
-            pos[1] = radius * sp
-            pos[2] = 0.0
-            cos_i = transverse * math.sqrt(max(0.0, 1.0 - impact * impact))
-            reflectance = fresnel_reflectance(cos_i, 1.0 / eta)
-            d[0], d[1], d[2] = refract(-toward_light[0], -toward_light[1], -toward_light[2], -cp, -sp, 0.0, cos_i,
-                                       1.0 / eta)
-            for k in range(n_wl):
-                task_specular[k] += reflectance
-            hero = _pick_hero(state, hero_cdf)
-            status, collisions, _ = trace(state, CYLINDER, dims, eta, medium, hero, hero_p, importance, pos, d,
-                                          1.0 - reflectance, ratio, banked, albedo_n, albedo_mark, ratios, weights,
-                                          task_absorbed)
-            task_events += collisions
-            if status == EXITED:
-                around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)
-                if collisions == 0:
-                    for k in range(n_wl):
-                        unscattered[c, around, out_cell, k] += weights[k]
-                    continue
-                for k in range(n_wl):
-                    sums[c, around, out_cell, k] += weights[k]
-                    sums_sq[c, around, out_cell, k] += weights[k] * weights[k]
-            elif status == LOST:
-                for k in range(n_wl):
-                    task_lost[k] += weights[k]
+        arrays = path_arrays(n_wl)
+        seed_stream(arrays.state, seed, c, 1)
+        events[c] = _beam_task(paths[c], dims, eta, medium, hero_p, hero_cdf, importance, toward_light, transverse,
+                               psi_light, dpsi, n_around, out_res, arrays, sums[c], sums_sq[c], unscattered[c],
+                               task_specular, task_absorbed, task_lost)
         specular[c] = task_specular
         absorbed[c] = task_absorbed
         lost[c] = task_lost
-        events[c] = task_events
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _beam_task(count, dims, eta, medium, hero_p, hero_cdf, importance, toward_light, transverse, psi_light, dpsi,
+               n_around, out_res, arrays, sums, sums_sq, unscattered, specular, absorbed, lost):
+    """:func:`beam_kernel`'s task: ``count`` paths into its tallies (``sums``, ``sums_sq``, ``unscattered``
+    (n_around, n_out, L); ``specular``, ``absorbed``, ``lost`` (L,)); returns the collisions."""
+    medium, arrays, dims = borrowed_medium(medium), borrowed_path_arrays(arrays), borrowed(dims)
+    hero_p, hero_cdf, importance = borrowed(hero_p), borrowed(hero_cdf), borrowed(importance)
+    absorbed = borrowed(absorbed)
+    state, pos, d, weights = arrays.state, arrays.pos, arrays.d, arrays.weights
+    n_wl = weights.shape[0]
+    radius = dims[0]
+    collisions_total = 0
+    for _ in range(count):
+        impact = 2.0 * uniform(state) - 1.0
+        psi = psi_light + math.asin(impact)
+        cp = math.cos(psi)
+        sp = math.sin(psi)
+        pos[0] = radius * cp
+        pos[1] = radius * sp
+        pos[2] = 0.0
+        cos_i = transverse * math.sqrt(max(0.0, 1.0 - impact * impact))
+        reflectance = fresnel_reflectance(cos_i, 1.0 / eta)
+        d[0], d[1], d[2] = refract(-toward_light[0], -toward_light[1], -toward_light[2], -cp, -sp, 0.0, cos_i,
+                                   1.0 / eta)
+        for k in range(n_wl):
+            specular[k] += reflectance
+        hero = _pick_hero(state, hero_cdf)
+        status, collisions, _ = trace(CYLINDER, dims, eta, medium, hero, hero_p, importance, 1.0 - reflectance,
+                                      arrays, absorbed)
+        collisions_total += collisions
+        if status == EXITED:
+            around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)
+            if collisions == 0:
+                for k in range(n_wl):
+                    unscattered[around, out_cell, k] += weights[k]
+                continue
+            for k in range(n_wl):
+                sums[around, out_cell, k] += weights[k]
+                sums_sq[around, out_cell, k] += weights[k] * weights[k]
+        elif status == LOST:
+            for k in range(n_wl):
+                lost[k] += weights[k]
+    return collisions_total
 
 
 @numba.njit(cache=True, parallel=True, error_model="numpy")

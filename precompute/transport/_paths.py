@@ -16,9 +16,10 @@ p_λ(x)`` (α = μs/μt).  The one-sample balance-heuristic estimator
     w_λ = f_λ(x) / Σ_k q_k p_k(x) = α_λ^n · r_λ(x),   r_λ = p_λ / Σ_k q_k p_k ≤ 1 / q_λ
 
 is unbiased for every λ and bounded (by L for uniform q).  The path keeps only
-``n``, ``D``, the running products ``Π_j p_k(μ_j) / p_h(μ_j)`` and the powers α_k^n;
-the weights are formed when needed (exit, roulette check), which keeps a
-collision's cost at one table lookup and one product per wavelength.
+``n``, ``D``, the running phase products ``Π_j p_k(μ_j)`` (up to a factor common to
+all k, which cancels in r) and the powers α_k^n; the weights are formed when needed
+(exit, roulette check), which keeps a collision's cost at one table lookup and one
+product per wavelength.
 
 Absorbed energy: a λ-analog path deposits ``α^{j−1}(1 − α)`` at its j-th
 collision, ``1 − α^n`` in all (times Russian-roulette factors); as a function
@@ -46,6 +47,7 @@ import math
 from collections import namedtuple
 
 import numba
+import numpy as np
 
 from ._interactions import (
     PHASE_HG,
@@ -57,6 +59,7 @@ from ._interactions import (
     sample_table,
     turn,
 )
+from ._exp import exp_nonpositive
 from ._rng import exponential, uniform
 
 SLAB = 0  #: dims = (thickness,): medium 0 ≤ z ≤ thickness, light enters at z = 0 going +z
@@ -80,7 +83,8 @@ MAX_INTERACTIONS = 1_000_000
 #: How far above ROULETTE_THRESHOLD a lower bound of a path's largest weight must be for the exact
 #: evaluation to be skipped: far above the bound's and the evaluation's round-off.
 BOUND_MARGIN = 1.0 + 1e-9
-#: Running phase ratios are rescaled when an upper bound of their largest exceeds RESCALE.
+#: Running phase products are rescaled when an upper bound of their largest exceeds RESCALE, or the hero's
+#: falls below 1 / RESCALE.
 RESCALE = 1e100
 
 KernelMedium = namedtuple(
@@ -88,6 +92,21 @@ KernelMedium = namedtuple(
     ["mu_t", "log_mu_t", "albedo", "brightest", "roulette_interval", "phase_kind", "hg_g", "phase_by_mu", "phase_max",
      "alias_threshold", "alias", "grey"],
 )
+
+#: A task's random stream and the arrays :func:`trace` works in: ``state`` (2,) uint64 (:mod:`._rng`);
+#: ``pos``, ``d`` (3,) a path's entry point and direction in, its exit point and direction out;
+#: ``weights`` (L,) its weights out; ``phase_product``, ``banked``, ``albedo_n``, ``albedo_mark``,
+#: ``ratios`` (L,) scratch.
+PathArrays = namedtuple(
+    "PathArrays", ["state", "pos", "d", "weights", "phase_product", "banked", "albedo_n", "albedo_mark", "ratios"],
+)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def path_arrays(n_wl):
+    """:data:`PathArrays` for ``n_wl`` wavelengths, not initialised (a task seeds ``state``)."""
+    return PathArrays(np.empty(2, dtype=np.uint64), np.empty(3), np.empty(3), np.empty(n_wl), np.empty(n_wl),
+                      np.empty(n_wl), np.empty(n_wl), np.empty(n_wl), np.empty(n_wl))
 
 
 def roulette_interval(albedo) -> int:
@@ -159,37 +178,39 @@ def boundary_shape(geometry, dims):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def update_phase_ratios(phase_kind, hg_g, table, phase_max, hero, mu, segment, along, ratio, bound):
-    """Multiply the running ratios Π p_k / p_h by this scattering's p_k(μ) / p_h(μ); return the
-    updated upper bound of their largest, rescaling them all when it would exceed RESCALE.
-    A table is evaluated where its sampler put μ: ``along`` ∈ [0, 1) within ``segment``
-    (:func:`._interactions.sample_table`), so that no round-off moves it to the next segment.
+def update_phase_products(phase_kind, hg_g, table, phase_max, hero, mu, segment, along, product, bound):
+    """Multiply the running products Π p_k (up to a factor common to all k) by this scattering's p_k(μ);
+    return the updated upper bound of their largest.  A table is evaluated where its sampler put μ:
+    ``along`` ∈ [0, 1) within ``segment`` (:func:`._interactions.sample_table`), so that no round-off
+    moves it to the next segment.
+
+    The MIS ratios (:func:`mis_ratios`) and the roulette's bound need the products only up to a common
+    factor, so none is divided by the hero's p_h(μ): the wavelengths' updates wait on no division.  To
+    keep them in range all are divided by their largest when the bound would exceed RESCALE or the
+    hero's own product (the wavelength the path follows, so never negligible) falls below 1 / RESCALE.
 
     The medium comes in as its arrays (``hg_g``, ``table``: :data:`KernelMedium`'s ``hg_g``,
     ``phase_by_mu``), never as the tuple: a function inlined into a loop binds its arguments
-    anew at each call, and binding the tuple takes and drops a reference to each of its arrays.
+    anew at each call.
     """
-    n_wl = ratio.shape[0]
+    n_wl = product.shape[0]
     if phase_kind == PHASE_HG:
-        inv = 1.0 / hg_value(hg_g[hero], mu)
         for k in range(n_wl):
-            ratio[k] *= hg_value(hg_g[k], mu) * inv
+            product[k] *= hg_value(hg_g[k], mu)
     else:
         j = segment
-        hero_value = table[j, hero] + (table[j + 1, hero] - table[j, hero]) * along
-        if hero_value <= 0.0:  # the sampler puts μ where the hero's density is 0 only by round-off
-            return bound
-        inv = 1.0 / hero_value
+        if table[j, hero] + (table[j + 1, hero] - table[j, hero]) * along <= 0.0:
+            return bound  # the sampler puts μ where the hero's density is 0 only by round-off
         for k in range(n_wl):
-            ratio[k] *= (table[j, k] + (table[j + 1, k] - table[j, k]) * along) * inv
-    bound *= phase_max * inv
-    if bound > RESCALE:
+            product[k] *= table[j, k] + (table[j + 1, k] - table[j, k]) * along
+    bound *= phase_max
+    if bound > RESCALE or product[hero] < 1.0 / RESCALE:
         big = 0.0
         for k in range(n_wl):
-            big = max(big, ratio[k])
+            big = max(big, product[k])
         inv = 1.0 / big
         for k in range(n_wl):
-            ratio[k] *= inv
+            product[k] *= inv
         bound = 1.0
     return bound
 
@@ -204,13 +225,15 @@ def log_flight_ratio(mu_t, log_mu_t, mu_t_hero, log_mu_t_hero, n, length):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def mis_ratios(mu_t, log_mu_t, grey, hero, ratio, n, length, hero_p, out):
+def mis_ratios(mu_t, log_mu_t, grey, hero, product, n, length, hero_p, out):
     """r_λ = p_λ(x) / Σ_k q_k p_k(x) for the path so far (n collisions, ``length`` mm) into ``out``;
-    q = ``hero_p``, the probabilities with which the hero wavelength was chosen; ``mu_t``,
-    ``log_mu_t``, ``grey``: the medium's (:data:`KernelMedium`).
+    q = ``hero_p``, the probabilities with which the hero wavelength was chosen; ``product``: the running
+    phase products (:func:`update_phase_products`); ``mu_t``, ``log_mu_t``, ``grey``: the medium's
+    (:data:`KernelMedium`).
 
-    p_k / p_h = ratio_k · (μt_k / μt_h)^n · e^{−(μt_k − μt_h) length}; the exponential factors
-    are scaled by their largest so that nothing overflows (``ratio`` ≤ RESCALE).
+    p_k ∝ product_k · (μt_k / μt_h)^n · e^{−(μt_k − μt_h) length}, the factor common to all k
+    cancelling in r; the exponential factors are scaled by their largest so that nothing overflows
+    (``product`` ≤ RESCALE).
     """
     n_wl = out.shape[0]
     if grey:
@@ -224,15 +247,16 @@ def mis_ratios(mu_t, log_mu_t, grey, hero, ratio, n, length, hero_p, out):
         b = log_flight_ratio(mu_t[k], log_mu_t[k], mu_t_hero, log_mu_t_hero, n, length)
         out[k] = b
         top = max(top, b)
+    for k in range(n_wl):  # a loop of arithmetic alone, vectorised
+        out[k] = product[k] * exp_nonpositive(out[k] - top)
     total = 0.0
     for k in range(n_wl):
-        out[k] = ratio[k] * math.exp(out[k] - top)
         total += hero_p[k] * out[k]
     if not 0.0 < total < math.inf:
         # every term underflowed (extreme phase ratios): the same sum in logarithms
         for k in range(n_wl):
             b = log_flight_ratio(mu_t[k], log_mu_t[k], mu_t_hero, log_mu_t_hero, n, length)
-            out[k] = b + math.log(ratio[k]) if ratio[k] > 0.0 else -math.inf
+            out[k] = b + math.log(product[k]) if product[k] > 0.0 else -math.inf
         top = -math.inf
         for k in range(n_wl):
             top = max(top, out[k])
@@ -246,32 +270,32 @@ def mis_ratios(mu_t, log_mu_t, grey, hero, ratio, n, length, hero_p, out):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def surely_above_threshold(mu_t, log_mu_t, albedo_n, brightest, neediest, hero, ratio, n, length, hero_p, factor,
+def surely_above_threshold(mu_t, log_mu_t, albedo_n, brightest, neediest, hero, product, n, length, hero_p, factor,
                            importance):
     """Whether the path's largest weight max_λ r_λ α_λ^n s_λ (``albedo_n``: α_λ^n, ``importance``: s) times
     ``factor`` is surely at least ROULETTE_THRESHOLD, from a lower bound that needs two exponentials instead
     of L; ``brightest``: the wavelength of largest albedo, ``neediest``: of largest importance.
 
     With b_k = n ln(μt_k/μt_h) − (μt_k − μt_h)·length (:func:`log_flight_ratio`) and B = max_k b_k,
-    the MIS ratio of any wavelength c is r_c = ratio_c e^{b_c} / Σ_k q_k ratio_k e^{b_k}
-    ≥ ratio_c e^{b_c − B} / Σ_k q_k ratio_k, and the largest weight is at least r_c α_c^n s_c, taken for
-    the brightest and the neediest wavelength.  The bound
-    must clear the threshold by a margin far above round-off, so where it answers True the full
-    check would answer the same: the path's decisions and random numbers do not change."""
-    n_wl = ratio.shape[0]
+    the MIS ratio of any wavelength c is r_c = P_c e^{b_c} / Σ_k q_k P_k e^{b_k}
+    ≥ P_c e^{b_c − B} / Σ_k q_k P_k (P: the phase ``product``), and the largest weight is at least
+    r_c α_c^n s_c, taken for the brightest and the neediest wavelength.  The bound must clear the
+    threshold by a margin far above round-off, so where it answers True the full check would answer
+    the same: the path's decisions and random numbers do not change."""
+    n_wl = product.shape[0]
     mu_t_hero = mu_t[hero]
     log_mu_t_hero = log_mu_t[hero]
     top = -math.inf
     total = 0.0
     for k in range(n_wl):
         top = max(top, log_flight_ratio(mu_t[k], log_mu_t[k], mu_t_hero, log_mu_t_hero, n, length))
-        total += hero_p[k] * ratio[k]
+        total += hero_p[k] * product[k]
     if not 0.0 < total < math.inf:
         return False
     lower = 0.0
     for c in (brightest, neediest):
         b_c = log_flight_ratio(mu_t[c], log_mu_t[c], mu_t_hero, log_mu_t_hero, n, length)
-        lower = max(lower, ratio[c] * math.exp(b_c - top) / total * albedo_n[c] * importance[c])
+        lower = max(lower, product[c] * math.exp(b_c - top) / total * albedo_n[c] * importance[c])
     return lower * factor >= ROULETTE_THRESHOLD * BOUND_MARGIN
 
 
@@ -286,38 +310,42 @@ def largest_weight(albedo_n, ratios, importance):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def _finish(medium, hero, hero_p, ratio, n, length, factor, banked, albedo_n, albedo_mark, alive, fresh, ratios,
+def _finish(medium, hero, hero_p, product, n, length, factor, banked, albedo_n, albedo_mark, alive, fresh, ratios,
             weights, absorbed):
     """Form the path's weights (``weights``, 0 if not ``alive``) and add its absorbed energy;
     ``fresh``: ``ratios`` already hold the whole path's MIS ratios."""
     if not fresh:
-        mis_ratios(medium.mu_t, medium.log_mu_t, medium.grey, hero, ratio, n, length, hero_p, ratios)
+        mis_ratios(medium.mu_t, medium.log_mu_t, medium.grey, hero, product, n, length, hero_p, ratios)
     for k in range(weights.shape[0]):
         absorbed[k] += ratios[k] * (banked[k] + factor * (albedo_mark[k] - albedo_n[k]))
         weights[k] = ratios[k] * factor * albedo_n[k] if alive else 0.0
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, enter_weight,
-          ratio, banked, albedo_n, albedo_mark, ratios, weights, absorbed):
-    """Trace one path that has just entered the medium at ``pos`` going along unit ``d``.
+def trace(geometry, dims, eta, medium, hero, hero_p, importance, enter_weight, arrays, absorbed):
+    """Trace one path that has just entered the medium at ``arrays.pos`` going along unit ``arrays.d``,
+    drawing from the stream ``arrays.state`` (:data:`PathArrays`).
 
     ``eta`` = n_inside / n_outside; ``enter_weight`` the flux it carries (per unit incident
     flux); ``hero_p`` (L,) the hero wavelengths' probabilities, ``importance`` (L,) the roulette's
     scale of each wavelength's weight.  On ``EXITED``: ``pos`` is the exit point, ``d``
     the refracted direction outside, ``weights`` (L,) the flux leaving per wavelength; on
     ``LOST`` ``weights`` holds the flux still inside; on ``TERMINATED`` (roulette) it is 0.
-    ``absorbed`` (L,) is incremented by the absorbed flux in every case.  ``ratio``, ``banked``,
-    ``albedo_n``, ``albedo_mark``, ``ratios`` are scratch arrays (L,).  The position and direction are
+    ``absorbed`` (L,) is incremented by the absorbed flux in every case.  The position and direction are
     local scalars while the path is traced: ``pos`` and ``d`` are read at the start and written at the end.
+    The kernels hand in :mod:`._borrow` views of the medium's and the path's arrays, which the inlined
+    helpers called at every collision bind without a reference count.
 
     Returns ``(status, collisions, length)``, ``length`` the path's length inside the medium
     (mm): a path's weight under absorption μa + Δμa is its weight here times e^{−Δμa·length}
     (the absorption reweighting of :mod:`.absorption`).
     """
+    state, pos, d, weights = arrays.state, arrays.pos, arrays.d, arrays.weights
+    product, banked, albedo_n, albedo_mark, ratios = (arrays.phase_product, arrays.banked, arrays.albedo_n,
+                                                     arrays.albedo_mark, arrays.ratios)
     n_wl = weights.shape[0]
     for k in range(n_wl):
-        ratio[k] = 1.0
+        product[k] = 1.0
         banked[k] = 0.0
         # α_λ^n and α_λ^m (m: the collisions at the last roulette survival), kept up as n grows: each is
         # needed at every roulette check and exit, where powers by squaring cost L loops of log₂ n steps
@@ -334,7 +362,7 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     n = 0
     length = 0.0
     factor = enter_weight  # roulette factor times entering flux
-    ratio_bound = 1.0  # an upper bound of max_k ratio[k]
+    product_bound = 1.0  # an upper bound of max_k product[k]
     interactions = 0
     status = LOST
     # the distance to the next collision (mm; < 0: none drawn yet).  A path reflected at the boundary
@@ -370,10 +398,11 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
             check = (n % medium.roulette_interval == 0) if spectral else True
             if check:
                 if spectral and surely_above_threshold(medium.mu_t, medium.log_mu_t, albedo_n, medium.brightest,
-                                                       neediest, hero, ratio, n, length, hero_p, factor, importance):
+                                                       neediest, hero, product, n, length, hero_p, factor,
+                                                       importance):
                     largest = math.inf
                 elif spectral:
-                    mis_ratios(medium.mu_t, medium.log_mu_t, False, hero, ratio, n, length, hero_p, ratios)
+                    mis_ratios(medium.mu_t, medium.log_mu_t, False, hero, product, n, length, hero_p, ratios)
                     largest = largest_weight(albedo_n, ratios, importance)
                 else:
                     largest = albedo_n[medium.brightest]  # r ≡ 1: the largest weight is the brightest's
@@ -394,8 +423,9 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
                 mu, segment, along = sample_table(medium.phase_by_mu, medium.alias_threshold, medium.alias, hero,
                                                   state)
             if spectral:
-                ratio_bound = update_phase_ratios(medium.phase_kind, medium.hg_g, medium.phase_by_mu, medium.phase_max,
-                                                  hero, mu, segment, along, ratio, ratio_bound)
+                product_bound = update_phase_products(medium.phase_kind, medium.hg_g, medium.phase_by_mu,
+                                                      medium.phase_max, hero, mu, segment, along, product,
+                                                      product_bound)
             dx, dy, dz = turn(dx, dy, dz, mu, state)
         else:
             length += to_boundary
@@ -414,6 +444,6 @@ def trace(state, geometry, dims, eta, medium, hero, hero_p, importance, pos, d, 
     pos[0], pos[1], pos[2] = px, py, pz
     d[0], d[1], d[2] = dx, dy, dz
     # a path ended by roulette ends right after a check that formed its ratios
-    _finish(medium, hero, hero_p, ratio, n, length, factor, banked, albedo_n, albedo_mark, status != TERMINATED,
+    _finish(medium, hero, hero_p, product, n, length, factor, banked, albedo_n, albedo_mark, status != TERMINATED,
             status == TERMINATED and spectral, ratios, weights, absorbed)
     return status, n, length

@@ -22,6 +22,7 @@ from ..grids import hemisphere_cell, square_to_hemisphere
 from ._borrow import borrowed, borrowed_medium, borrowed_path_arrays
 from ._interactions import fresnel_reflectance, refract
 from ._paths import CYLINDER, EXITED, LOST, SLAB, path_arrays, trace
+from ._prefetch import prefetch_for_write
 from ._rng import seed_stream, uniform
 
 #: The yarn kernel's absorption-reweighting tallies (:func:`yarn_kernel`).
@@ -148,6 +149,36 @@ def _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d):
     return fresnel_reflectance(wz, 1.0 / eta)
 
 
+#: Bytes in a cache line: the stride of the prefetches of a tally row.
+CACHE_LINE = 64
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _ask_for_exit_rows(table, table_sq, decay_bssrdf, row, around, along, out_cell):
+    """Prefetch the rows of the large tallies that an exit into (``around``, ``along``, ``out_cell``) adds to."""
+    n_wl = table.shape[4]
+    for k in range(0, n_wl, CACHE_LINE // table.itemsize):
+        prefetch_for_write(table, (row, around, along, out_cell, k))
+    prefetch_for_write(table, (row, around, along, out_cell, n_wl - 1))
+    for k in range(0, n_wl, CACHE_LINE // table_sq.itemsize):
+        prefetch_for_write(table_sq, (row, around, out_cell, k))
+    prefetch_for_write(table_sq, (row, around, out_cell, n_wl - 1))
+    n_decay = decay_bssrdf.shape[4]
+    for i in range(0, n_wl * n_decay, CACHE_LINE // decay_bssrdf.itemsize):
+        prefetch_for_write(decay_bssrdf, (row, around, out_cell, i // n_decay, i % n_decay))
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _add_exit(table, table_sq, decay_bssrdf, row, around, along, out_cell, weights, factors):
+    """Add an exit's ``weights`` (L,) and decayed weights ``factors`` (L, K) to the large tallies."""
+    for k in range(weights.shape[0]):
+        w = weights[k]
+        table[row, around, along, out_cell, k] += w
+        table_sq[row, around, out_cell, k] += w * w
+        for j in range(factors.shape[1]):
+            decay_bssrdf[row, around, out_cell, k, j] += factors[k, j]
+
+
 @numba.njit(cache=True, error_model="numpy")
 def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p, importance, in_res, cos_max, n_around,
                 n_along, cell_length, out_res, table, table_sq, specular, exit_sum, exit_sq, unscattered, absorbed,
@@ -178,6 +209,12 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
     cell_absorbed = np.zeros(n_wl)
     cell_lost = np.zeros(n_wl)
     cell_events = 0
+    # An exit's additions to the large tallies wait for the next exit (or the cell's end), its rows asked
+    # for meanwhile: they are in cache when written, in the same order as without the wait.
+    waiting = False
+    waiting_bins = (0, 0, 0)
+    waiting_weights = np.empty(n_wl)
+    waiting_factors = np.empty((n_wl, n_decay))
     for t in range(sizes.shape[0]):
         if sizes[t] == 0:
             break
@@ -208,20 +245,28 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
                         cell_decayed_unscattered[k, j] += factors[k, j]
             elif status == EXITED:
                 around, along, out_cell = _exit_bins(pos, d, dpsi, n_around, n_along, cell_length, out_res)
+                _ask_for_exit_rows(table, table_sq, decay.bssrdf, row, around, along, out_cell)
+                if waiting:
+                    _add_exit(table, table_sq, decay.bssrdf, row, waiting_bins[0], waiting_bins[1], waiting_bins[2],
+                              waiting_weights, waiting_factors)
+                waiting = True
+                waiting_bins = (around, along, out_cell)
                 for k in range(n_wl):
                     w = weights[k]
-                    table[row, around, along, out_cell, k] += w
-                    table_sq[row, around, out_cell, k] += w * w
+                    waiting_weights[k] = w
                     cell_exit[k] += w
                     cell_exit_sq[k] += w * w
                     for j in range(n_decay):
                         f = factors[k, j]
-                        decay.bssrdf[row, around, out_cell, k, j] += f
+                        waiting_factors[k, j] = f
                         cell_decayed_exit[k, j] += f
                         cell_decayed_exit_sq[k, j] += f * f
             elif status == LOST:
                 for k in range(n_wl):
                     cell_lost[k] += weights[k]
+    if waiting:
+        _add_exit(table, table_sq, decay.bssrdf, row, waiting_bins[0], waiting_bins[1], waiting_bins[2],
+                  waiting_weights, waiting_factors)
     for k in range(n_wl):
         specular[row, k] += cell_specular[k]
         exit_sum[row, k] += cell_exit[k]

@@ -2,11 +2,13 @@
 
 numba counts references to an array atomically: binding an array to a variable, reading it from a
 tuple or handing it to an inlined helper takes and drops a reference, and on x86 each is a locked
-instruction that also drains the store buffer.  Where such a pair sits on every collision
-(the medium's tables handed to the phase sampler and the phase-ratio update) it costs more than
-the arithmetic around it.  A view made here has no memory-info block, so taking and dropping a
-reference to it is a test of a null pointer.  It must not outlive the array it views: a kernel
-borrows its own arguments, which its caller holds for the whole call.
+instruction that also drains the store buffer.  Where such pairs sit on every collision (the random
+stream's state handed to every draw, the medium's tables to the phase sampler and the phase-product
+update) they cost more than the arithmetic around them: a tenth of the yarn kernel's time
+(docs/transport.md, "Reference counts, and a collision without a division").  A view made here has no
+memory-info block, so taking and dropping a reference to it is a test of a null pointer.  It must not
+outlive the array it views: a kernel borrows its own arguments, which its caller holds for the whole
+call.
 """
 
 from __future__ import annotations

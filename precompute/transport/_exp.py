@@ -4,7 +4,7 @@ A path's MIS weights need one exponential per wavelength at every exit (:func:`.
 35 calls of libm's ``exp`` per path, which LLVM can only issue one after another.  The same
 function written as arithmetic (Cody–Waite reduction by ln 2, a polynomial, the power of two
 assembled in the exponent bits) lets LLVM vectorise the loop.  Within 2 ulp of libm down to
-x = −708 (tests/test_transport_sampling.py); below that it returns 0 (e^{−708} ≈ 3·10⁻³⁰⁸: a
+x = −708 (tests/test_transport_bookkeeping.py); below that it returns 0 (e^{−708} ≈ 3·10⁻³⁰⁸: a
 weight that small beside the path's largest, which is 1, changes no sum).
 """
 
@@ -23,6 +23,8 @@ _LOG2_E = 1.0 / math.log(2.0)
 #: ln 2 in two parts, the first with trailing zero bits so that k·LN2_HIGH is exact for |k| < 2^11.
 _LN2_HIGH = 6.93147180369123816490e-01
 _LN2_LOW = 1.90821492927058770002e-10
+
+
 @intrinsic
 def _float_from_bits(typingctx, bits):
     """The float64 whose IEEE-754 bits are the int64 ``bits``."""

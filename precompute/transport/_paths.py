@@ -253,7 +253,7 @@ def mis_ratios(mu_t, log_mu_t, grey, hero, product, n, length, hero_p, out):
     for k in range(n_wl):
         total += hero_p[k] * out[k]
     if not 0.0 < total < math.inf:
-        # every term underflowed (extreme phase ratios): the same sum in logarithms
+        # every term underflowed (extreme phase products): the same sum in logarithms
         for k in range(n_wl):
             b = log_flight_ratio(mu_t[k], log_mu_t[k], mu_t_hero, log_mu_t_hero, n, length)
             out[k] = b + math.log(product[k]) if product[k] > 0.0 else -math.inf

@@ -9,7 +9,7 @@ import numpy as np
 from precompute.transport._borrow import borrowed
 from precompute.transport._exp import SMALLEST_EXPONENT, exp_nonpositive
 from precompute.transport._interactions import PHASE_TABLE, sample_table
-from precompute.transport._paths import RESCALE, mis_ratios, update_phase_products
+from precompute.transport._paths import RESCALE, mis_ratios, padded_width, update_phase_products
 from precompute.transport._rng import seed_stream
 from precompute.transport.media import phase_sampling_tables
 
@@ -49,13 +49,16 @@ def _scatterings(table, threshold, alias, hero, count, seed):
 
 @numba.njit
 def _products_after(table, phase_max, hero, segments, alongs, mu_t, length, hero_p):
-    """The running products after one scattering per (segment, along), their bound and the MIS ratios."""
-    product = np.ones(table.shape[1])
+    """The running products after one scattering per (segment, along), their bound and the MIS ratios;
+    ``table``'s rows may be padded with zeros beyond the wavelengths of ``mu_t``, as the kernels' are."""
+    n_wl = mu_t.shape[0]
+    product = np.zeros(table.shape[1])
+    product[:n_wl] = 1.0
     bound = 1.0
     for i in range(segments.shape[0]):
         bound = update_phase_products(PHASE_TABLE, np.zeros(1), table, phase_max, hero, 0.0, segments[i], alongs[i],
-                                      product, bound)
-    ratios = np.empty(table.shape[1])
+                                      n_wl, product, bound)
+    ratios = np.empty(n_wl)
     mis_ratios(mu_t, np.log(mu_t), False, hero, product, segments.shape[0], length, hero_p, ratios)
     return product, bound, ratios
 
@@ -82,6 +85,14 @@ def test_phase_products_stay_in_range_and_give_the_mis_ratios_of_their_definitio
         log_p = log_phase + len(segments) * np.log(mu_t) - mu_t * length
         expected = np.exp(log_p - np.logaddexp.reduce(np.log(hero_p) + log_p))
         np.testing.assert_allclose(ratios, expected, rtol=1e-9, atol=1e-300)
+        # the kernels' rows padded with zeros to PHASE_WIDTH: the same products bit for bit, the padding 0
+        padded = np.zeros((by_mu.shape[0], padded_width(3)))
+        padded[:, :3] = by_mu
+        padded_product, _, padded_ratios = _products_after(padded, float(by_mu.max()), hero, segments, alongs, mu_t,
+                                                           length, hero_p)
+        np.testing.assert_array_equal(padded_product[:3], product)
+        np.testing.assert_array_equal(padded_ratios, ratios)
+        assert padded.shape[1] == 4 and np.all(padded_product[3:] == 0.0)
 
 
 @numba.njit

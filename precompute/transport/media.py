@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
 from ._interactions import PHASE_HG, PHASE_TABLE, alias_tables
-from ._paths import KernelMedium, roulette_interval
+from ._paths import KernelMedium, padded_width, roulette_interval
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,7 +93,10 @@ class TransportMedium:
             table, alias_threshold, alias = phase_sampling_tables(self.phase_table)
             same_phase = bool(np.all(table == table[0]))
             phase_max = float(table.max())
-            table = np.ascontiguousarray(table.T)  # (M, L): all wavelengths at one μ side by side
+            # (M, L padded with zeros: _paths.PHASE_WIDTH): all wavelengths at one μ side by side
+            by_mu = np.zeros((table.shape[1], padded_width(len(mu_t))))
+            by_mu[:, :len(mu_t)] = table.T
+            table = by_mu
         grey = same_phase and bool(np.all(mu_t == mu_t[0]))
         return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), roulette_interval(albedo), kind, hg_g,
                             table,

@@ -9,7 +9,7 @@ import numpy as np
 from precompute.transport._borrow import borrowed
 from precompute.transport._exp import SMALLEST_EXPONENT, exp_nonpositive
 from precompute.transport._interactions import PHASE_TABLE, sample_table
-from precompute.transport._paths import RESCALE, mis_ratios, padded_width, update_phase_products
+from precompute.transport._paths import RESCALE, mis_ratios, padded_width, path_arrays, update_phase_products
 from precompute.transport._rng import seed_stream
 from precompute.transport.media import phase_sampling_tables
 
@@ -103,8 +103,20 @@ def _doubled_through_a_view(values):
     return view.sum(), view.shape[0], view.strides[0]
 
 
-def test_a_borrowed_view_is_the_same_array():
+@numba.njit
+def _through_a_borrowed_tuple(arrays):
+    view = borrowed(arrays)
+    view.weights[0] = 5.0
+    view.state[1] = 9
+    return view.weights.shape[0], view.phase_product.shape[0], view.state[1]
+
+
+def test_a_borrowed_view_is_the_same_array_and_a_borrowed_tuple_holds_the_same_arrays():
     values = np.arange(5.0)
     total, size, stride = _doubled_through_a_view(values)
     np.testing.assert_array_equal(values, 2.0 * np.arange(5.0))
     assert (total, size, stride) == (20.0, 5, 8)
+
+    arrays = path_arrays(35)
+    assert _through_a_borrowed_tuple(arrays) == (35, padded_width(35), 9)
+    assert arrays.weights[0] == 5.0 and arrays.state[1] == 9

@@ -13,42 +13,34 @@ call.
 
 from __future__ import annotations
 
-import numba
 from numba.core import types
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-from ._paths import KernelMedium, PathArrays
+
+def _view(context, builder, array_type, value):
+    source = make_array(array_type)(context, builder, value=value)
+    view = make_array(array_type)(context, builder)
+    populate_array(view, data=source.data, shape=source.shape, strides=source.strides, itemsize=source.itemsize,
+                   meminfo=None)
+    return view._getvalue()
 
 
 @intrinsic
-def borrowed(typingctx, array):
-    """A view of ``array`` (same data, shape and strides, same type) without a reference count."""
-    if not isinstance(array, types.Array):
+def borrowed(typingctx, value):
+    """A view of the array ``value`` (same data, shape and strides, same type) without a reference count;
+    of a tuple (a :data:`._paths.KernelMedium`, :data:`._paths.PathArrays`), the same tuple with each of its
+    arrays such a view."""
+    if isinstance(value, types.Array):
+        def codegen(context, builder, signature, args):
+            return _view(context, builder, value, args[0])
+    elif isinstance(value, types.BaseTuple):
+        def codegen(context, builder, signature, args):
+            out = args[0]
+            for i, member in enumerate(value.types):
+                if isinstance(member, types.Array):
+                    out = builder.insert_value(out, _view(context, builder, member, builder.extract_value(out, i)), i)
+            return out
+    else:
         return None
-
-    def codegen(context, builder, signature, args):
-        source = make_array(array)(context, builder, value=args[0])
-        view = make_array(array)(context, builder)
-        populate_array(view, data=source.data, shape=source.shape, strides=source.strides,
-                       itemsize=source.itemsize, meminfo=None)
-        return view._getvalue()
-
-    return array(array), codegen
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def borrowed_medium(medium):
-    """:data:`._paths.KernelMedium` ``medium`` with every array a :func:`borrowed` view."""
-    return KernelMedium(borrowed(medium.mu_t), borrowed(medium.log_mu_t), borrowed(medium.albedo), medium.brightest,
-                        medium.roulette_interval, medium.phase_kind, borrowed(medium.hg_g),
-                        borrowed(medium.phase_by_mu), medium.phase_max, borrowed(medium.alias_threshold),
-                        borrowed(medium.alias), medium.grey)
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def borrowed_path_arrays(arrays):
-    """:data:`._paths.PathArrays` ``arrays`` with every array a :func:`borrowed` view."""
-    return PathArrays(borrowed(arrays.state), borrowed(arrays.pos), borrowed(arrays.d), borrowed(arrays.weights),
-                      borrowed(arrays.phase_product), borrowed(arrays.banked), borrowed(arrays.albedo_n),
-                      borrowed(arrays.albedo_mark), borrowed(arrays.ratios))
+    return value(value), codegen

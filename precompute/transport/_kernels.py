@@ -19,7 +19,7 @@ import numba
 import numpy as np
 
 from ..grids import hemisphere_cell, square_to_hemisphere
-from ._borrow import borrowed, borrowed_medium, borrowed_path_arrays
+from ._borrow import borrowed
 from ._interactions import fresnel_reflectance, refract
 from ._paths import CYLINDER, EXITED, LOST, SLAB, path_arrays, trace
 from ._prefetch import prefetch_for_write
@@ -81,7 +81,7 @@ def slab_kernel(paths, seed, thickness, eta, medium, sums, events):
 @numba.njit(cache=True, error_model="numpy")
 def _slab_task(count, dims, eta, medium, specular, hero_p, hero_cdf, importance, arrays, local):
     """:func:`slab_kernel`'s task: ``count`` paths into its tallies ``local`` (8, L); returns the collisions."""
-    medium, arrays, dims = borrowed_medium(medium), borrowed_path_arrays(arrays), borrowed(dims)
+    medium, arrays, dims = borrowed(medium), borrowed(arrays), borrowed(dims)
     hero_p, hero_cdf, importance, local = borrowed(hero_p), borrowed(hero_cdf), borrowed(importance), borrowed(local)
     n_wl = local.shape[1]
     pos, d, weights = arrays.pos, arrays.d, arrays.weights
@@ -186,7 +186,7 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
     """Run incidence cell ``cell``'s tasks ``first_task + t`` of ``sizes[t]`` paths (a 0 ends the list),
     choosing hero wavelengths with probabilities ``hero_p`` (L,), into the tallies' row ``row``;
     ``arrays``: :data:`._paths.PathArrays` to work in."""
-    medium, arrays = borrowed_medium(medium), borrowed_path_arrays(arrays)
+    medium, arrays = borrowed(medium), borrowed(arrays)
     hero_p, importance = borrowed(hero_p), borrowed(importance)
     state, pos, d, weights = arrays.state, arrays.pos, arrays.d, arrays.weights
     n_wl = exit_sum.shape[1]
@@ -359,7 +359,7 @@ def _beam_task(count, dims, eta, medium, hero_p, hero_cdf, importance, toward_li
                n_around, out_res, arrays, sums, sums_sq, unscattered, specular, absorbed, lost):
     """:func:`beam_kernel`'s task: ``count`` paths into its tallies (``sums``, ``sums_sq``, ``unscattered``
     (n_around, n_out, L); ``specular``, ``absorbed``, ``lost`` (L,)); returns the collisions."""
-    medium, arrays, dims = borrowed_medium(medium), borrowed_path_arrays(arrays), borrowed(dims)
+    medium, arrays, dims = borrowed(medium), borrowed(arrays), borrowed(dims)
     hero_p, hero_cdf, importance = borrowed(hero_p), borrowed(hero_cdf), borrowed(importance)
     absorbed = borrowed(absorbed)
     state, pos, d, weights = arrays.state, arrays.pos, arrays.d, arrays.weights

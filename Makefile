@@ -16,7 +16,8 @@ STAMP := $(VENV)/.clothlight-installed
 OUT ?= out
 
 # numba keeps compiled kernels beside their sources (__pycache__), keyed by the source files: the
-# kernels are compiled once per checkout here rather than during the first job (docs/transport.md).
+# kernels are compiled once per checkout here rather than during the first job, and the native slab
+# library is built beside them (docs/transport.md).
 KERNEL_STAMP := precompute/transport/__pycache__/.kernels-compiled
 
 .PHONY: setup demo test test-fast lint bench extension clean
@@ -31,7 +32,7 @@ $(STAMP): requirements.txt scripts/setup_env.py
 	@touch $(STAMP)
 	@echo "environment ready: $(VENV)"
 
-$(KERNEL_STAMP): $(STAMP) $(wildcard precompute/transport/*.py) precompute/grids.py
+$(KERNEL_STAMP): $(STAMP) $(wildcard precompute/transport/*.py) precompute/grids.py precompute/slab_layout.py
 	$(PY) -m precompute.transport.compile
 	@touch $(KERNEL_STAMP)
 

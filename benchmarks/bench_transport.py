@@ -20,9 +20,9 @@ bookkeeping alone costs.
 ``mcml`` (issue 24) times MCML 1.2 beside ClothLight in the same run (benchmarks/mcml_reference.py: built
 from its public source when a C compiler is there, skipped with the reason otherwise) and prints the
 ratios the issue asks for: the kernel's photons/s per core on the van de Hulst slab (n 1 and 1.5,
-target ≥ 2), whole processes at 10⁶ photons (target ≥ 1), and the default bake as a process on this
-machine's cores over MCML's 4·10⁶ van de Hulst photons on one thread, timed before and after the bake
-(target ≤ 30).
+target ≥ 2), whole processes at 10⁶ photons (target ≥ 1; the slab command through the native slab
+library and through numba's kernel), and the default bake as a process on this machine's cores over
+MCML's 4·10⁶ van de Hulst photons on one thread, timed before and after the bake (target ≤ 30).
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 import numba
 import numpy as np
 
+from precompute import native_slab
 from precompute.medium import DEFAULT_PRESET
 from precompute.optics import load_preset, medium_optics
 from precompute.transport import (
@@ -231,12 +232,16 @@ def mcml(source: str | None = None, rounds: int = 3) -> None:
               f"R {result.R_total[0]:.4f} vs {reference['R_total']:.4f}, T {result.T_total[0]:.4f} vs "
               f"{reference['T_total']:.4f}")
     slab_command = [sys.executable, "-m", "precompute", "slab", "--albedo", str(slab["albedo"]), "--g",
-                    str(slab["g"]), "--tau", str(slab["tau"]), "--paths", "1000000", "--threads", "1"]
-    ours = median_of(lambda: process_seconds(slab_command), rounds)
+                    str(slab["g"]), "--tau", str(slab["tau"]), "--paths", "1000000", "--threads", "1", "--engine"]
+    engines = ("native", "numba") if native_slab.load_library() is not None else ("numba",)
+    ours = {engine: median_of(lambda engine=engine: process_seconds(slab_command + [engine]), rounds)
+            for engine in engines}
     theirs = median_of(lambda: run_slab(executable, 1_000_000, slab["albedo"], slab["g"], slab["tau"], 1.0)["wall_s"],
                        rounds)
-    print(f"  whole process, 1e6 photons, n 1: python -m precompute slab {ours:.2f} s, MCML {theirs:.2f} s: "
-          f"{theirs / ours:.2f}x MCML (target >= 1)")
+    print(f"  whole process, 1e6 photons, n 1: MCML {theirs:.2f} s; python -m precompute slab "
+          + ", ".join(f"--engine {engine} {seconds:.2f} s: {theirs / seconds:.2f}x MCML" for engine, seconds in
+                      ours.items())
+          + " (target >= 1)" + ("" if "native" in ours else "; the native slab library is not built (make setup)"))
     with tempfile.TemporaryDirectory(prefix="clothlight-bench-bake-") as cache:
         bake_seconds = process_seconds([sys.executable, "-m", "precompute", "bake", "--cache-dir", cache])
     # the bake takes half a minute, over which a shared machine's speed drifts: MCML is timed again right

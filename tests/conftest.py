@@ -60,8 +60,9 @@ RENDER_MODULES = {"test_addon_operators", "test_cloth_response_render", "test_cy
 SLOW_MODULES = {"test_addon_operators", "test_bake_cli", "test_bake_dye_series", "test_distributed",
                 "test_distributed_fit", "test_distributed_garment", "test_distributed_jobs",
                 "test_distributed_validation", "test_extension", "test_fit_dye_series"}
-#: Fixtures that bake (yarn or cloth) or build the extension zip: a test that uses one is slow.
-SLOW_FIXTURES = {"extension_zip", "red_cotton_cloth", "transport_runs"}
+#: Fixtures that bake (yarn or cloth) or build the extension zip or the native slab library: a test that
+#: uses one is slow.
+SLOW_FIXTURES = {"extension_zip", "native_slab_library", "red_cotton_cloth", "transport_runs"}
 #: Single tests of otherwise quick modules that bake or fit in a child process, run Monte-Carlo
 #: transport or a fit's optimiser for seconds (module::name).
 SLOW_TESTS = {"test_cache::test_a_killed_bake_leaves_no_table",

@@ -70,7 +70,7 @@ def no_work(monkeypatch):
     monkeypatch.setattr(precompute.bake, "_transport_executor", lambda *args: contextlib.nullcontext())
     monkeypatch.setattr(precompute.bake, "_simulate", lambda configuration, *args: _started(
         configuration=configuration)())
-    monkeypatch.setattr(precompute.cli.slab, "simulate_hg_slab", _started(command="slab"))
+    monkeypatch.setattr(precompute.cli.slab, "slab_summary", _started(command="slab"))
     monkeypatch.setattr(validate_cli, "_sweep", lambda args, interrupt: _started(**vars(args))())
     monkeypatch.setattr(garment_cli, "_measure", lambda args, interrupt: _started(**vars(args))())
 
@@ -137,7 +137,7 @@ def test_an_internal_error_is_one_line_and_its_traceback_is_there_when_asked(mon
     def broken(*args, **kwargs):
         raise RuntimeError("the transport broke")
 
-    monkeypatch.setattr(precompute.cli.slab, "simulate_hg_slab", broken)
+    monkeypatch.setattr(precompute.cli.slab, "slab_summary", broken)
     argv = ["slab", "--albedo", "0.5", "--g", "0", "--tau", "1", "--paths", "100"]
     monkeypatch.delenv(exit_codes.TRACEBACK_ENV, raising=False)
     code, err = run("precompute", argv, capsys)
@@ -267,7 +267,7 @@ INTERRUPTING_IMPORT = textwrap.dedent("""
 
 @pytest.mark.parametrize("module, argv, interrupted_import", [
     ("precompute", ["bake", "--paths", "100"], "numba"),
-    ("precompute", ["slab", "--albedo", "0.5", "--g", "0", "--tau", "1"], "precompute.transport"),
+    ("precompute", ["slab", "--albedo", "0.5", "--g", "0", "--tau", "1"], "precompute.native_slab"),
     ("precompute", ["optics"], "precompute.exit_codes"),
     ("clothlight.validate", ["--out", "{tmp}/v"], "numpy"),
     ("clothlight.validate", ["--out", "{tmp}/v", "--resolution", "8", "--samples", "1"], "bpy"),
@@ -437,7 +437,7 @@ def _value_given(arguments: dict, command: str, option: str):
     if command == "precompute bake":  # the yarn bake's checked configuration
         key = {"--paths": "paths_per_cell", "--target-error": "target_rel_stderr", "--seed": "seed"}[option]
         return arguments["configuration"].transport[key]
-    if command == "precompute slab":  # simulate_hg_slab(albedo, g, tau, n, paths=…, seed=…)
+    if command == "precompute slab":  # slab_summary(albedo, g, tau, n, paths=…, seed=…, …)
         positional = ("--albedo", "--g", "--tau", "--n")
         return arguments["args"][positional.index(option)] if option in positional else arguments[option[2:]]
     return arguments[option[2:].replace("-", "_")]  # validate and garment: their parsed arguments

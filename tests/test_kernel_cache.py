@@ -3,20 +3,20 @@ transport kernel's cache when any transport source (or the direction grids they 
 
 import pathlib
 
-from precompute import grids
+from precompute import grids, kernel_sources
 from precompute.transport import _kernels, _paths, kernel_cache
 
 
 def test_the_digest_covers_the_sources_that_kernels_inline_from_other_files():
     assert {"transport/_paths.py", "transport/_interactions.py", "transport/_rng.py", "transport/_kernels.py",
-            "grids.py"} <= set(kernel_cache.kernel_sources())
+            "grids.py"} <= set(kernel_sources.kernel_sources())
 
 
 def test_a_changed_source_flushes_every_kernel_cache_beside_it():
     modules = (grids, _kernels, _paths)
     kernels = kernel_cache.cached_kernels(modules)
     assert _kernels.yarn_kernel in kernels and _paths.trace in kernels and grids.hemisphere_cell in kernels
-    current = kernel_cache.sources_digest()
+    current = kernel_sources.sources_digest()
     kernel_cache.flush_stale_kernel_caches(modules, current)
     assert not kernel_cache.flush_stale_kernel_caches(modules, current)  # up to date: nothing flushed
     flushed = []

@@ -10,7 +10,8 @@ from precompute.transport import TransportGrids, YarnGeometry, _kernels, simulat
 from precompute.transport.absorption import absorption_steps, reweighted_transport
 from precompute.transport.compile import compile_kernels
 
-KERNELS = (_kernels.slab_kernel, _kernels.yarn_kernel, _kernels.beam_kernel, _kernels.interpolate_steps)
+KERNELS = (_kernels.slab_kernel, _kernels.slab_results, _kernels.yarn_kernel, _kernels.beam_kernel,
+           _kernels.interpolate_steps)
 
 
 def test_real_jobs_after_the_compile_step_use_its_specialisations():

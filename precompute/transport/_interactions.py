@@ -88,6 +88,16 @@ def hg_value(g, mu):
     return (1.0 - g * g) * _INV_4PI / (x * math.sqrt(x))
 
 
+@numba.njit(cache=True, error_model="numpy")
+def hg_phase_max(hg_g):
+    """The largest value, over directions and wavelengths, of the Henyey–Greenstein phase functions of
+    asymmetries ``hg_g`` (L,), 1/sr: each peaks in the direction its ``g`` favours."""
+    peak = 0.0
+    for g in hg_g:
+        peak = max(peak, hg_value(g, 1.0 if g >= 0.0 else -1.0))
+    return peak
+
+
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def sample_table(table, alias_threshold, alias, k, state):
     """cos θ drawn exactly from the piecewise-linear phase ``table[:, k]`` on the uniform μ grid:

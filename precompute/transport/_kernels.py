@@ -19,6 +19,17 @@ import numba
 import numpy as np
 
 from ..grids import hemisphere_cell, square_to_hemisphere
+from ..slab_layout import (
+    SLAB_ABSORBED,
+    SLAB_LOST,
+    SLAB_R_DIFFUSE,
+    SLAB_R_SQUARES,
+    SLAB_R_UNSCATTERED,
+    SLAB_RESULTS,
+    SLAB_T_DIFFUSE,
+    SLAB_T_SQUARES,
+    SLAB_T_UNSCATTERED,
+)
 from ._borrow import borrowed
 from ._interactions import fresnel_reflectance, refract
 from ._paths import CYLINDER, EXITED, LOST, SLAB, path_arrays, trace
@@ -28,9 +39,12 @@ from ._rng import seed_stream, uniform
 #: The yarn kernel's absorption-reweighting tallies (:func:`yarn_kernel`).
 DecayTallies = namedtuple("DecayTallies", ["extra_mu_a", "bssrdf", "exit_sum", "exit_sq", "unscattered"])
 
-#: Rows of the slab tallies.
-SLAB_R_DIFFUSE, SLAB_R_UNSCATTERED, SLAB_T_DIFFUSE, SLAB_T_UNSCATTERED, SLAB_ABSORBED, SLAB_LOST = range(6)
-SLAB_R_SQUARES, SLAB_T_SQUARES = 6, 7
+#: Rows of :func:`slab_results`'s output.
+_RESULT = {name: row for row, name in enumerate(SLAB_RESULTS)}
+_R_TOTAL, _T_TOTAL, _R_STDERR, _T_STDERR, _R_SPECULAR = (_RESULT[name] for name in (
+    "R_total", "T_total", "R_total_stderr", "T_total_stderr", "R_specular"))
+_R_UNSCATTERED, _R_DIFFUSE, _T_UNSCATTERED, _T_DIFFUSE, _ABSORBED, _LOST = (_RESULT[name] for name in (
+    "R_unscattered", "R_diffuse", "T_unscattered", "T_diffuse", "absorbed", "lost"))
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -109,6 +123,47 @@ def _slab_task(count, dims, eta, medium, specular, hero_p, hero_cdf, importance,
             for k in range(n_wl):
                 local[SLAB_LOST, k] += weights[k]
     return collisions_total
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _task_mean(sums, row, k, paths):
+    """Row ``row`` of the tasks' tallies ``sums`` at wavelength ``k``, summed over the tasks in order, per path."""
+    total = 0.0
+    for task in range(sums.shape[0]):
+        total += sums[task, row, k]
+    return total / paths
+
+
+@numba.njit(cache=True, error_model="numpy")
+def slab_results(sums, paths, eta, out):
+    """A slab's result from its tasks' tallies ``sums`` (tasks, 8, L) of ``paths`` paths in all, at index
+    ratio ``eta``: ``out`` (len(SLAB_RESULTS), L), the rows :data:`precompute.slab_layout.SLAB_RESULTS`.
+
+    Totals include the specular reflection at entry ((n − 1)/(n + 1))² and the unscattered parts; the
+    standard errors are those of the Monte-Carlo means (the specular part is exact).  It allocates
+    nothing, so that the native slab library runs it without numba's runtime (:mod:`.native`).
+    """
+    specular = ((eta - 1.0) / (eta + 1.0)) ** 2
+    for k in range(sums.shape[2]):
+        r_unscattered = _task_mean(sums, SLAB_R_UNSCATTERED, k, paths)
+        r_diffuse = _task_mean(sums, SLAB_R_DIFFUSE, k, paths)
+        t_unscattered = _task_mean(sums, SLAB_T_UNSCATTERED, k, paths)
+        t_diffuse = _task_mean(sums, SLAB_T_DIFFUSE, k, paths)
+        r_scattered = r_diffuse + r_unscattered
+        t_all = t_diffuse + t_unscattered
+        r_square = _task_mean(sums, SLAB_R_SQUARES, k, paths)
+        t_square = _task_mean(sums, SLAB_T_SQUARES, k, paths)
+        out[_R_TOTAL, k] = specular + r_scattered
+        out[_T_TOTAL, k] = t_all
+        out[_R_STDERR, k] = math.sqrt(max(r_square - r_scattered * r_scattered, 0.0) / (paths - 1))
+        out[_T_STDERR, k] = math.sqrt(max(t_square - t_all * t_all, 0.0) / (paths - 1))
+        out[_R_SPECULAR, k] = specular
+        out[_R_UNSCATTERED, k] = r_unscattered
+        out[_R_DIFFUSE, k] = r_diffuse
+        out[_T_UNSCATTERED, k] = t_unscattered
+        out[_T_DIFFUSE, k] = t_diffuse
+        out[_ABSORBED, k] = _task_mean(sums, SLAB_ABSORBED, k, paths)
+        out[_LOST, k] = _task_mean(sums, SLAB_LOST, k, paths)
 
 
 @numba.njit(cache=True, error_model="numpy")

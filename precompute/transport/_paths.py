@@ -120,7 +120,8 @@ def path_arrays(n_wl):
                       np.zeros(padded_width(n_wl)), np.empty(n_wl), np.empty(n_wl), np.empty(n_wl), np.empty(n_wl))
 
 
-def roulette_interval(albedo) -> int:
+@numba.njit(cache=True)
+def roulette_interval(albedo):
     """Collisions between a spectral path's roulette checks in a medium of single-scattering albedos
     ``albedo`` (L,).  In a scattering medium (mean albedo at least SCATTERING_MEDIUM) paths are long and
     their largest weight falls slowly: checks every ROULETTE_INTERVAL_SCATTERING collisions reached the
@@ -128,7 +129,7 @@ def roulette_interval(albedo) -> int:
     absorbs, most paths' weights collapse within a few collisions, and a path left unchecked for 16 goes on
     for nothing: the paper's yarn took 1.5 times the CPU time at 16 (docs/transport.md, "Where a
     collision's time goes")."""
-    return ROULETTE_INTERVAL_SCATTERING if float(albedo.mean()) >= SCATTERING_MEDIUM else ROULETTE_INTERVAL_ABSORBING
+    return ROULETTE_INTERVAL_SCATTERING if albedo.mean() >= SCATTERING_MEDIUM else ROULETTE_INTERVAL_ABSORBING
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")

@@ -6,11 +6,13 @@ argument types.  Without this step a new machine's first slab or bake spends abo
 compiling before any work; ``make setup`` runs it once per checkout (``python -m
 precompute.transport.compile``), so that first job only loads the cache.  Each kernel is called
 here through the public function that calls it in real use, with the same argument types, on a
-problem too small to take time.
+problem too small to take time.  It then builds the native slab library (:mod:`.native`), with which
+``python -m precompute slab`` runs without importing numba at all.
 """
 
 from __future__ import annotations
 
+import subprocess
 import sys
 import time
 
@@ -21,6 +23,7 @@ from .absorption import absorption_steps, interpolate_absorption
 from .beam import simulate_parallel_beam
 from .cylinder import TransportGrids, YarnGeometry, simulate_yarn
 from .media import henyey_greenstein_medium
+from .native import build_native_slab
 from .slab import simulate_hg_slab, simulate_slab
 
 
@@ -55,6 +58,14 @@ def main() -> int:
     start = time.perf_counter()
     compiled = compile_kernels()
     print(f"numba kernels ready ({', '.join(compiled)}) in {time.perf_counter() - start:.1f} s", file=sys.stderr)
+    start = time.perf_counter()
+    try:
+        library = build_native_slab()
+    except (RuntimeError, subprocess.CalledProcessError) as exc:  # the slab command falls back to numba
+        detail = exc.stderr.decode(errors="replace").strip() if isinstance(exc, subprocess.CalledProcessError) else exc
+        print(f"native slab library not built: {detail}", file=sys.stderr)
+    else:
+        print(f"native slab library ready ({library}) in {time.perf_counter() - start:.1f} s", file=sys.stderr)
     return 0
 
 

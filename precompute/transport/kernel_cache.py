@@ -13,23 +13,10 @@ import pathlib
 
 from numba.core.registry import CPUDispatcher
 
-from ..cache import source_digest
+from ..kernel_sources import sources_digest
 
 #: Where the digest of the sources is kept, in each folder of cached kernels.
 DIGEST_FILE = "clothlight-kernel-sources.sha256"
-#: The ``precompute`` package, which the sources are named relative to.
-PACKAGE_ROOT = pathlib.Path(__file__).resolve().parents[1]
-
-
-def kernel_sources() -> list[str]:
-    """The transport's source files and the direction grids they inline, relative to the package."""
-    transport = sorted(path.relative_to(PACKAGE_ROOT).as_posix() for path in (PACKAGE_ROOT / "transport").glob("*.py"))
-    return transport + ["grids.py"]
-
-
-def sources_digest() -> str:
-    """:func:`precompute.cache.source_digest` of :func:`kernel_sources`."""
-    return source_digest(PACKAGE_ROOT, kernel_sources())
 
 
 def cached_kernels(modules) -> list:
@@ -42,8 +29,8 @@ def cached_kernels(modules) -> list:
 
 def flush_stale_kernel_caches(modules, digest: str | None = None) -> bool:
     """Flush the caches of the kernels of ``modules`` wherever the digest kept beside them is not
-    ``digest`` (by default :func:`sources_digest`), and keep that digest there; returns whether any
-    cache was flushed.  A folder that cannot be written is left as it is."""
+    ``digest`` (by default :func:`precompute.kernel_sources.sources_digest`), and keep that digest there;
+    returns whether any cache was flushed.  A folder that cannot be written is left as it is."""
     digest = digest or sources_digest()
     by_folder: dict[pathlib.Path, list] = {}
     for kernel in cached_kernels(modules):

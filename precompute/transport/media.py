@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
-from ._interactions import PHASE_HG, PHASE_TABLE, alias_tables
+from ._interactions import PHASE_HG, PHASE_TABLE, alias_tables, hg_phase_max
 from ._paths import KernelMedium, padded_width, roulette_interval
 
 
@@ -87,7 +87,7 @@ class TransportMedium:
             table = alias_threshold = np.zeros((1, 2))
             alias = np.zeros((1, 1), dtype=np.int32)
             same_phase = bool(np.all(hg_g == hg_g[0]))
-            phase_max = float(np.max((1 - hg_g**2) / (4 * np.pi * (1 - np.abs(hg_g)) ** 3)))
+            phase_max = hg_phase_max(hg_g)
         else:
             kind, hg_g = PHASE_TABLE, np.zeros(1)
             table, alias_threshold, alias = phase_sampling_tables(self.phase_table)

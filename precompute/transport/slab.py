@@ -14,14 +14,11 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..errors import ParameterError
+from ..slab_layout import SLAB_RESULTS, SLAB_TALLY_ROWS, SLAB_TASKS, task_paths
 from . import _kernels
 from ._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
 from ._threads import numba_threads
 from .media import TransportMedium, henyey_greenstein_medium
-
-#: Independent random streams of a slab run (fixed, so results do not depend on the thread count).
-SLAB_TASKS = 64
-
 
 @dataclass(frozen=True)
 class SlabResult:
@@ -70,36 +67,16 @@ def simulate_slab(medium: TransportMedium, thickness_mm: float, index: float, *,
     index = refractive_index("n", index)
     paths = integer_at_least("paths", paths, 2)
     seed = seed_value(seed)
-    counts = np.full(SLAB_TASKS, paths // SLAB_TASKS, dtype=np.int64)
-    counts[: paths % SLAB_TASKS] += 1
+    counts = np.array(task_paths(paths), dtype=np.int64)
     n_wl = len(medium.wavelengths_nm)
-    sums = np.zeros((SLAB_TASKS, 8, n_wl))
+    sums = np.zeros((SLAB_TASKS, SLAB_TALLY_ROWS, n_wl))
     events = np.zeros(SLAB_TASKS, dtype=np.int64)
     with numba_threads(thread_count(threads)):
         _kernels.slab_kernel(counts, seed, thickness_mm, index, medium.kernel(), sums, events)
-    total = sums.sum(axis=0) / paths
-    r_scattered = total[_kernels.SLAB_R_DIFFUSE] + total[_kernels.SLAB_R_UNSCATTERED]
-    t_all = total[_kernels.SLAB_T_DIFFUSE] + total[_kernels.SLAB_T_UNSCATTERED]
-    specular = ((index - 1.0) / (index + 1.0)) ** 2
-    return SlabResult(
-        R_total=specular + r_scattered,
-        T_total=t_all,
-        R_total_stderr=_stderr(total[_kernels.SLAB_R_SQUARES], r_scattered, paths),
-        T_total_stderr=_stderr(total[_kernels.SLAB_T_SQUARES], t_all, paths),
-        R_specular=specular,
-        R_unscattered=total[_kernels.SLAB_R_UNSCATTERED],
-        R_diffuse=total[_kernels.SLAB_R_DIFFUSE],
-        T_unscattered=total[_kernels.SLAB_T_UNSCATTERED],
-        T_diffuse=total[_kernels.SLAB_T_DIFFUSE],
-        absorbed=total[_kernels.SLAB_ABSORBED],
-        lost=total[_kernels.SLAB_LOST],
-        paths=paths,
-        events=int(events.sum()),
-    )
-
-
-def _stderr(mean_square, mean, n):
-    return np.sqrt(np.maximum(mean_square - mean**2, 0.0) / (n - 1))
+    results = np.empty((len(SLAB_RESULTS), n_wl))
+    _kernels.slab_results(sums, paths, index, results)
+    rows = dict(zip(SLAB_RESULTS, results))
+    return SlabResult(**rows | {"R_specular": float(rows["R_specular"][0])}, paths=paths, events=int(events.sum()))
 
 
 def simulate_hg_slab(albedo: float, g: float, tau: float, index: float, **kwargs) -> SlabResult:

@@ -1,0 +1,27 @@
+"""The sources that the transport's compiled code is built from, and their digest.
+
+numba's cache keys a kernel by its own file only, though a kernel inlines functions of other files; the
+digest of all of them keys the compiled code instead (:mod:`precompute.transport.kernel_cache` for
+numba's cache, :mod:`precompute.native_slab` for the native slab library).  Importing this module
+imports neither numba nor NumPy.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+from .cache import source_digest
+
+#: The ``precompute`` package, which the sources are named relative to.
+PACKAGE_ROOT = pathlib.Path(__file__).resolve().parent
+
+
+def kernel_sources() -> list[str]:
+    """The transport's source files and the direction grids they inline, relative to the package."""
+    transport = sorted(path.relative_to(PACKAGE_ROOT).as_posix() for path in (PACKAGE_ROOT / "transport").glob("*.py"))
+    return transport + ["grids.py", "slab_layout.py"]
+
+
+def sources_digest() -> str:
+    """:func:`precompute.cache.source_digest` of :func:`kernel_sources`."""
+    return source_digest(PACKAGE_ROOT, kernel_sources())

@@ -27,7 +27,7 @@ from .slab_layout import SLAB_RESULTS, SLAB_TALLY_ROWS, SLAB_TASKS, task_paths
 TASKS_FUNCTION = "clothlight_hg_slab_tasks"
 RESULTS_FUNCTION = "clothlight_slab_results"
 #: Doubles of scratch that a thread hands to the tasks function.
-WORK_DOUBLES = 32
+WORK_DOUBLES = 64
 #: The library's file names, one per digest of the sources.
 LIBRARY_PATTERN = "clothlight_slab-*.so"
 

@@ -1,5 +1,5 @@
 """A spectral path's bookkeeping: the exponential of the MIS weights, the running phase products and
-their rescaling, and the views the kernels borrow, each against its definition."""
+their rescaling, the albedo's powers, and the views the kernels borrow, each against its definition."""
 
 import math
 
@@ -120,3 +120,30 @@ def test_a_borrowed_view_is_the_same_array_and_a_borrowed_tuple_holds_the_same_a
     arrays = path_arrays(35)
     assert _through_a_borrowed_tuple(arrays) == (35, padded_width(35), 9)
     assert arrays.weights[0] == 5.0 and arrays.state[1] == 9
+
+
+def test_the_albedo_power_table_holds_each_power_a_path_multiplies_in_at_its_checks_and_end():
+    """A spectral path keeps α^n by multiplying in α^interval at each roulette check and α^(n mod interval)
+    at its end: the table's rows are those powers, to round-off, for an interval of either kind of medium."""
+    from precompute.medium import DEFAULT_PRESET, load_preset
+    from precompute.optics import medium_optics
+    from precompute.transport import medium_from_optics
+    from precompute.transport._paths import ROULETTE_INTERVAL_ABSORBING, albedo_power_table
+
+    medium = medium_from_optics(medium_optics(load_preset(DEFAULT_PRESET))).kernel()
+    albedo = medium.albedo
+    assert medium.albedo_powers.shape == (medium.roulette_interval + 1, len(albedo))
+    powers = np.empty((ROULETTE_INTERVAL_ABSORBING + 1, len(albedo)))
+    albedo_power_table(albedo, powers)
+    for table in (medium.albedo_powers, powers):
+        assert np.all(table[0] == 1.0) and np.array_equal(table[1], albedo)
+        rows = np.arange(len(table))[:, None]
+        np.testing.assert_allclose(table, albedo[None, :] ** rows, rtol=1e-14)
+    # n collisions: n // interval checks, then the remainder
+    interval = medium.roulette_interval
+    for n in (1, interval - 1, interval, 3 * interval + 5):
+        kept = np.ones_like(albedo)
+        for _ in range(n // interval):
+            kept *= medium.albedo_powers[interval]
+        kept *= medium.albedo_powers[n % interval]
+        np.testing.assert_allclose(kept, albedo**n, rtol=1e-13)

@@ -91,10 +91,12 @@ RESCALE = 1e100
 #: steps instead of 1–3 scalar ones (35 wavelengths: 36).
 PHASE_WIDTH = 4
 
+#: The medium as :func:`trace` reads it (``TransportMedium.kernel()``); ``albedo_powers`` (interval + 1, L):
+#: row r holds α_λ^r up to the roulette interval (:func:`albedo_power_table`).
 KernelMedium = namedtuple(
     "KernelMedium",
-    ["mu_t", "log_mu_t", "albedo", "brightest", "roulette_interval", "phase_kind", "hg_g", "phase_by_mu", "phase_max",
-     "alias_threshold", "alias", "grey"],
+    ["mu_t", "log_mu_t", "albedo", "brightest", "roulette_interval", "albedo_powers", "phase_kind", "hg_g",
+     "phase_by_mu", "phase_max", "alias_threshold", "alias", "grey"],
 )
 
 #: A task's random stream and the arrays :func:`trace` works in: ``state`` (2,) uint64 (:mod:`._rng`);
@@ -130,6 +132,17 @@ def roulette_interval(albedo):
     for nothing: the paper's yarn took 1.5 times the CPU time at 16 (docs/transport.md, "Where a
     collision's time goes")."""
     return ROULETTE_INTERVAL_SCATTERING if albedo.mean() >= SCATTERING_MEDIUM else ROULETTE_INTERVAL_ABSORBING
+
+
+@numba.njit(cache=True, error_model="numpy")
+def albedo_power_table(albedo, out):
+    """Fill ``out`` (rows, L) with the powers α_λ^r of the albedos ``albedo`` (L,), r = 0 … rows − 1, each
+    row the one before times α (row 0: 1)."""
+    for k in range(albedo.shape[0]):
+        power = 1.0
+        for r in range(out.shape[0]):
+            out[r, k] = power
+            power *= albedo[k]
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -359,11 +372,16 @@ def trace(geometry, dims, eta, medium, hero, hero_p, importance, enter_weight, a
     for k in range(n_wl):
         product[k] = 1.0
         banked[k] = 0.0
-        # α_λ^n and α_λ^m (m: the collisions at the last roulette survival), kept up as n grows: each is
-        # needed at every roulette check and exit, where powers by squaring cost L loops of log₂ n steps
+        # α_λ^n and α_λ^m (m: the collisions at the last roulette survival).  α^n is needed only at the
+        # roulette checks and the path's end: a spectral path, checked every interval-th collision,
+        # multiplies in α^interval at each check and α^(n mod interval) at its end (the medium's table),
+        # where L products at every collision cost 4 % of its time and powers by squaring L loops of
+        # log₂ n steps; a grey path is checked at every collision and keeps α^n up there
         albedo_n[k] = 1.0
         albedo_mark[k] = 1.0
     spectral = (not medium.grey) and n_wl > 1
+    every_collision = 0 if spectral else n_wl  # the wavelengths whose α^n is kept up at every collision
+    per_check = medium.albedo_powers[medium.roulette_interval]  # α^interval
     neediest = 0
     for k in range(n_wl):
         if importance[k] > importance[neediest]:
@@ -405,10 +423,12 @@ def trace(geometry, dims, eta, medium, hero, hero_p, importance, enter_weight, a
             length += flight
             flight = -1.0
             n += 1
-            for k in range(n_wl):
+            for k in range(every_collision):
                 albedo_n[k] *= medium.albedo[k]
             check = (n % medium.roulette_interval == 0) if spectral else True
             if check:
+                for k in range(n_wl - every_collision):
+                    albedo_n[k] *= per_check[k]
                 if spectral and surely_above_threshold(medium.mu_t, medium.log_mu_t, albedo_n, medium.brightest,
                                                        neediest, hero, product, n, length, hero_p, factor,
                                                        importance):
@@ -455,6 +475,9 @@ def trace(geometry, dims, eta, medium, hero, hero_p, importance, enter_weight, a
                     break
     pos[0], pos[1], pos[2] = px, py, pz
     d[0], d[1], d[2] = dx, dy, dz
+    if spectral and n % medium.roulette_interval:  # α^n, short of the collisions since the last check
+        for k in range(n_wl):
+            albedo_n[k] *= medium.albedo_powers[n % medium.roulette_interval, k]
     # a path ended by roulette ends right after a check that formed its ratios
     _finish(medium, hero, hero_p, product, n, length, factor, banked, albedo_n, albedo_mark, status != TERMINATED,
             status == TERMINATED and spectral, ratios, weights, absorbed)

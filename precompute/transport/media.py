@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
 from ._interactions import PHASE_HG, PHASE_TABLE, alias_tables, hg_phase_max
-from ._paths import KernelMedium, padded_width, roulette_interval
+from ._paths import KernelMedium, albedo_power_table, padded_width, roulette_interval
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,8 +98,10 @@ class TransportMedium:
             by_mu[:, :len(mu_t)] = table.T
             table = by_mu
         grey = same_phase and bool(np.all(mu_t == mu_t[0]))
-        return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), roulette_interval(albedo), kind, hg_g,
-                            table,
+        interval = roulette_interval(albedo)
+        powers = np.empty((interval + 1, len(albedo)))
+        albedo_power_table(albedo, powers)
+        return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), interval, powers, kind, hg_g, table,
                             phase_max, alias_threshold, alias, grey)
 
 

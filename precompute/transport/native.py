@@ -38,19 +38,29 @@ from .. import native_slab
 from ..slab_layout import SLAB_RESULTS, SLAB_TALLY_ROWS, SLAB_TASKS
 from ._interactions import PHASE_HG, fresnel_reflectance, hg_phase_max
 from ._kernels import _slab_task, slab_results
-from ._paths import PHASE_WIDTH, KernelMedium, PathArrays, roulette_interval
+from ._paths import (
+    PHASE_WIDTH,
+    ROULETTE_INTERVAL_ABSORBING,
+    ROULETTE_INTERVAL_SCATTERING,
+    KernelMedium,
+    PathArrays,
+    albedo_power_table,
+    roulette_interval,
+)
 from ._rng import seed_stream
 
 _F8P, _I8P = types.CPointer(types.float64), types.CPointer(types.int64)
 _U8P, _I4P = types.CPointer(types.uint64), types.CPointer(types.int32)
 
 # Where each of a task's arrays lies in the caller's work area (native_slab.WORK_DOUBLES doubles),
-# one wavelength: the medium's arrays, the path's, then two rows of two for the medium's unused
-# phase and alias tables (a Henyey–Greenstein medium samples without them).
+# one wavelength: the medium's arrays, the path's, two rows of two for the medium's unused phase and
+# alias tables (a Henyey–Greenstein medium samples without them), then its albedo's powers.
 _DIMS, _HERO_P, _HERO_CDF, _IMPORTANCE, _MU_T, _LOG_MU_T, _ALBEDO, _HG_G = range(8)
 _POS, _D, _WEIGHTS, _BANKED, _ALBEDO_N, _ALBEDO_MARK, _RATIOS, _PRODUCT = 8, 11, 14, 15, 16, 17, 18, 20
 _TABLE_ROW, _THRESHOLD_ROW = 12, 13
-assert _PRODUCT + PHASE_WIDTH <= 2 * _TABLE_ROW and 2 * (_THRESHOLD_ROW + 1) <= native_slab.WORK_DOUBLES
+_POWERS = 2 * (_THRESHOLD_ROW + 1)
+assert _PRODUCT + PHASE_WIDTH <= 2 * _TABLE_ROW
+assert _POWERS + max(ROULETTE_INTERVAL_SCATTERING, ROULETTE_INTERVAL_ABSORBING) + 1 <= native_slab.WORK_DOUBLES
 
 
 def hg_slab_tasks(first_task, tasks, counts_p, seed, thickness, eta, albedo, g, sums_p, events_p, work_p, state_p,
@@ -65,14 +75,18 @@ def hg_slab_tasks(first_task, tasks, counts_p, seed, thickness, eta, albedo, g, 
     events = carray(events_p, (SLAB_TASKS,))
     work = carray(work_p, (native_slab.WORK_DOUBLES,))
     rows = carray(work_p, (native_slab.WORK_DOUBLES // 2, 2))
+    column = carray(work_p, (native_slab.WORK_DOUBLES, 1))
     for slot, value in ((_DIMS, thickness), (_HERO_P, 1.0), (_HERO_CDF, 1.0), (_IMPORTANCE, 1.0), (_MU_T, 1.0),
                         (_LOG_MU_T, 0.0), (_ALBEDO, albedo), (_HG_G, g)):
         work[slot] = value
     for k in range(PHASE_WIDTH):
         work[_PRODUCT + k] = 0.0  # the phase products' padding, which trace() leaves at 0
     albedos, hg_g = work[_ALBEDO:_ALBEDO + 1], work[_HG_G:_HG_G + 1]
+    interval = roulette_interval(albedos)
+    powers = column[_POWERS:_POWERS + interval + 1]
+    albedo_power_table(albedos, powers)
     # one wavelength: grey, its own brightest (as TransportMedium.kernel() makes them)
-    medium = KernelMedium(work[_MU_T:_MU_T + 1], work[_LOG_MU_T:_LOG_MU_T + 1], albedos, 0, roulette_interval(albedos),
+    medium = KernelMedium(work[_MU_T:_MU_T + 1], work[_LOG_MU_T:_LOG_MU_T + 1], albedos, 0, interval, powers,
                           PHASE_HG, hg_g, rows[_TABLE_ROW:_TABLE_ROW + 1], hg_phase_max(hg_g),
                           rows[_THRESHOLD_ROW:_THRESHOLD_ROW + 1], carray(alias_p, (1, 1)), True)
     arrays = PathArrays(carray(state_p, (2,)), work[_POS:_POS + 3], work[_D:_D + 3], work[_WEIGHTS:_WEIGHTS + 1],

@@ -65,8 +65,9 @@ ROULETTE_WINDOW = 0.5
 USAGE_FLOOR = 0.25
 #: Blocks of incidence cells per worker of a distributed run (``simulate_yarn(executor=...)``): a
 #: block's large tallies stay on one worker from round to round, and each round is one task per
-#: block, so that a task runs for seconds against the scheduler's milliseconds (docs/distributed.md).
-BLOCKS_PER_WORKER = 4
+#: block, so that a task runs for tenths of a second to seconds against the scheduler's milliseconds
+#: (docs/distributed.md: 4 a worker left the default bake's tasks at a median of 0.12 s on 2 workers).
+BLOCKS_PER_WORKER = 2
 
 #: The large tallies of a block of incidence cells on a worker (rows: the block's cells), as
 #: ``_YarnRun`` holds them for every cell in a single-process run: ``table``, ``table_sq`` and the

@@ -32,7 +32,8 @@ $(STAMP): requirements.txt scripts/setup_env.py
 	@touch $(STAMP)
 	@echo "environment ready: $(VENV)"
 
-$(KERNEL_STAMP): $(STAMP) $(wildcard precompute/transport/*.py) precompute/grids.py precompute/slab_layout.py
+$(KERNEL_STAMP): $(STAMP) $(wildcard precompute/transport/*.py) precompute/grids.py precompute/slab_layout.py \
+		precompute/native_slab.py
 	$(PY) -m precompute.transport.compile
 	@touch $(KERNEL_STAMP)
 

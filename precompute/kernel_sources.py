@@ -17,9 +17,10 @@ PACKAGE_ROOT = pathlib.Path(__file__).resolve().parent
 
 
 def kernel_sources() -> list[str]:
-    """The transport's source files and the direction grids they inline, relative to the package."""
+    """The transport's source files, the direction grids and the slab's layout that they inline, and the
+    native slab library's calling side (its functions' names and scratch size), relative to the package."""
     transport = sorted(path.relative_to(PACKAGE_ROOT).as_posix() for path in (PACKAGE_ROOT / "transport").glob("*.py"))
-    return transport + ["grids.py", "slab_layout.py"]
+    return transport + ["grids.py", "slab_layout.py", "native_slab.py"]
 
 
 def sources_digest() -> str:

@@ -9,7 +9,7 @@ from precompute.transport import _kernels, _paths, kernel_cache
 
 def test_the_digest_covers_the_sources_that_kernels_inline_from_other_files():
     assert {"transport/_paths.py", "transport/_interactions.py", "transport/_rng.py", "transport/_kernels.py",
-            "grids.py"} <= set(kernel_sources.kernel_sources())
+            "grids.py", "slab_layout.py", "native_slab.py"} <= set(kernel_sources.kernel_sources())
 
 
 def test_a_changed_source_flushes_every_kernel_cache_beside_it():

@@ -20,6 +20,7 @@ from ._checks import integer_at_least, positive_length, refractive_index, seed_v
 from ._threads import numba_threads
 from .media import TransportMedium, henyey_greenstein_medium
 
+
 @dataclass(frozen=True)
 class SlabResult:
     """Reflectance and transmittance of a slab, per wavelength (L,), fractions of the incident flux.

@@ -106,6 +106,8 @@ def simulate_hg_slab_native(library: ctypes.CDLL, albedo: float, g: float, tau: 
     run_tasks(shares[0][0], shares[0][1] - shares[0][0])
     for worker in workers:
         worker.join()
+    if len(statuses) != threads:  # a thread that raised reported no status: its tasks' tallies are missing
+        raise RuntimeError(f"{threads - len(statuses)} of {threads} threads of the native slab library failed")
     results = (ctypes.c_double * len(SLAB_RESULTS))()
     statuses.append(_call(library, RESULTS_FUNCTION, sums, paths, float(index), results))
     if any(statuses):

@@ -233,7 +233,7 @@ def mcml(source: str | None = None, rounds: int = 3) -> None:
               f"{reference['T_total']:.4f}")
     slab_command = [sys.executable, "-m", "precompute", "slab", "--albedo", str(slab["albedo"]), "--g",
                     str(slab["g"]), "--tau", str(slab["tau"]), "--paths", "1000000", "--threads", "1", "--engine"]
-    engines = ("native", "numba") if native_slab.load_library() is not None else ("numba",)
+    engines = ("native", "numba") if native_slab.library_path().is_file() else ("numba",)
     ours = {engine: median_of(lambda engine=engine: process_seconds(slab_command + [engine]), rounds)
             for engine in engines}
     theirs = median_of(lambda: run_slab(executable, 1_000_000, slab["albedo"], slab["g"], slab["tau"], 1.0)["wall_s"],

@@ -32,8 +32,8 @@ $(STAMP): requirements.txt scripts/setup_env.py
 	@touch $(STAMP)
 	@echo "environment ready: $(VENV)"
 
-$(KERNEL_STAMP): $(STAMP) $(wildcard precompute/transport/*.py) precompute/grids.py precompute/slab_layout.py \
-		precompute/native_slab.py
+$(KERNEL_STAMP): $(STAMP) $(wildcard precompute/transport/*.py) precompute/tables/grids.py precompute/slab/layout.py \
+		precompute/slab/native.py
 	$(PY) -m precompute.transport.compile
 	@touch $(KERNEL_STAMP)
 

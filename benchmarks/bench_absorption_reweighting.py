@@ -28,8 +28,8 @@ def total_rho_rgb(transport, resolution: int):
     """ρ summed over the incidence cells of eq. (5) on ``resolution``² and over the exit cells, RGB (3,),
     and its standard error (3,): exact over the paths (each adds to one bin of the axial sum), an
     upper bound over the wavelengths (which share paths)."""
-    from precompute.color import spectral_stderr_to_rgb, spectral_to_rgb
-    from precompute.grids import AngularGrid
+    from precompute.tables.color import spectral_stderr_to_rgb, spectral_to_rgb
+    from precompute.tables.grids import AngularGrid
     from precompute.transport.brdf import source_weights
 
     weights = source_weights(transport, AngularGrid("sphere", resolution).cell_centers()).sum(axis=0)
@@ -46,9 +46,9 @@ def total_rho_rgb(transport, resolution: int):
 
 def main() -> None:
     from precompute.bake import transport_settings
-    from precompute.fit.forward import FIT_INCIDENCE_RESOLUTION
-    from precompute.medium import load_preset_config, medium_from_dict
-    from precompute.optics import medium_optics
+    from clothlight.fit.forward import FIT_INCIDENCE_RESOLUTION
+    from precompute.optics.medium import load_preset_config, medium_from_dict
+    from precompute.optics.coefficients import medium_optics
     from precompute.transport import TransportGrids, YarnGeometry, simulate_yarn, yarn_brdf
     from precompute.transport.absorption import absorption_steps, reweighted_transport
 

@@ -21,7 +21,7 @@ import numpy as np
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from precompute.bake import bake
-from precompute.tables import read_table
+from precompute.tables.exr import read_table
 
 cache_dir = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-bake-"))
 print(f"{numba.config.NUMBA_NUM_THREADS} threads; cache {cache_dir}")

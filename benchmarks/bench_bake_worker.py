@@ -18,7 +18,8 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from clothlight.jobs import BakeJob, BakeRequest
+from clothlight.jobs import BakeJob
+from clothlight.medium_settings import BakeRequest
 from tests.helpers import PREBAKED_TRANSPORT
 
 request = BakeRequest(overrides=(("dye.weight_percent", 2.0),), target_rel_stderr=None, **PREBAKED_TRANSPORT)

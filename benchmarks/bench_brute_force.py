@@ -12,8 +12,8 @@ RMS relative difference over the bins whose reference noise is below 2 % (``rms<
 bins: issue 18's criterion), and the reference's relative noise per bin (median and largest).
 
 The table side reads the bake's spectral ρ at that wavelength exactly as the shader does
-(``precompute.table_layout.interpolate_rho``); the unscattered light is added by
-``precompute.ballistic`` (``ballistic_paths`` or ``unscattered_paths``) when that module exists
+(``precompute.tables.layout.interpolate_rho``); the unscattered light is added by
+``precompute.optics.ballistic`` (``ballistic_paths`` or ``unscattered_paths``) when that module exists
 (``--no-ballistic`` leaves it out).
 A bake folder without ``spectral.npz`` (the shipped example tables keep only the RGB files) is
 re-simulated from its ``summary.json`` (the medium and the transport settings; a setting the current
@@ -154,10 +154,10 @@ def main(argv: list[str]) -> int:
     spectral = args.spectral if args.spectral else spectral_data(args.tables)
     ballistic = None if args.no_ballistic else default_ballistic()
     if ballistic is None:
-        why = "--no-ballistic" if args.no_ballistic else "precompute/ballistic.py does not exist"
+        why = "--no-ballistic" if args.no_ballistic else "precompute/optics/ballistic.py does not exist"
         print(f"ballistic term: none ({why}); the table's ρ is compared alone")
     else:
-        print(f"ballistic term: precompute.ballistic.{ballistic.__name__} added to the table's ρ")
+        print(f"ballistic term: precompute.optics.ballistic.{ballistic.__name__} added to the table's ρ")
     cap = CapLight(args.cap)
     print(f"reference: Mitsuba 3 volpath, {args.bins} bins across the width (4 x 4 pixels each), {args.spp} spp "
           f"per seed, seeds until +-{args.target:.0%} on the median bin or {args.max_seconds:g} s per case, cap "

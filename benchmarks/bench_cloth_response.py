@@ -43,7 +43,7 @@ def main() -> None:
     from clothlight.blender.validation.rig import RigSettings
     from clothlight.blender.validation.run import run_validation
     from clothlight.yarn_tables import yarn_tables_from_bake
-    from precompute import ballistic
+    from precompute.optics import ballistic
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--tables", type=pathlib.Path, default=ROOT / "example_blends" / "tables" / "paper_2008")

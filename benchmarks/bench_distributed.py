@@ -35,7 +35,7 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from precompute import bake as bake_module
-from precompute.medium import DEFAULT_PRESET
+from precompute.optics.medium import DEFAULT_PRESET
 from precompute.transport.cylinder import BLOCKS_PER_WORKER
 
 #: Trivial tasks timed for the scheduler's overhead.

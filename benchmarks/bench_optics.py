@@ -17,9 +17,9 @@ import time
 # Run as a plain script (``python benchmarks/bench_optics.py``): the repository root holds the package.
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from precompute.medium import load_preset, preset_names
-from precompute.mie import size_distribution
-from precompute.optics import medium_optics
+from precompute.optics.medium import load_preset, preset_names
+from precompute.optics.mie import size_distribution
+from precompute.optics.coefficients import medium_optics
 
 
 def best_of(count: int, function) -> float:

@@ -3,7 +3,7 @@
 Bakes the paper's red cotton with the default settings (cached in the user cache), then prints
 
 * per wavelength (450, 550, 620, 650, 700 nm): the share of the incident flux that the transport saw
-  leave the yarn without a collision, against the closed form of precompute/ballistic.py averaged
+  leave the yarn without a collision, against the closed form of precompute/optics/ballistic.py averaged
   over each incidence cell as the transport's source samples it (mean ratio, worst cell), and what
   the unscattered light is worth beside the scattered light;
 * the incidence-grid checks the bake made (``incidence_grid_checks`` of its summary): the lookup's
@@ -22,9 +22,9 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from precompute import ballistic
+from precompute.optics import ballistic
 from precompute.bake import SPECTRAL_FILE, bake, load_spectral
-from precompute.grids import AngularGrid
+from precompute.tables.grids import AngularGrid
 
 result = bake("paper_2008")
 arrays, spectral = load_spectral(result.folder / SPECTRAL_FILE)

@@ -7,7 +7,7 @@ Per-core rates are given per second of wall time and per second of CPU time: the
 does not depend on other programs sharing the machine (the load average is printed).
 Also prints how far eq. (5) at the default grids is from a direct parallel-beam simulation
 for the paper's red cotton, both of the scattered light (the discretisation error of the tables; the
-unscattered light is exact, precompute/ballistic.py, docs/transport.md).
+unscattered light is exact, precompute/optics/ballistic.py, docs/transport.md).
 
     python benchmarks/bench_transport.py [slab] [yarn] [bake] [mcml] [--mcml-source DIR]
 
@@ -41,9 +41,9 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 import numba
 import numpy as np
 
-from precompute import native_slab
-from precompute.medium import DEFAULT_PRESET
-from precompute.optics import load_preset, medium_optics
+from precompute.slab import native as native_slab
+from precompute.optics.medium import DEFAULT_PRESET
+from precompute.optics.coefficients import load_preset, medium_optics
 from precompute.transport import (
     TransportGrids,
     TransportMedium,

@@ -24,7 +24,7 @@ import numpy as np
 
 
 def cached_red_cotton_bake() -> pathlib.Path | None:
-    from precompute.cache import default_cache_dir
+    from precompute.cache.entries import default_cache_dir
 
     root = pathlib.Path(default_cache_dir())
     bakes = [p.parent for p in root.glob("tables/*/summary.json")

@@ -17,7 +17,7 @@ from clothlight.blender.sample_object import build_sample_object
 from clothlight.weave import WeaveParameters
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.bake import bake
-from precompute.medium import DEFAULT_PRESET
+from precompute.optics.medium import DEFAULT_PRESET
 from render_cost import light_and_camera, print_render_cost
 
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-material-"))

@@ -41,8 +41,8 @@ SAMPLES_PER_SECOND = 4000
 def run_traced(mode: str, paths: int, target: float | None, folder: pathlib.Path) -> None:
     """The traced child: warm up, trace, and copy the executable anonymous mappings into ``folder``."""
     sys.path.insert(0, str(REPO))
-    from precompute.medium import DEFAULT_PRESET
-    from precompute.optics import load_preset, medium_optics
+    from precompute.optics.medium import DEFAULT_PRESET
+    from precompute.optics.coefficients import load_preset, medium_optics
     from precompute.transport import TransportGrids, YarnGeometry, simulate_hg_slab, simulate_yarn
 
     if mode == "yarn":

@@ -14,8 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .addon import import_precompute
-from .jobs import BakeRequest
+from .medium_settings import BakeRequest
 from .worker_io import ProgressEvents, run_worker
 
 
@@ -29,7 +28,7 @@ def main(argv=None) -> int:
 
 
 def _bake(args, _cancelled) -> dict:
-    bake_module = import_precompute("bake")
+    from precompute import bake as bake_module
     request = BakeRequest.from_json(args.request)
     result = bake_module.bake(**request.bake_arguments(), threads=args.threads, cache_dir=args.cache_dir,
                               progress=ProgressEvents(), scheduler=args.scheduler)

@@ -1,12 +1,12 @@
 """Medium fits in a separate process, so Blender's interface never waits on the fit (issue 19).
 
-The Yarn Medium panel's Fit runs the fit of ``python -m precompute fit`` (docs/fitting.md): the
-same checks, forward model, optimiser and folder (:mod:`precompute.fit.job`), in the child
-:mod:`clothlight.fit_worker`, driven as the bake is (:class:`clothlight.jobs.ChildJob`: JSON-line
+The Yarn Medium panel's Fit runs the fit of ``python -m clothlight.fit`` (docs/fitting.md): the
+same checks, forward model, optimiser and folder (:mod:`clothlight.fit.run`), in the child
+:mod:`clothlight.fit.worker`, driven as the bake is (:class:`clothlight.jobs.ChildJob`: JSON-line
 progress, ``cancel`` on stdin, exit codes 0/2/130/1).  The fit's forward model renders the cloth
 response with bpy, so inside Blender the child is Blender itself in background mode
 (:func:`clothlight.jobs.child_command`).  A cancelled fit writes nothing: the folder is written
-into a staging folder and swapped in at the end (``precompute.table_folder.replace_folder``).
+into a staging folder and swapped in at the end (``precompute.tables.folder.replace_folder``).
 
 A :class:`FitRequest` says what to fit; :meth:`FitRequest.check` refuses bad input before a child
 starts, with precompute's messages (the parameter named as the request names it).  No Blender
@@ -21,18 +21,10 @@ import json
 import pathlib
 from collections.abc import Iterator
 
-from .addon import import_precompute
-from .jobs import (
-    FIT_DEPENDENCIES,
-    BakeRequest,
-    ChildJob,
-    JobCancelled,
-    JobFailed,
-    missing_dependencies,
-    typed_number,
-)
+from .jobs import FIT_DEPENDENCIES, ChildJob, JobCancelled, JobFailed, missing_dependencies
+from .medium_settings import BakeRequest, typed_number
 
-FIT_WORKER_MODULE = "clothlight.fit_worker"
+FIT_WORKER_MODULE = "clothlight.fit.worker"
 
 #: The parameters a fit may free, as the panel lists them: name, label, unit, fit range (low, high)
 #: and what it sets.  The same as :data:`precompute.fit.parameters.PARAMETERS` (held together by
@@ -82,7 +74,7 @@ def fit_unavailable_reason(missing: list[str] | None = None) -> str | None:
 def request_names() -> Iterator[None]:
     """Re-raise precompute's ParameterError naming a command-line option (``--free``) with the
     request's name for it (``free``); same type, value and allowed values."""
-    ParameterError = import_precompute("errors").ParameterError
+    from precompute.errors import ParameterError
     try:
         yield
     except ParameterError as error:
@@ -94,7 +86,7 @@ def request_names() -> Iterator[None]:
 
 @dataclasses.dataclass(frozen=True)
 class FitRequest:
-    """Everything a fit is made from (docs/fitting.md, ``python -m precompute fit``).
+    """Everything a fit is made from (docs/fitting.md, ``python -m clothlight.fit``).
 
     Attributes
     ----------
@@ -105,7 +97,7 @@ class FitRequest:
     free
         The free parameters, names of :data:`FREE_PARAMETERS` (``--free``).
     medium
-        The starting medium as the bake describes it (:class:`clothlight.jobs.BakeRequest`: a shipped
+        The starting medium as the bake describes it (:class:`clothlight.medium_settings.BakeRequest`: a shipped
         preset and overrides of its values; its grids become the fit's ``[transport]`` table, its
         seed, budget and dye range are not used).
     target_ratios
@@ -158,7 +150,7 @@ class FitRequest:
         return cls(**fields)
 
     def fit_arguments(self) -> dict:
-        """Keyword arguments of :func:`precompute.fit.job.check_fit_inputs` (but ``cache_dir``)."""
+        """Keyword arguments of :func:`clothlight.fit.run.check_fit_inputs` (but ``cache_dir``)."""
         medium = self.medium.bake_arguments()
         return {"measured": self.measured, "preset": medium["preset_or_params"], "free": ",".join(self.free),
                 "out": self.out, "overrides": medium["overrides"], "target_ratios": self.target_ratios or None,
@@ -175,12 +167,12 @@ class FitRequest:
         checks the rest before any work (the measurement's format, the preset's species; exit 2)."""
         import math
 
-        ParameterError = import_precompute("errors").ParameterError
-        parameters = import_precompute("fit.parameters")
-        objective = import_precompute("fit.objective")
-        optimise = import_precompute("fit.optimise")
-        report = import_precompute("fit.report")
-        bounds = import_precompute("bounds")
+        from precompute.errors import ParameterError
+        from precompute.fit import parameters
+        from precompute.fit import objective
+        from precompute.fit import optimise
+        from precompute.fit import report
+        from precompute import bounds
         with request_names():
             if not self.measured or not pathlib.Path(self.measured).is_file():
                 raise ParameterError("--measured", self.measured,
@@ -203,28 +195,6 @@ class FitRequest:
         return self
 
 
-def fitted_overrides(result) -> tuple[tuple[str, float], ...]:
-    """The fitted values of a fit's free parameters (``precompute.fit.FitResult``) as the bake's
-    overrides (:attr:`clothlight.jobs.BakeRequest.overrides`: dotted keys of the preset's TOML, a
-    particle species by its index; the sheen in the ``[fit]`` table, which the bake's tables carry),
-    so that the panel can show and bake the fitted medium."""
-    overrides = []
-    for parameter in result.free:
-        if parameter.is_specular:
-            overrides.append((f"fit.{parameter.path}", float(result.specular[parameter.path])))
-            continue
-        section, _, key = parameter.path.rpartition(".")
-        table = result.config
-        if section.startswith("particles["):
-            species = section[len("particles["):-1]
-            index = next(i for i, t in enumerate(result.config["particles"]) if t.get("name") == species)
-            section, table = f"particles.{index}", result.config["particles"][index]
-        else:
-            table = result.config[section]
-        overrides.append((f"{section}.{key}", float(table[key])))
-    return tuple(overrides)
-
-
 class FitFailed(JobFailed):
     """The child fit stopped with an error; ``message`` is meant for the user, ``log`` for the console."""
 
@@ -239,8 +209,8 @@ class FitOutcome:
 
     ``relative_rms`` is the fitted medium's relative RMS error on the fit views (the plane of
     incidence), ``held_out_rms`` on the held-out views (None without any); ``overrides`` the fitted
-    values as the bake's overrides (:func:`fitted_overrides`); ``figures`` whether the folder has its
-    plots (Blender's Python has no matplotlib)."""
+    values as the bake's overrides (:func:`clothlight.medium_settings.fitted_overrides`); ``figures``
+    whether the folder has its plots (Blender's Python has no matplotlib)."""
 
     folder: pathlib.Path
     preset: pathlib.Path
@@ -310,4 +280,4 @@ class FitJob(ChildJob):
 
 
 __all__ = ["FIT_WORKER_MODULE", "FREE_PARAMETERS", "FitFailed", "FitJob", "FitJobCancelled", "FitOutcome",
-           "FitRequest", "fit_unavailable_reason", "fitted_overrides", "missing_fit_dependencies", "request_names"]
+           "FitRequest", "fit_unavailable_reason", "missing_fit_dependencies", "request_names"]

@@ -6,7 +6,7 @@ in JSON lines: the child writes ``progress``, then ``done``, ``error`` or ``canc
 the parent writes ``cancel`` on the child's stdin.  The child turns ``cancel`` (or its stdin
 closing, when Blender dies) into a KeyboardInterrupt in its main thread: the bake's cache stages
 every entry in a private temporary folder and removes it on the way out
-(:func:`precompute.cache.store`), so a cancelled bake leaves no partial table.  A child that does
+(:func:`precompute.cache.entries.store`), so a cancelled bake leaves no partial table.  A child that does
 not stop within :data:`CANCEL_GRACE_SECONDS` (one transport block still running) is killed; its
 temporary folder is hidden from every lookup and removed by a later bake.
 
@@ -30,10 +30,9 @@ import threading
 import time
 from collections.abc import Callable
 
-from .addon import import_precompute
+from .medium_settings import BakeRequest
 
-#: The ``[transport]`` defaults (standard library only, as the add-on's start needs).
-_TRANSPORT_DEFAULTS = import_precompute("bounds").TRANSPORT_DEFAULTS
+
 #: The folder holding the ``clothlight`` and ``precompute`` packages (the extension's root).
 PACKAGE_ROOT = pathlib.Path(__file__).resolve().parents[1]
 WORKER_MODULE = "clothlight.bake_worker"
@@ -85,106 +84,6 @@ def bake_unavailable_reason(missing: list[str] | None = None) -> str | None:
         return None
     return (f"Bake unavailable: {', '.join(missing)} not installed (this build of the extension bundles no "
             "wheels for this platform). Pre-baked tables of the shipped presets still work")
-
-
-def typed_number(value: float) -> float:
-    """A float as typed: Blender stores float properties in single precision (0.14 → 0.14000000059604645),
-    and a bake's cache key hashes its inputs, so the digits beyond single precision are dropped."""
-    return float(f"{float(value):.6g}")
-
-
-@dataclasses.dataclass(frozen=True)
-class BakeRequest:
-    """Everything a bake is made from: a shipped preset, overrides of its medium, seed, budget, grids.
-
-    Two equal requests bake the same tables (the bake's cache key hashes the same inputs), which is
-    how the add-on recognises tables it shipped or baked before.
-
-    Attributes
-    ----------
-    preset
-        Name of a shipped medium preset (``precompute/presets/<name>.toml``).
-    overrides
-        ``(dotted key, value)`` pairs applied to the preset's TOML, e.g. ``("dye.weight_percent", 2.0)``.
-    seed
-        Seed of the transport's random streams.
-    paths_per_cell, target_rel_stderr
-        The path budget: paths per incidence cell, or the relative standard error of every cell's
-        albedo to reach.  Exactly one is set.
-    n_around, n_along, angular_resolution, incidence_resolution
-        Transport and table grids (``[transport]`` of a preset, see :mod:`precompute.bake`); the
-        defaults are the bake's.  ``incidence_resolution`` is an odd integer or ``AUTO_RESOLUTION``
-        (the bake chooses it by its accuracy checks).
-    dye_series
-        A dye range (low, high), % of fibre weight: the bake simulates once for the range and reads
-        any dye amount in it in seconds (``precompute.bake.bake(dye_series=...)``); None: one
-        simulation per medium.
-    """
-
-    preset: str = "red_cotton"
-    overrides: tuple[tuple[str, float], ...] = ()
-    seed: int = _TRANSPORT_DEFAULTS["seed"]
-    paths_per_cell: int | None = _TRANSPORT_DEFAULTS["paths_per_cell"]
-    target_rel_stderr: float | None = _TRANSPORT_DEFAULTS["target_rel_stderr"]
-    n_around: int = _TRANSPORT_DEFAULTS["n_around"]
-    n_along: int = _TRANSPORT_DEFAULTS["n_along"]
-    angular_resolution: int = _TRANSPORT_DEFAULTS["angular_resolution"]
-    incidence_resolution: int | str = _TRANSPORT_DEFAULTS["incidence_resolution"]
-    dye_series: tuple[float, float] | None = None
-
-    def __post_init__(self):
-        object.__setattr__(self, "overrides", tuple(sorted((str(k), typed_number(v)) for k, v in self.overrides)))
-        if self.dye_series is not None:
-            object.__setattr__(self, "dye_series", tuple(typed_number(v) for v in self.dye_series))
-        if self.target_rel_stderr is not None:
-            object.__setattr__(self, "target_rel_stderr", typed_number(self.target_rel_stderr))
-
-    def to_json(self) -> str:
-        """Canonical JSON: equal requests give equal text."""
-        return json.dumps(dataclasses.asdict(self), sort_keys=True, separators=(",", ":"))
-
-    @classmethod
-    def from_json(cls, text: str) -> "BakeRequest":
-        fields = json.loads(text)
-        fields["overrides"] = tuple(tuple(pair) for pair in fields.get("overrides", ()))
-        if fields.get("dye_series") is not None:
-            fields["dye_series"] = tuple(fields["dye_series"])
-        return cls(**fields)
-
-    def same_but_dye(self, other: "BakeRequest") -> bool:
-        """Whether ``other`` asks for the same bake but another dye amount."""
-
-        def without_dye(request):
-            return dataclasses.replace(request, overrides=tuple(pair for pair in request.overrides
-                                                                if pair[0] != "dye.weight_percent"))
-
-        return without_dye(self) == without_dye(other)
-
-    def bake_arguments(self) -> dict:
-        """Keyword arguments of :func:`precompute.bake.bake`."""
-        grids = {f"transport.{name}": getattr(self, name) for name in import_precompute("bounds").GRID_SETTINGS}
-        return {
-            "preset_or_params": self.preset,
-            "overrides": {**dict(self.overrides), **grids},
-            "seed": self.seed,
-            "paths_per_cell": self.paths_per_cell,
-            "target_rel_stderr": None if self.paths_per_cell is not None else self.target_rel_stderr,
-            "dye_series": self.dye_series,
-        }
-
-
-def preset_request(name: str) -> BakeRequest:
-    """The request of the shipped preset ``name`` untouched: its own [transport] table over the defaults."""
-    config = import_precompute("medium").load_preset_config(name)[0]
-    given = config.get("transport", {})
-    defaults = BakeRequest(preset=name)
-    fields = {key: given.get(key, getattr(defaults, key))
-              for key in ("seed", *import_precompute("bounds").GRID_SETTINGS)}
-    if given.get("paths_per_cell") is not None and "target_rel_stderr" not in given:
-        fields.update(paths_per_cell=int(given["paths_per_cell"]), target_rel_stderr=None)
-    else:
-        fields.update(target_rel_stderr=float(given.get("target_rel_stderr", defaults.target_rel_stderr)))
-    return BakeRequest(preset=name, **fields)
 
 
 class JobFailed(RuntimeError):

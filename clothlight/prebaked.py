@@ -7,7 +7,7 @@ then render magenta.  Apply Material copies the folder, once and whole, into the
 (:func:`user_copy`), named by a digest of its content: an update that ships other tables makes
 another copy and leaves the one saved files use in place.
 
-No Blender here; ``precompute.table_folder`` (and OpenEXR with it) is imported only when a copy is
+No Blender here; ``precompute.tables.folder`` (and OpenEXR with it) is imported only when a copy is
 made.
 """
 
@@ -18,8 +18,8 @@ import json
 import pathlib
 import shutil
 
-from .addon import import_precompute
-from .jobs import PACKAGE_ROOT, BakeRequest
+from .jobs import PACKAGE_ROOT
+from .medium_settings import BakeRequest
 
 #: Tables baked when the extension was built, one folder per shipped preset (scripts/build_extension.py).
 PREBAKED_DIR = PACKAGE_ROOT / "prebaked"
@@ -57,7 +57,7 @@ def user_copy(folder: str | pathlib.Path, cache_dir: str | pathlib.Path) -> path
     The copy is ``<cache_dir>/prebaked/<folder name>-<content digest>``: the same shipped tables always
     map to the same copy, other tables (another version of the extension) to another.  An existing
     copy is reused when its files are byte for byte the shipped ones; otherwise the shipped folder is
-    checked as a whole (``precompute.table_folder.check_yarn_table_folder``, a ``TableError`` naming
+    checked as a whole (``precompute.tables.folder.check_yarn_table_folder``, a ``TableError`` naming
     the shipped file) and written in one step (``replace_folder``: a reader, or a second Blender
     copying at the same time, finds the complete folder or none).
     """
@@ -66,7 +66,7 @@ def user_copy(folder: str | pathlib.Path, cache_dir: str | pathlib.Path) -> path
     copy = pathlib.Path(cache_dir) / COPIES_FOLDER / f"{folder.name}-{content_key(hashes)[:16]}"
     if copy.is_dir() and _file_hashes(copy) == hashes:
         return copy
-    table_folder = import_precompute("table_folder")
+    from precompute.tables import folder as table_folder
     table_folder.check_yarn_table_folder(folder)
 
     def write(staging: pathlib.Path) -> None:

@@ -13,9 +13,8 @@ No Blender, no numpy: the command lines check their arguments with this before i
 
 from __future__ import annotations
 
-from .addon import import_precompute
 
-_bounds = import_precompute("bounds")
+from precompute import bounds as _bounds
 Bound = _bounds.Bound
 
 #: Cycles' seed is a 32-bit integer.

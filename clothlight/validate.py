@@ -23,7 +23,6 @@ try:  # a Ctrl-C before the handler in main() is in place still exits with 130, 
     import pathlib
     import sys
 
-    from .addon import import_precompute
 except KeyboardInterrupt:
     if __name__ != "__main__":
         raise
@@ -64,7 +63,7 @@ def build_parser():
     parser.add_argument("--tables", help="bake folder of the yarn material (python -m precompute bake --out DIR)")
     parser.add_argument("--cloth-tables",
                         help="cloth bake folder of the garment material (python -m clothlight.garment bake --out DIR)")
-    parser.add_argument("--measured", help="measured BRDF CSV (format: clothlight/validation/measured_data.py)")
+    parser.add_argument("--measured", help="measured BRDF CSV (format: precompute/fit/measured_data.py)")
     parser.add_argument("--incidences", type=float, nargs="+", metavar="DEG", help="θi, degrees (default 0 30 45 60)")
     parser.add_argument("--views", type=float, nargs="+", metavar="DEG",
                         help="θv, degrees, negative on the light's side (default -60 … 70 by 10)")
@@ -95,11 +94,11 @@ def check_arguments(args) -> None:
     starts: the output folder, the input files and folders, the angles (the numbers are checked as
     they are parsed).  ParameterError (or MeasurementFormatError) naming the option otherwise."""
     from .validation.framing import ParameterError, check_angles
-    from .validation.measured_data import read_measurement
+    from precompute.fit.measured_data import read_measurement
 
-    outputs = import_precompute("outputs")
+    from precompute import outputs
     outputs.check_writable_folder(args.out, "--out", what="an output folder for the report and renders")
-    distributed = import_precompute("distributed")
+    from precompute import distributed
     if args.scheduler is None:
         args.scheduler = None if (args.blend or args.object) else distributed.default_scheduler()
     else:
@@ -191,15 +190,17 @@ def _sweep(args, interrupt) -> dict:
 
 def main(argv=None) -> int:
     """Run the sweep; the exit code (module docstring)."""
-    return import_precompute("exit_codes").run_cli(lambda: _main(argv))
+    from precompute import exit_codes
+    return exit_codes.run_cli(lambda: _main(argv))
 
 
 def _main(argv) -> int:
+    from precompute import exit_codes
     args = build_parser().parse_args(argv)
     check_arguments(args)
     # Blender prints and swallows an exception raised in its callbacks (Cycles' render engine): a
     # Ctrl-C is held and raised between renders instead, so it always stops the sweep (code 130).
-    with import_precompute("exit_codes").DeferredInterrupt("interrupting after the current render…") as interrupt:
+    with exit_codes.DeferredInterrupt("interrupting after the current render…") as interrupt:
         results = _sweep(args, interrupt)
     if args.json:
         # The file is the results with NaN written as null: standard JSON.

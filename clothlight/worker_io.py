@@ -1,6 +1,6 @@
 """What the add-on's child processes share: JSON-line events on stdout, ``cancel`` on stdin, the exit codes.
 
-The bake (:mod:`clothlight.bake_worker`) and the medium fit (:mod:`clothlight.fit_worker`) run in a
+The bake (:mod:`clothlight.bake_worker`) and the medium fit (:mod:`clothlight.fit.worker`) run in a
 child process of Blender (:mod:`clothlight.jobs`, :mod:`clothlight.fit_job`).  Each writes JSON
 lines on stdout — ``{"event": "progress", "fraction": f}`` (the fit adds a ``stage``), then one of
 ``done``, ``error`` or ``cancelled`` — and stops when its stdin says ``cancel`` or closes (Blender
@@ -34,9 +34,8 @@ import traceback
 import warnings
 from collections.abc import Callable
 
-from .addon import import_precompute
 
-_exit_codes = import_precompute("exit_codes")
+from precompute import exit_codes as _exit_codes
 
 
 def emit(**event) -> None:
@@ -89,7 +88,7 @@ def run_worker(parse: Callable[[], object], work: Callable[[object, threading.Ev
         try:
             # colour-science probes for matplotlib and warns when it is absent: its plots are not used here.
             warnings.filterwarnings("ignore", message=".*Matplotlib.*")
-            InputError = import_precompute("errors").InputError
+            from precompute.errors import InputError
             try:
                 done = work(args, cancelled)
             except InputError as error:

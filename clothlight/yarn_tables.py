@@ -12,7 +12,6 @@ import pathlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from .addon import import_precompute
 
 
 #: The general mode of the yarn material leaves out an unscattered path whose weight, (1 − F)² F^k
@@ -25,12 +24,12 @@ GENERAL_MODE_MIN_WEIGHT = 0.003
 def attenuation_reach(table, floor: float = GENERAL_MODE_MIN_WEIGHT) -> float:
     """The path length ℓ / R from which an attenuation table (``unscattered.exr``'s pixels, (1, M, C)
     or (M, C)), read as the shader reads it (linear between pixel centres, held at the ends:
-    ``precompute.table_layout.interpolate_attenuation``), is below ``floor`` in every channel;
+    ``precompute.tables.layout.interpolate_attenuation``), is below ``floor`` in every channel;
     ``inf`` where its last pixel is not.  A general-mode path longer than this weighs less than
     ``floor`` (its Fresnel factor is at most 1), so the shader leaves it out before its lookup."""
     import numpy as np
 
-    max_length = import_precompute("ballistic").MAX_LENGTH_OVER_RADIUS
+    from precompute.optics.ballistic import MAX_LENGTH_OVER_RADIUS as max_length
     table = np.asarray(table, float).reshape(-1, np.shape(table)[-1])
     above = np.flatnonzero(np.any(table >= floor, axis=-1))
     first_below_for_good = 0 if above.size == 0 else int(above[-1]) + 1
@@ -41,7 +40,7 @@ def attenuation_reach(table, floor: float = GENERAL_MODE_MIN_WEIGHT) -> float:
 
 def shortest_unscattered_path(host_index: float) -> float:
     """The shortest path ℓ / R of light crossing a yarn of index ``host_index`` unscattered toward
-    any view (``precompute.ballistic.unscattered_paths``): the chord of the first refracted path,
+    any view (``precompute.optics.ballistic.unscattered_paths``): the chord of the first refracted path,
     2 |u_z| / (1 − ω_x² / n²) for the view ω inside the yarn refracted to u, is least for a view at
     the horizon across the axis, 2 √(1 − 1/n²) (1.53 R at n = 1.557)."""
     return 2.0 * math.sqrt(max(0.0, 1.0 - 1.0 / host_index**2))
@@ -68,7 +67,7 @@ class YarnTableFiles:
         ``N_i`` (sphere grid) and ``N_o`` (hemisphere grid).
     lobe_shape
         Roughness of the general-lighting mode's shaped lobes, keyed as
-        ``precompute.closure_fit.LobeShape`` (the bake's ``summary.json``).
+        ``precompute.tables.closure_fit.LobeShape`` (the bake's ``summary.json``).
     host_index
         Refractive index of the yarn host, for the specular Fresnel term and the refraction of
         the unscattered light.
@@ -109,14 +108,14 @@ def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:
     """The table files of a bake folder (``python -m precompute bake --out``, a cache entry, pre-baked
     tables), checked as a whole first.
 
-    Every file of the folder is read and validated (``precompute.table_folder.check_yarn_table_folder``:
+    Every file of the folder is read and validated (``precompute.tables.folder.check_yarn_table_folder``:
     schema, kind, size against the summary's resolutions, content hash, finite values ≥ 0, one bake):
-    ``precompute.tables.TableError`` (a ValueError) names the file and the reason, so that a damaged,
-    incomplete or mixed folder is refused rather than rendered.  ``precompute.table_folder`` (and with
+    ``precompute.tables.exr.TableError`` (a ValueError) names the file and the reason, so that a damaged,
+    incomplete or mixed folder is refused rather than rendered.  ``precompute.tables.folder`` (and with
     it OpenEXR) is imported here, when tables are used, not when the add-on is enabled.  The specular
     term is the summary's, or the paper's defaults for a folder baked before bakes recorded it.
     """
-    table_folder = import_precompute("table_folder")
+    from precompute.tables import folder as table_folder
     checked = table_folder.check_yarn_table_folder(pathlib.Path(folder).resolve())
     files, summary = table_folder.YARN_TABLE_FILES, checked.summary
     return YarnTableFiles(

@@ -1,5 +1,5 @@
 // ClothLight shared OSL math: direction grids of the baked tables and the cloth specular term.
-// Mirrors precompute/grids.py exactly (tests hold the two together).
+// Mirrors precompute/tables/grids.py exactly (tests hold the two together).
 // Local frame of a yarn surface point: x = yarn axis (tangent), y = n x t, z = outward normal.
 
 #ifndef CLOTHLIGHT_H
@@ -243,18 +243,18 @@ color cl_yarn_rho(string file, int incidence_resolution, int exit_resolution, ve
     return mix(mix(c00, c10, ax), mix(c01, c11, ax), ay);
 }
 
-// ---- Unscattered light through the yarn (precompute/ballistic.py) ---------------------------
+// ---- Unscattered light through the yarn (precompute/optics/ballistic.py) ---------------------------
 // Light that crosses the yarn without scattering, in closed form: refracted in, attenuated along
 // equal chords, reflected inside with the same Fresnel F at every hit, refracted out.  Path k
 // (k internal reflections) carries (1 - F)^2 F^k A((k + 1) chord), A from the attenuation table
 // (one row of `samples` pixels over l/R in [0, CL_UNSCATTERED_MAX_LENGTH]).  Each path's delta
 // in wi is spread over a normalised von Mises-Fisher cone of angular spread `spread` (radians).
-// precompute.table_layout.interpolate_unscattered_rho is the NumPy twin.
+// precompute.tables.layout.interpolate_unscattered_rho is the NumPy twin.
 
 #define CL_UNSCATTERED_ORDERS 4
 #define CL_UNSCATTERED_MAX_LENGTH 8.0
 #define CL_UNSCATTERED_MIN_FACTOR 0.003
-// The sun mode's cone is zero where kappa (1 - cos) exceeds this (precompute.ballistic.CONE_CUTOFF):
+// The sun mode's cone is zero where kappa (1 - cos) exceeds this (precompute.optics.ballistic.CONE_CUTOFF):
 // the path's attenuation lookup is skipped there, most of the sun mode's cost for it.
 #define CL_CONE_CUTOFF 14.0
 
@@ -265,7 +265,7 @@ color cl_unscattered_attenuation(string file, int samples, float length_over_rad
 }
 
 // The unscattered paths that leave toward wo (yarn frame): direction toward the light, (1 - F)^2 F^k
-// and length / R of path k, followed backwards hit by hit (precompute.ballistic.unscattered_paths).
+// and length / R of path k, followed backwards hit by hit (precompute.optics.ballistic.unscattered_paths).
 void cl_unscattered_paths(vector wo, float eta, output vector toward_light[CL_UNSCATTERED_ORDERS],
                           output float fresnel_factor[CL_UNSCATTERED_ORDERS],
                           output float length_over_radius[CL_UNSCATTERED_ORDERS])
@@ -361,14 +361,14 @@ closure color cl_unscattered_closures(string file, int samples, float reach, flo
     return lobes;
 }
 
-// Number of closure-mixture lobes: the tiles of lobes.exr (precompute.closure_fit.LOBES).
+// Number of closure-mixture lobes: the tiles of lobes.exr (precompute.tables.closure_fit.LOBES).
 #define CL_LOBE_COUNT 5
 
 // The general-lighting closure mixture of a baked rho (frame x, z; V the world view): five Cycles
-// closures in the order of precompute.closure_fit.LOBES, with the weights of lobes.exr at the view
+// closures in the order of precompute.tables.closure_fit.LOBES, with the weights of lobes.exr at the view
 // (looked up by the material: cloth_yarn_exit.osl).  A lobe of zero weight adds no closure: each
 // costs Cycles an evaluation per light sample, and the fit leaves out the minor ones
-// (precompute.closure_fit.MIN_LOBE_SHARE).
+// (precompute.tables.closure_fit.MIN_LOBE_SHARE).
 closure color cl_closure_mixture(color weight[CL_LOBE_COUNT], vector V, vector x, vector z,
                                  float reflection_r1, float reflection_r2, float transmission_r1,
                                  float transmission_r2, float retroreflection_alpha)

@@ -10,36 +10,46 @@ from __future__ import annotations
 try:  # a Ctrl-C before the handler below is in place still exits with 130, without a traceback
     import sys
 
-    from .exit_codes import INTERRUPTED, run_cli
+    from precompute.exit_codes import INTERRUPTED, run_cli
 except KeyboardInterrupt:
     if __name__ != "__main__":
         raise
     print("interrupted", file=__import__("sys").stderr)
     raise SystemExit(130) from None
 
-# Each module in precompute/cli defines add_parser(subparsers), whose parser sets
-# ``func(args) -> int``.  Listed by name so a missing optional command fails loudly.
-COMMAND_MODULES = ("optics", "slab", "bake", "plot", "fit")
+#: The commands; each module of precompute/cli defines add_parser(subparsers), whose parser sets
+#: ``func(args) -> int``.  The medium fit renders with Blender, so its command is the add-on's:
+#: ``python -m clothlight.fit``.
+COMMANDS = ("optics", "slab", "bake", "plot")
+
+
+def _command_module(name: str):
+    """The module of command ``name``, imported when asked for: start-up time (the slab command
+    imports neither numba nor NumPy, and a bake need not import the plots)."""
+    if name == "optics":
+        from precompute.cli import optics as module
+    elif name == "slab":
+        from precompute.cli import slab as module
+    elif name == "bake":
+        from precompute.cli import bake as module
+    elif name == "plot":
+        from precompute.cli import plot as module
+    else:
+        raise ValueError(f"no command {name!r}")
+    return module
 
 
 def build_parser(argv: list[str] | None = None):
-    """The parser; with ``argv`` naming a command, only that command's module is imported (a slab
-    need not import the bake's colour science), else all of them (the help lists every command)."""
+    """The parser; with ``argv`` naming a command, only that command's module is imported, else all
+    of them (the help lists every command)."""
     import argparse
-    import importlib
 
     parser = argparse.ArgumentParser(prog="python -m precompute", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     subparsers = parser.add_subparsers(dest="command", required=True)
     requested = next((arg for arg in argv or () if not arg.startswith("-")), None)
-    for name in (requested,) if requested in COMMAND_MODULES else COMMAND_MODULES:
-        try:
-            module = importlib.import_module(f"precompute.cli.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name != f"precompute.cli.{name}":
-                raise
-            continue
-        module.add_parser(subparsers)
+    for name in (requested,) if requested in COMMANDS else COMMANDS:
+        _command_module(name).add_parser(subparsers)
     return parser
 
 

@@ -1,18 +1,18 @@
 """Bake a yarn: medium optics → Monte-Carlo transport → yarn BRDF → RGB tables, cached.
 
 :func:`bake` turns a preset (a shipped name, a TOML path, its parsed content
-or :class:`~precompute.medium.MediumParameters`) plus ``key=value`` overrides
+or :class:`~precompute.optics.medium.MediumParameters`) plus ``key=value`` overrides
 into the files the shaders read (docs/table-spec.md) and reports the paper's
 Table 1 ratios B/R and G/R at normal incidence and view.
 
-It runs in two cached stages (:mod:`precompute.cache`):
+It runs in two cached stages (:mod:`precompute.cache.entries`):
 
 ``spectral``
     the simulation: optics (paper §3.3), transport and the yarn BRDF by eq. (5)
     (§5.3), kept spectrally in ``spectral.npz``.  Keyed by the medium, the
     ``[transport]`` settings and a digest of the physics code.
 ``tables``
-    the colour conversion (:mod:`precompute.color`, ``[bake]`` settings) and
+    the colour conversion (:mod:`precompute.tables.color`, ``[bake]`` settings) and
     the OpenEXR tables.  Keyed by the spectral key, the ``[bake]`` settings,
     the table schema and a digest of this stage's code.
 
@@ -32,17 +32,17 @@ Preset TOML tables owned here (defaults merged when absent)::
     seed = 0
 
     [bake]
-    illuminant = "D65"         # colour-science illuminant name, see precompute/color.py
+    illuminant = "D65"         # colour-science illuminant name, see precompute/tables/color.py
     observer = "CIE 1931 2 Degree Standard Observer"
 
-Read here too, written by ``python -m precompute fit`` (:data:`precompute.fit.parameters.FIT_TABLE`)::
+Read here too, written by ``python -m clothlight.fit`` (:data:`precompute.optics.cook_torrance.FIT_TABLE`)::
 
     [fit]
     specular_weight = 1.0      # the yarn shader's SpecularWeight (Cook–Torrance weight)
     specular_slope = 0.8       # its Slope: the Beckmann rms slope m (the paper's §6 value)
 
 The bake does not simulate the specular term (the shader computes it); it records it — the
-``[fit]`` values, or :data:`precompute.cook_torrance.DEFAULT_WEIGHT` and ``DEFAULT_SLOPE`` stated as
+``[fit]`` values, or :data:`precompute.optics.cook_torrance.DEFAULT_WEIGHT` and ``DEFAULT_SLOPE`` stated as
 defaults — in the tables' summary and headers as ``specular`` (docs/table-spec.md), and the
 materials set the shader from it.  It is part of the tables' key, not of the spectral one: a fitted
 preset reuses the simulation of its medium.
@@ -64,11 +64,12 @@ from collections.abc import Callable, Mapping, Sequence
 import numba
 import numpy as np
 
-from . import __version__, ballistic, bounds
-from .bounds import Bound
-from .cache import canonical_json, cache_key, default_cache_dir, lookup, store
-from .closure_fit import LOBES, LobeShape, fit_closure_weights
-from .color import (
+from precompute import __version__, bounds
+from precompute.optics import ballistic
+from precompute.bounds import Bound
+from precompute.cache.entries import canonical_json, cache_key, default_cache_dir, lookup, store
+from precompute.tables.closure_fit import LOBES, LobeShape, fit_closure_weights
+from precompute.tables.color import (
     DEFAULT_ILLUMINANT,
     DEFAULT_OBSERVER,
     RGB_SPACE,
@@ -79,21 +80,16 @@ from .color import (
     spectral_weights,
     white_balance_factors,
 )
-from .distributed import LOCAL, check_scheduler, open_executor
-from .errors import ParameterError
-from .fit.parameters import FIT_TABLE, specular_from_config
-from .grids import AngularGrid
-from .medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
-from .optics import medium_optics, planned_phase_grid
-from .outputs import check_writable_folder
-from .sources import stage_digest
-from .table_layout import (
-    brdf_atlas,
-    interpolate_attenuation,
-    interpolate_rho,
-    lobe_atlas,
-)
-from .table_folder import (
+from precompute.distributed import LOCAL, check_scheduler, open_executor
+from precompute.errors import ParameterError
+from precompute.optics.cook_torrance import FIT_TABLE, specular_from_config
+from precompute.tables.grids import AngularGrid
+from precompute.optics.medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
+from precompute.optics.coefficients import medium_optics, planned_phase_grid
+from precompute.outputs import check_writable_folder
+from precompute.cache.sources import stage_digest
+from precompute.tables.layout import brdf_atlas, interpolate_attenuation, interpolate_rho, lobe_atlas
+from precompute.tables.folder import (
     FILE_HASHES_KEY,
     SPECULAR_FROM_PRESET,
     SPECULAR_KEY,
@@ -105,20 +101,20 @@ from .table_folder import (
     file_hashes,
     replace_folder,
 )
-from .tables import SCHEMA, write_table
-from .transport import TransportGrids, YarnGeometry, simulate_yarn
-from .transport.absorption import (
+from precompute.tables.exr import SCHEMA, write_table
+from precompute.transport import TransportGrids, YarnGeometry, simulate_yarn
+from precompute.transport.absorption import (
     absorption_steps,
     albedo_relative_stderr,
     interpolate_absorption,
     step_transport,
 )
-from .transport.brdf import INCIDENCE_RESOLUTIONS, YarnBRDF, yarn_brdf, yarn_brdf_to_tolerance
-from .transport.cylinder import counted_wavelengths
+from precompute.transport.brdf import INCIDENCE_RESOLUTIONS, YarnBRDF, yarn_brdf, yarn_brdf_to_tolerance
+from precompute.transport.cylinder import counted_wavelengths
 
 TRANSPORT_DEFAULTS = bounds.TRANSPORT_DEFAULTS
 BAKE_DEFAULTS = {"illuminant": DEFAULT_ILLUMINANT, "observer": DEFAULT_OBSERVER}
-#: The ``[fit]`` keys and their defaults (the shader's: precompute.cook_torrance), as the fit writes them.
+#: The ``[fit]`` keys and their defaults (the shader's: precompute.optics.cook_torrance), as the fit writes them.
 FIT_DEFAULTS = specular_from_config({})
 #: What the bake accepts of them (the shader's Cook–Torrance term is defined for any weight ≥ 0 and slope > 0).
 SPECULAR_BOUNDS = {"specular_weight": Bound(f"{FIT_TABLE}.specular_weight", 0.0, float("inf"), high_open=True),
@@ -129,20 +125,20 @@ SPECTRAL_FORMAT = "clothlight-spectral/2"
 #: Incidence samples per side of the sphere square that the closure fit uses in all (cells ×
 #: samples per cell), whatever N_i is.
 CLOSURE_FIT_SAMPLES_PER_SIDE = 36
-#: Code the result of each stage depends on, digested into its key (:mod:`precompute.sources`): the
+#: Code the result of each stage depends on, digested into its key (:mod:`precompute.cache.sources`): the
 #: modules the stage runs and every project module they import, transitively.  The spectral stage
 #: runs the optics, the transport (with its absorption reweighting, for dye series) and
 #: :func:`_simulate`, :func:`_simulate_series` and :func:`_reweighted_spectral` of this file, without
 #: the colour and fit this file imports (tests/test_sources.py checks that what those call comes
 #: from the former).
 PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[1]
-SPECTRAL_SOURCES = {"entries": ("precompute.medium", "precompute.optics", "precompute.transport",
+SPECTRAL_SOURCES = {"entries": ("precompute.optics.medium", "precompute.optics.coefficients", "precompute.transport",
                                 "precompute.transport.absorption"),
                     "files": ("precompute/bake.py",)}
 TABLE_SOURCES = {"entries": ("precompute.bake",)}
-#: The table files of a bake folder, written in this order (summary.json last; precompute/table_folder.py).
+#: The table files of a bake folder, written in this order (summary.json last; precompute/tables/folder.py).
 TABLE_FILES = YARN_TABLE_FILES
-#: The spectral stage's file (named here, in the stage's code; precompute.table_folder checks it by this name).
+#: The spectral stage's file (named here, in the stage's code; precompute.tables.folder checks it by this name).
 SPECTRAL_FILE = "spectral.npz"
 #: A dye series' file and format (:func:`bake` with ``dye_series``): eq. (5)'s ρ at the absorption steps.
 SERIES_FILE = "series.npz"
@@ -277,7 +273,7 @@ def _settings(config: dict, table: str, defaults: dict) -> dict:
 def specular_settings(config: Mapping) -> dict:
     """The specular record of a preset's content (``specular`` of the summary, docs/table-spec.md):
     its ``[fit]`` table's ``specular_weight`` and ``specular_slope``, checked, a key it leaves out at
-    the shader's default; :func:`precompute.table_folder.default_specular` when it has no ``[fit]``."""
+    the shader's default; :func:`precompute.tables.folder.default_specular` when it has no ``[fit]``."""
     given = _settings(dict(config), FIT_TABLE, FIT_DEFAULTS)
     default = default_specular()
     table = config.get(FIT_TABLE) or {}
@@ -802,7 +798,7 @@ def bake(
     ----------
     preset_or_params
         A shipped preset's name, a preset TOML path, a preset's parsed TOML
-        content, or :class:`~precompute.medium.MediumParameters` (then only
+        content, or :class:`~precompute.optics.medium.MediumParameters` (then only
         ``transport.*`` and ``bake.*`` overrides apply).
     overrides
         ``"key=value"`` strings (values are TOML literals) or a mapping of
@@ -814,7 +810,7 @@ def bake(
         CPU threads of the transport (default: all); with ``scheduler="local"`` its worker processes.
         The result does not depend on it.
     cache_dir
-        Cache folder (default :func:`precompute.cache.default_cache_dir`).
+        Cache folder (default :func:`precompute.cache.entries.default_cache_dir`).
     progress
         Called with the completed fraction in [0, 1].
     dye_series
@@ -895,10 +891,10 @@ def _transport_executor(scheduler: str | None, threads: int | None):
 def export_bake(result: BakeResult, out_dir: str | pathlib.Path) -> dict:
     """Copy a bake's files into the folder ``out_dir`` as a whole; the summary with the new paths.
 
-    ``out_dir`` must be new, empty or an earlier bake's folder (:func:`precompute.table_folder.
+    ``out_dir`` must be new, empty or an earlier bake's folder (:func:`precompute.tables.folder.
     check_output_folder`, ParameterError otherwise).  The copy is checked
-    (:func:`~precompute.table_folder.check_yarn_table_folder`) and then swapped in for the previous
-    folder in one step (:func:`~precompute.table_folder.replace_folder`): a reader, or a bake killed at
+    (:func:`~precompute.tables.folder.check_yarn_table_folder`) and then swapped in for the previous
+    folder in one step (:func:`~precompute.tables.folder.replace_folder`): a reader, or a bake killed at
     any moment, finds the complete previous folder or the complete new one, never a mixture.
     """
 

@@ -1,6 +1,6 @@
 """The allowed range of every numeric input of the yarn bake, as data: one definition per parameter.
 
-The Python API (:mod:`precompute.medium`, :mod:`precompute.bake`), the command line (``python -m
+The Python API (:mod:`precompute.optics.medium`, :mod:`precompute.bake`), the command line (``python -m
 precompute``: each option parses with :meth:`Bound.argument`, which also takes the ``2e4`` notation
 its help prints) and the add-on's panel (``clothlight/blender/properties.py``: ``min``/``max`` from
 :meth:`Bound.limits`) all read these, so they refuse the same values with the same message: the
@@ -24,7 +24,7 @@ import os
 from decimal import Decimal, InvalidOperation
 from types import MappingProxyType
 
-from .errors import ParameterError
+from precompute.errors import ParameterError
 
 #: Share of the machine's physical memory a bake or a render may plan to use.
 MEMORY_FRACTION = 0.5
@@ -157,12 +157,12 @@ ANGULAR_RESOLUTION = Bound("transport.angular_resolution", 2, 64, integer=True)
 #: N_i of the tables' incidence grid (or "auto"): odd, up to 63 (a table's atlas side N_i · N_o).
 INCIDENCE_RESOLUTION = Bound("transport.incidence_resolution", 3, 63, integer=True, odd=True)
 #: The grid settings of ``[transport]``, by their key: what a bake request carries besides its path
-#: budget and seed (:class:`clothlight.jobs.BakeRequest`), and what sizes the transport's tallies.
+#: budget and seed (:class:`clothlight.medium_settings.BakeRequest`), and what sizes the transport's tallies.
 GRID_SETTINGS = ("n_around", "n_along", "angular_resolution", "incidence_resolution")
 SEED = Bound("transport.seed", 0, 2**63 - 1, integer=True)
 #: The ``[transport]`` defaults, the one place for them: the bake merges a preset's table over them,
 #: the transport's grids (:class:`precompute.transport.TransportGrids`) and the add-on's bake request
-#: (:class:`clothlight.jobs.BakeRequest`) take theirs from here.  32 × 3 cells around and along: a
+#: (:class:`clothlight.medium_settings.BakeRequest`) take theirs from here.  32 × 3 cells around and along: a
 #: uniformly lit yarn reads only the sum along the axis (docs/transport.md), and an odd count lets the
 #: transport use the yarn's mirror symmetry across its cross-section too, tracing a quarter of the
 #: incidence cells rather than a half (:mod:`precompute.transport.symmetry`); 12 × 12 angular cells as

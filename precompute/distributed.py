@@ -19,7 +19,7 @@ determinism"), so N workers give the single-process result bit for bit.
 A task function is a module-level function of the project, pickled by reference: every worker
 imports it from its own checkout.  So that a worker with other code cannot change a result,
 :func:`open_executor` compares the digest of the job's source files
-(:func:`precompute.sources.stage_digest`, what the cache keys hold) on every worker with this
+(:func:`precompute.cache.sources.stage_digest`, what the cache keys hold) on every worker with this
 process's before any work (:class:`~precompute.errors.WorkerCodeMismatch`), and every task checks
 it again on its worker, once per process, for workers that join later.  A worker process runs one
 task at a time (ClothLight's numba kernels and bpy are not for concurrent calls), with the worker's
@@ -31,7 +31,7 @@ a scheduler that does not answer within ``connect_timeout_s`` or is lost during 
 :class:`~precompute.errors.SchedulerUnreachable` naming its address; an exception in a task, or a
 KeyboardInterrupt (Ctrl-C) or ``cancel()`` while waiting, cancels every future of the map before it
 propagates, so the cluster keeps nothing of the job.  Jobs write their results only after the
-map has returned (the bake: into a cache entry renamed into place at the end, precompute/cache.py).
+map has returned (the bake: into a cache entry renamed into place at the end, precompute/cache/entries.py).
 """
 
 from __future__ import annotations
@@ -49,8 +49,8 @@ import sys
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 
-from .errors import ClusterError, ParameterError, SchedulerUnreachable, WorkerCodeMismatch
-from .sources import stage_digest
+from precompute.errors import ClusterError, ParameterError, SchedulerUnreachable, WorkerCodeMismatch
+from precompute.cache.sources import stage_digest
 
 #: ``--scheduler`` values besides an address.
 LOCAL = "local"
@@ -299,7 +299,7 @@ def open_executor(scheduler: str, *, code: dict, workers: int | None = None,
                   connect_timeout_s: float | None = None) -> Iterator[ClusterExecutor]:
     """A :class:`ClusterExecutor` on ``scheduler`` (``"local"`` or an address), checked, for a ``with``.
 
-    ``code``: the job's sources as :func:`precompute.sources.stage_digest` takes them (``entries``,
+    ``code``: the job's sources as :func:`precompute.cache.sources.stage_digest` takes them (``entries``,
     optionally ``files``); every worker must have the same (WorkerCodeMismatch otherwise, before
     any work).  ``workers``: the local cluster's worker processes (default: this machine's cores);
     only with ``"local"``.  An address that does not answer within ``connect_timeout_s`` (default

@@ -6,8 +6,8 @@ command line maps it to exit code 2 (:mod:`precompute.exit_codes`).  Its kinds:
 - :class:`ParameterError`: a parameter outside its allowed range or malformed; the message names
   the parameter, the value it got and the range it allows (the ranges of numeric inputs are data:
   :mod:`precompute.bounds`).  ``clothlight.weave.WeaveParameterError`` is one.
-- :class:`precompute.tables.TableError`: a file that is not a valid ClothLight table, named.
-- ``clothlight.validation.measured_data.MeasurementFormatError``: a measurement file breaking
+- :class:`precompute.tables.exr.TableError`: a file that is not a valid ClothLight table, named.
+- ``precompute.fit.measured_data.MeasurementFormatError``: a measurement file breaking
   its format, the file and the row named.
 - :class:`ClusterError`: a dask.distributed cluster a job was pointed at cannot run it
   (:mod:`precompute.distributed`): :class:`SchedulerUnreachable` (the address named) or
@@ -62,7 +62,7 @@ class WorkerCodeMismatch(ClusterError):
     """A worker or the scheduler (``process``: ``"worker tcp://…"`` or ``"the scheduler"``; the
     scheduler unpickles the tasks, so it imports their code too) runs other code than this process:
     another version, or none of the project.  The digests of the job's source files
-    (:func:`precompute.sources.stage_digest`) differ, or it cannot import them."""
+    (:func:`precompute.cache.sources.stage_digest`) differ, or it cannot import them."""
 
     def __init__(self, address: str, process: str, detail: str):
         self.address = address

@@ -27,7 +27,7 @@ import threading
 import traceback
 from collections.abc import Callable
 
-from .errors import InputError
+from precompute.errors import InputError
 
 OK = 0
 INTERNAL_ERROR = 1

@@ -2,7 +2,7 @@
 a folder it could not write into, instead of failing after minutes of work (issue 22).
 
 Standard library only.  Bake folders written as a whole have their own, stricter check
-(:func:`precompute.table_folder.check_output_folder`).  :func:`json_ready` makes results standard JSON.
+(:func:`precompute.tables.folder.check_output_folder`).  :func:`json_ready` makes results standard JSON.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numbers
 import os
 import pathlib
 
-from .errors import ParameterError
+from precompute.errors import ParameterError
 
 
 def existing_place(path: pathlib.Path) -> pathlib.Path:

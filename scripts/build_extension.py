@@ -46,7 +46,8 @@ REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(REPO_ROOT) not in sys.path:  # a script in scripts/: make the repository's packages importable
     sys.path.insert(0, str(REPO_ROOT))
 
-from clothlight.jobs import BUNDLED_DEPENDENCIES, BakeCancelled, BakeFailed, BakeJob, preset_request  # noqa: E402
+from clothlight.jobs import BUNDLED_DEPENDENCIES, BakeCancelled, BakeFailed, BakeJob  # noqa: E402
+from clothlight.medium_settings import preset_request  # noqa: E402
 
 #: pip's platform tags for each Blender platform: Blender 5.0 needs glibc 2.28 on Linux and
 #: runs on macOS 11.2+; scipy's and numba's macOS wheels need macOS 12, which is what a bake
@@ -157,9 +158,9 @@ def prebake(presets: list[str], stage: pathlib.Path, cache_dir: pathlib.Path | N
             transport: dict | None = None) -> None:
     """Bake each preset's tables (or find them in the cache) into ``stage/prebaked/<preset>``: the
     untouched preset's bake, or with ``transport`` settings replacing its own (tests use tiny ones)."""
-    from clothlight.addon import import_precompute
+    from precompute.cache import entries as cache
 
-    cache_dir = cache_dir or import_precompute("cache").default_cache_dir()
+    cache_dir = cache_dir or cache.default_cache_dir()
     for name in presets:
         request = dataclasses.replace(preset_request(name), **(transport or {}))
         started = time.perf_counter()
@@ -260,9 +261,9 @@ def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = (
 
 
 def main(argv=None) -> None:
-    from clothlight.addon import import_precompute
+    from precompute.optics import medium
 
-    presets = import_precompute("medium").preset_names()
+    presets = medium.preset_names()
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--output-dir", type=pathlib.Path, default=REPO_ROOT / "dist")
     parser.add_argument("--platforms", nargs="+", choices=[*PLATFORM_TAGS, "all"], default=["linux-x64"],

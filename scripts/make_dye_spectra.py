@@ -1,7 +1,7 @@
 """Write precompute/data/congo_red.csv and precompute/data/evans_blue.csv from PhotochemCAD spectra.
 
 Measured absorption spectra of two direct (cellulose) dyes, converted to the
-napierian mass absorption coefficient the dye model uses (precompute/dye.py):
+napierian mass absorption coefficient the dye model uses (precompute/optics/dye.py):
 
 * C.I. Direct Red 28 (Congo red), PhotochemCAD compound J17;
 * C.I. Direct Blue 53 (Evans blue), PhotochemCAD compound J19.

@@ -43,7 +43,8 @@ from mathutils import Vector  # noqa: E402
 from clothlight.blender.garment.bake import bake_cloth  # noqa: E402
 from clothlight.blender.garment.drape import draped_cloth  # noqa: E402
 from clothlight.blender.garment.material import apply_garment_material, cloth_tables_from_bake  # noqa: E402
-from clothlight.jobs import BakeJob, preset_request  # noqa: E402
+from clothlight.jobs import BakeJob  # noqa: E402
+from clothlight.medium_settings import preset_request  # noqa: E402
 from clothlight.blender.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
 from clothlight.blender.render_setup import use_cycles_osl_on_cpu  # noqa: E402
 from clothlight.blender.sample_object import build_sample_object  # noqa: E402
@@ -63,9 +64,9 @@ TWILL_WEAVE = WeaveParameters(interlacing="twill_2_2", warp_count=16, weft_count
 
 def example_tables(out_dir: pathlib.Path) -> pathlib.Path:
     """The red-cotton tables copied next to the blends (baked, or found in the bake cache)."""
-    from clothlight.addon import import_precompute
+    from precompute.cache import entries as cache
 
-    job = BakeJob(preset_request(PRESET), cache_dir=import_precompute("cache").default_cache_dir())
+    job = BakeJob(preset_request(PRESET), cache_dir=cache.default_cache_dir())
     outcome = job.wait(on_progress=lambda f: print(f"\rbaking {PRESET}: {f:.0%}", end="", file=sys.stderr))
     print(file=sys.stderr)
     folder = out_dir / "tables" / PRESET

@@ -19,7 +19,7 @@ factor (1 − cos θi cos θv) stands in for fibres masking the surface reflecti
 removes the white specular at normal incidence and view, where Table 1 leaves it no room.
 
 Rows: θi = 0, 30, 45, 60° and θv = −60 … 70° in 10° steps, light at φi = 180°, so φo = 180° on
-the light's side and 0° on the mirror side (clothlight/validation/measured_data.py).
+the light's side and 0° on the mirror side (precompute/fit/measured_data.py).
 
     python scripts/make_synthetic_measurement.py
 """

@@ -20,10 +20,10 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 def main() -> int:
     from precompute.fit.baseline import baseline_brdf, fit_baseline
-    from precompute.fit.forward import build_forward_model
+    from clothlight.fit.forward import build_forward_model
     from precompute.fit.objective import Objective, load_measurement, split_views
-    from precompute.fit.parameters import specular_from_config
-    from precompute.medium import DEFAULT_PRESET, load_preset_config
+    from precompute.optics.cook_torrance import specular_from_config
+    from precompute.optics.medium import DEFAULT_PRESET, load_preset_config
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--measured", type=pathlib.Path, required=True, help="a measured-data CSV")

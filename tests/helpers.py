@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import OpenEXR
 
-from precompute.cook_torrance import cook_torrance_between as _cook_torrance_between
+from precompute.optics.cook_torrance import cook_torrance_between as _cook_torrance_between
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 #: Modules that only Blender provides.
@@ -44,7 +44,7 @@ def write_exr(path, image) -> None:
 
 
 def table_metadata(kind: str, layout: dict, cache_key: str, **extra) -> dict:
-    """The metadata a ClothLight table must carry (precompute.tables.REQUIRED_METADATA), for test tables."""
+    """The metadata a ClothLight table must carry (precompute.tables.exr.REQUIRED_METADATA), for test tables."""
     return {"table": kind, "layout": layout, "code_version": "test", "cache_key": cache_key,
             "medium": {"name": "test"}, "transport": {}, "paths": {}, "colour": {}, "units": {}, **extra}
 
@@ -58,9 +58,9 @@ def write_yarn_table_folder(folder, brdf, lobes, unscattered, *, incidence_resol
     use and, when ``listed``, every file's SHA-256 (folders baked before bakes listed them have none).
     ``specular``: the bake's specular record (``{"weight", "slope", "source"}``) in the headers and the
     summary; None, none (a folder baked before bakes recorded it)."""
-    from precompute.closure_fit import LobeShape
-    from precompute.table_folder import FILE_HASHES_KEY, SPECTRAL_FILE, SUMMARY_FILE, YARN_TABLE_FILES, file_hashes
-    from precompute.tables import SCHEMA, write_table
+    from precompute.tables.closure_fit import LobeShape
+    from precompute.tables.folder import FILE_HASHES_KEY, SPECTRAL_FILE, SUMMARY_FILE, YARN_TABLE_FILES, file_hashes
+    from precompute.tables.exr import SCHEMA, write_table
 
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -92,7 +92,7 @@ def write_yarn_table_folder(folder, brdf, lobes, unscattered, *, incidence_resol
 # -- a reference BRDF -----------------------------------------------------------------------------
 
 
-#: The Cook–Torrance twin lives in precompute/cook_torrance.py (the fit's baseline uses it too).
+#: The Cook–Torrance twin lives in precompute/optics/cook_torrance.py (the fit's baseline uses it too).
 cook_torrance_between = _cook_torrance_between
 
 
@@ -198,3 +198,14 @@ def build_extension_zip(out: pathlib.Path) -> pathlib.Path:
     )
     assert result.returncode == 0, result.stdout + result.stderr
     return pathlib.Path(result.stdout.strip().splitlines()[-1])
+
+
+#: The attribute that marks a fixture as slow (:func:`slow_fixture`).
+SLOW_FIXTURE = "clothlight_slow_fixture"
+
+
+def slow_fixture(function):
+    """Mark a fixture function as slow (it bakes, builds the extension zip or the native library):
+    every test that uses it is a ``slow`` test (tests/conftest.py).  Put it under ``@pytest.fixture``."""
+    setattr(function, SLOW_FIXTURE, True)
+    return function

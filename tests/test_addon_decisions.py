@@ -7,7 +7,7 @@ import pathlib
 import pytest
 
 from clothlight import jobs, prebaked
-from clothlight.jobs import BakeRequest
+from clothlight.medium_settings import BakeRequest
 
 
 def test_a_baked_folder_wins_and_is_flagged_when_baked_from_other_settings(tmp_path):

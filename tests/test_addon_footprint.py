@@ -27,7 +27,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")  # the Blenders below run in child processes; this one only says bpy is here
 
-from precompute.table_folder import check_yarn_table_folder  # noqa: E402
+from precompute.tables.folder import check_yarn_table_folder  # noqa: E402
 from tests.helpers import PREBAKED_PRESET, PREBAKED_TRANSPORT  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
@@ -68,12 +68,12 @@ def test_registering_the_add_on_imports_none_of_the_heavy_modules(tmp_path):
     outcome = run_blender("""
         before = len(sys.modules)
         started = time.perf_counter()
-        import clothlight
-        clothlight.register()
+        from clothlight.blender import registration
+        registration.register()
         seconds = time.perf_counter() - started
         print(json.dumps({"seconds": seconds, "modules": len(sys.modules) - before, "heavy": heavy_imported()}))
     """, blender_env(tmp_path), cwd=REPO)
-    print(f"\nimport clothlight + register(): {outcome['seconds']:.2f} s, {outcome['modules']} modules imported")
+    print(f"\nimport + register(): {outcome['seconds']:.2f} s, {outcome['modules']} modules imported")
     assert outcome["heavy"] == []
 
 
@@ -109,7 +109,7 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
         addon_utils.enable(EXTENSION, default_set=True)  # the first enable also unpacks the wheels
         enable_seconds = time.perf_counter() - started
         heavy_at_enable = heavy_imported()
-        table_folder = importlib.import_module(EXTENSION + ".precompute.table_folder")
+        table_folder = importlib.import_module("precompute.tables.folder")
         materials = importlib.import_module(EXTENSION + ".clothlight.blender.materials")
 
         def table_paths(material):
@@ -141,7 +141,7 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
         assert bpy.ops.clothlight.validate("INVOKE_DEFAULT", out_dir=str(out), materials={{"YARN"}}, incidences="0",
                                            views="0", resolution=8, samples=1, swatches=False) == {{"FINISHED"}}
         # A garment or validation job in Blender's process: precompute's cache=True kernels, compiled here.
-        grids = importlib.import_module(EXTENSION + ".precompute.grids")
+        grids = importlib.import_module("precompute.tables.grids")
         grids.AngularGrid("sphere", 4).direction_to_square([[0.0, 0.0, 1.0]])
         numba = sys.modules["numba"]
         medium.seed, medium.tables_dir = 0, ""  # the shipped tables again, for the saved file

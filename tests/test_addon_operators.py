@@ -29,7 +29,7 @@ def tiny(medium) -> None:
     for key, value in TINY.items():
         setattr(medium, key, value)
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.render, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,9 @@ def addon(extension_zip):
     yield {name: importlib.import_module(f"{ADDON}.{module}")
            for name, module in (("operators", "blender.operators"), ("jobs", "jobs"), ("prebaked", "prebaked"),
                                 ("properties", "blender.properties"), ("preferences", "blender.preferences"),
-                                ("materials", "blender.materials"))}
+                                ("materials", "blender.materials"),
+                                ("running_jobs", "blender.running_jobs"),
+                                ("medium_settings", "medium_settings"))}
     import addon_utils
 
     addon_utils.disable(EXTENSION_MODULE)
@@ -95,7 +97,7 @@ def test_installed_extension_registers_its_classes_and_user_folders(addon, scene
 def test_bake_request_defaults_are_the_bakes_own():
     from precompute.bake import TRANSPORT_DEFAULTS
     from precompute.bounds import GRID_SETTINGS
-    from clothlight.jobs import BakeRequest
+    from clothlight.medium_settings import BakeRequest
 
     request = BakeRequest()
     for key, value in TRANSPORT_DEFAULTS.items():
@@ -110,15 +112,15 @@ def test_bake_request_defaults_are_the_bakes_own():
 
 def test_medium_settings_load_the_preset_and_send_only_changed_values(addon, scene):
     medium = scene.clothlight.medium
-    jobs = addon["jobs"]
-    assert medium.request() == jobs.preset_request("red_cotton")
+    medium_settings = addon["medium_settings"]
+    assert medium.request() == medium_settings.preset_request("red_cotton")
     medium.dye_weight_percent = 2.5
     medium.particle_volume_fraction = 0.14  # the preset's own value, stored in single precision
     assert medium.request().overrides == (("dye.weight_percent", 2.5),)
     medium.base = "delustred_polyester"
     assert "dye_weight_percent" not in medium.exposed_keys()
     assert medium.particle_diameter_nm == pytest.approx(250.0)
-    assert medium.request() == jobs.preset_request("delustred_polyester")
+    assert medium.request() == medium_settings.preset_request("delustred_polyester")
     medium.particle_diameter_nm = 300.0
     assert medium.request().overrides == (("particles.0.median_diameter_nm", 300.0),)
 
@@ -259,7 +261,7 @@ def test_bake_tables_runs_to_the_end_in_background_mode_and_apply_uses_its_table
 
 
 def test_bake_request_with_a_dye_range_round_trips_and_knows_a_dye_change():
-    from clothlight.jobs import BakeRequest
+    from clothlight.medium_settings import BakeRequest
 
     request = BakeRequest(overrides=(("dye.weight_percent", 0.5),), dye_series=(0.1, 3.0))
     assert BakeRequest.from_json(request.to_json()) == request
@@ -272,7 +274,7 @@ def test_bake_request_with_a_dye_range_round_trips_and_knows_a_dye_change():
 
 
 def test_a_dye_range_bakes_once_then_a_dye_change_rebakes_from_it_and_recolours_the_material(addon, scene):
-    operators = addon["operators"]
+    running_jobs = addon["running_jobs"]
     medium = scene.clothlight.medium
     tiny(medium)
     medium.use_dye_series = True
@@ -287,9 +289,9 @@ def test_a_dye_range_bakes_once_then_a_dye_change_rebakes_from_it_and_recolours_
     assert brdf_table(addon, material) == first / "brdf.exr"
 
     medium.dye_weight_percent = 2.0  # the update schedules the re-bake (a timer: never run in background mode)
-    pending = operators._ScheduledRecolour.start
+    pending = running_jobs.ScheduledRecolour.start
     assert pending is not None and bpy.app.timers.is_registered(pending)
-    operators._ScheduledRecolour.cancel()
+    running_jobs.ScheduledRecolour.cancel()
     assert bpy.ops.clothlight.bake_tables() == {"FINISHED"}
     second = pathlib.Path(medium.tables_dir)
     summary, before = (json.loads((folder / "summary.json").read_text()) for folder in (second, first))
@@ -302,10 +304,10 @@ def test_a_dye_range_bakes_once_then_a_dye_change_rebakes_from_it_and_recolours_
     assert brdf_table(addon, material) == second / "brdf.exr"
 
     medium.dye_weight_percent = 4.0  # outside the range: the panel says so, nothing is scheduled
-    assert operators._ScheduledRecolour.start is None
+    assert running_jobs.ScheduledRecolour.start is None
     medium.use_dye_series = False  # a dye change then waits for Bake Tables
     medium.dye_weight_percent = 1.0
-    assert operators._ScheduledRecolour.start is None
+    assert running_jobs.ScheduledRecolour.start is None
 
 
 def test_bake_tables_reports_bad_input_by_parameter_name(addon, scene):
@@ -373,23 +375,25 @@ def _tick(operator, context, until):
 
 def test_interactive_bake_polls_its_child_shows_progress_and_finishes(addon, scene):
     operators = addon["operators"]
+    running_jobs = addon["running_jobs"]
     medium = scene.clothlight.medium
     tiny(medium)
     medium.seed = 3
     operator, context = _interactive_bake(operators, scene)
     assert operator._start_modal(context) == {"RUNNING_MODAL"}
-    assert operators.running_bake() is not None and not bpy.ops.clothlight.bake_tables.poll()
+    assert running_jobs.running_bake() is not None and not bpy.ops.clothlight.bake_tables.poll()
     # Other events pass through to the interface while the child works.
     assert operator.modal(context, SimpleNamespace(type="MOUSEMOVE", value="NOTHING")) == {"PASS_THROUGH"}
     assert _tick(operator, context, lambda result: result != {"PASS_THROUGH"}) == {"FINISHED"}
     assert callable(context.workspace.status[0]) and context.workspace.status[-1] is None
-    assert operators.running_bake() is None
+    assert running_jobs.running_bake() is None
     assert pathlib.Path(medium.tables_dir, "brdf.exr").is_file() and medium.tables_request == medium.request().to_json()
     assert operator.reports[-1][0] == "INFO" and "B/R" in operator.reports[-1][1]
 
 
 def test_esc_cancels_an_interactive_bake_and_no_partial_table_is_left(addon, scene):
     operators = addon["operators"]
+    running_jobs = addon["running_jobs"]
     medium = scene.clothlight.medium
     tiny(medium)
     medium.paths_per_cell, medium.angular_resolution, medium.seed = 20000, 6, 7
@@ -397,14 +401,14 @@ def test_esc_cancels_an_interactive_bake_and_no_partial_table_is_left(addon, sce
     cache = pathlib.Path(addon["preferences"].cache_directory())
     entries = set(cache.glob("*/*"))
     assert operator._start_modal(context) == {"RUNNING_MODAL"}
-    job = operators.running_bake()
+    job = running_jobs.running_bake()
     _tick(operator, context, lambda result: job.progress > 0.0 or result != {"PASS_THROUGH"})
     assert not job.done, "the bake finished before it could be cancelled"
     assert operator.modal(context, SimpleNamespace(type="ESC", value="PRESS")) == {"RUNNING_MODAL"}
     assert _tick(operator, context, lambda result: result != {"PASS_THROUGH"}) == {"CANCELLED"}
     assert isinstance(job.error, addon["jobs"].BakeCancelled) and operator.reports[-1][0] == "WARNING"
     assert set(cache.glob("*/*")) == entries and not _partials(cache)
-    assert medium.tables_dir == "" and operators.running_bake() is None
+    assert medium.tables_dir == "" and running_jobs.running_bake() is None
 
 
 def test_the_bundled_wheels_and_blenders_numpy_alone_can_bake(addon, tmp_path):
@@ -420,8 +424,8 @@ def test_the_bundled_wheels_and_blenders_numpy_alone_can_bake(addon, tmp_path):
     for sibling in numpy_dir.parent.iterdir():
         if sibling.name == "numpy" or sibling.name.startswith(("numpy.libs", "numpy-")):
             (numpy_only / sibling.name).symlink_to(sibling)
-    request = jobs.BakeRequest(seed=11, paths_per_cell=64, target_rel_stderr=None, n_around=4, n_along=2,
-                               angular_resolution=4, incidence_resolution=5)
+    request = addon["medium_settings"].BakeRequest(seed=11, paths_per_cell=64, target_rel_stderr=None, n_around=4,
+                                                   n_along=2, angular_resolution=4, incidence_resolution=5)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(jobs.PACKAGE_ROOT), str(site), str(numpy_only)]),
            "NUMBA_CACHE_DIR": addon["preferences"].numba_cache_directory()}
     log = tmp_path / "stderr.txt"
@@ -498,7 +502,7 @@ def _shipped(subdir: str) -> list[pathlib.Path]:
 
 
 def test_shipped_presets_are_found_by_blender_and_give_valid_settings(addon, scene):
-    from precompute.medium import preset_names
+    from precompute.optics.medium import preset_names
 
     weave_presets = _shipped("clothlight_weave")
     assert str(weave_presets[0].parent) in bpy.utils.preset_paths("clothlight_weave")
@@ -509,7 +513,7 @@ def test_shipped_presets_are_found_by_blender_and_give_valid_settings(addon, sce
     for path in _shipped("clothlight_medium"):
         bpy.ops.script.execute_preset(filepath=str(path), menu_idname="CLOTHLIGHT_PT_medium_presets")
         medium = scene.clothlight.medium
-        assert medium.request() == addon["jobs"].preset_request(medium.base)
+        assert medium.request() == addon["medium_settings"].preset_request(medium.base)
         bases.add(medium.base)
     assert bases == set(preset_names())
 

@@ -10,10 +10,12 @@ import pytest
 
 import precompute
 from precompute.bake import load_spectral
-from precompute.color import channel_ratios, clip_to_gamut, spectral_to_rgb
-from precompute.medium import PRESET_DIR, load_preset
-from precompute.table_layout import interpolate_rho
-from precompute.tables import HASH_KEY, SCHEMA, content_hash, read_table
+from precompute.tables.color import channel_ratios, clip_to_gamut, spectral_to_rgb
+from precompute.optics.medium import PRESET_DIR, load_preset
+from precompute.tables.layout import interpolate_rho
+from precompute.tables.exr import HASH_KEY, SCHEMA, content_hash, read_table
+
+pytestmark = pytest.mark.slow
 
 N_I, N_O, PATHS, SEED = 5, 6, 300, 11
 SMALL = [f"transport.incidence_resolution={N_I}", f"transport.angular_resolution={N_O}",

@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 
 from precompute.bake import bake, load_spectral
-from precompute.color import spectral_to_rgb
+from precompute.tables.color import spectral_to_rgb
 from precompute.errors import ParameterError
 from precompute.transport.symmetry import CellSymmetry
+
+pytestmark = pytest.mark.slow
 
 SMALL = ["transport.incidence_resolution=5", "transport.angular_resolution=4", "transport.n_around=8",
          "transport.n_along=4"]

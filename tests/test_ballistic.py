@@ -1,4 +1,4 @@
-"""The unscattered light through a yarn in closed form (precompute/ballistic.py).
+"""The unscattered light through a yarn in closed form (precompute/optics/ballistic.py).
 
 Held against geometry (Snell at both ends, the fibre's specular cone, the chords of a circle) and
 against the transport itself: the share of each incidence cell's flux that the Monte-Carlo
@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from precompute import ballistic
-from precompute.grids import AngularGrid
-from precompute.table_layout import interpolate_attenuation, interpolate_unscattered_rho
+from precompute.optics import ballistic
+from precompute.tables.grids import AngularGrid
+from precompute.tables.layout import interpolate_attenuation, interpolate_unscattered_rho
 from precompute.transport import TransportGrids, YarnGeometry, henyey_greenstein_medium, simulate_yarn
 
 INDEX = 1.557

@@ -20,7 +20,7 @@ import math
 import numpy as np
 import pytest
 
-from precompute.phase import henyey_greenstein_phase
+from precompute.optics.phase import henyey_greenstein_phase
 from precompute.reference import (
     CapLight,
     ReferenceMedium,

@@ -10,9 +10,11 @@ import time
 import pytest
 
 from precompute import bake as bake_module
-from precompute import cache
+from precompute.cache import entries as cache
 from precompute.bake import bake
-from precompute.tables import read_table
+from precompute.tables.exr import read_table
+
+from tests.helpers import slow_fixture
 
 SMALL = ["transport.angular_resolution=4", "transport.incidence_resolution=5",
          "transport.n_around=8", "transport.n_along=4"]
@@ -90,6 +92,7 @@ def test_stale_partials_of_dead_bakes_are_removed_fresh_ones_kept(tmp_path):
 
 
 @pytest.fixture
+@slow_fixture
 def transport_runs(monkeypatch):
     """Counts the Monte-Carlo transport runs of in-process bakes."""
     runs = []
@@ -151,6 +154,7 @@ def test_a_bake_interrupted_while_writing_tables_leaves_no_table(tmp_path, monke
     read_table(result.table("albedo"), kind="albedo")
 
 
+@pytest.mark.slow
 def test_a_killed_bake_leaves_no_table(tmp_path):
     command = [sys.executable, "-m", "precompute", "bake", *SMALL_CLI, "--paths", "400000",
                "--threads", "1", "--cache-dir", str(tmp_path)]
@@ -171,6 +175,7 @@ def test_a_killed_bake_leaves_no_table(tmp_path):
     assert cache.lookup(tmp_path, "spectral", key) is None  # a later bake of these inputs starts afresh
 
 
+@pytest.mark.slow
 def test_two_concurrent_bakes_of_one_key_end_with_one_valid_table(tmp_path):
     command = [sys.executable, "-m", "precompute", "bake", *SMALL_CLI, "--paths", "40000", "--threads", "1",
                "--cache-dir", str(tmp_path), "--json"]

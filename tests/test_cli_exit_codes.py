@@ -28,12 +28,12 @@ import clothlight.garment.__main__ as garment_cli
 import clothlight.validate as validate_cli
 import clothlight.validation.report as report_cli
 import precompute.__main__ as precompute_cli
-from clothlight import jobs, render_bounds
-from clothlight.validation.measured_data import MeasurementFormatError
+from clothlight import jobs, medium_settings, render_bounds
+from precompute.fit.measured_data import MeasurementFormatError
 from clothlight.weave import WeaveParameterError
 from precompute import bounds, exit_codes
 from precompute.errors import InputError, ParameterError
-from precompute.tables import TableError
+from precompute.tables.exr import TableError
 from tests.helpers import REPO
 
 YARN_BAKE = REPO / "example_blends" / "tables" / "paper_2008"
@@ -225,6 +225,7 @@ def test_bad_input_exits_2_naming_it_before_any_work(cli, argv, words, files, no
         assert word in err, (word, err)
 
 
+@pytest.mark.slow
 def test_the_bake_worker_reports_bad_input_and_internal_errors_in_its_events(files):
     """The add-on's bake child: exit 2 with a ``bad_input`` event naming the parameter, 1 with a
     one-line event for anything else (its traceback goes to the log the add-on keeps)."""
@@ -237,7 +238,8 @@ def test_the_bake_worker_reports_bad_input_and_internal_errors_in_its_events(fil
         child.stdin.close()
         return subprocess.CompletedProcess(child.args, child.wait(timeout=600), stdout, stderr)
 
-    refused = worker(jobs.BakeRequest(preset="paper_2008", paths_per_cell=10**12, target_rel_stderr=None).to_json())
+    request = medium_settings.BakeRequest(preset="paper_2008", paths_per_cell=10**12, target_rel_stderr=None)
+    refused = worker(request.to_json())
     events = [json.loads(line) for line in refused.stdout.splitlines()]
     assert refused.returncode == 2 and events[-1]["event"] == "error" and events[-1]["bad_input"]
     assert "transport.paths_per_cell" in events[-1]["message"] and "100000000" in events[-1]["message"]
@@ -267,7 +269,7 @@ INTERRUPTING_IMPORT = textwrap.dedent("""
 
 @pytest.mark.parametrize("module, argv, interrupted_import", [
     ("precompute", ["bake", "--paths", "100"], "numba"),
-    ("precompute", ["slab", "--albedo", "0.5", "--g", "0", "--tau", "1"], "precompute.native_slab"),
+    ("precompute", ["slab", "--albedo", "0.5", "--g", "0", "--tau", "1"], "precompute.slab.native"),
     ("precompute", ["optics"], "precompute.exit_codes"),
     ("clothlight.validate", ["--out", "{tmp}/v"], "numpy"),
     ("clothlight.validate", ["--out", "{tmp}/v", "--resolution", "8", "--samples", "1"], "bpy"),

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from precompute.closure_fit import (
+from precompute.tables.closure_fit import (
     LOBES,
     MIN_LOBE_SHARE,
     LobeShape,
@@ -13,8 +13,8 @@ from precompute.closure_fit import (
     lobe_responses,
 )
 from precompute.errors import ParameterError
-from precompute.grids import AngularGrid
-from precompute.table_layout import brdf_atlas, interpolate_rho
+from precompute.tables.grids import AngularGrid
+from precompute.tables.layout import brdf_atlas, interpolate_rho
 
 N_I, N_O = 12, 4
 

@@ -6,7 +6,7 @@ import pytest
 
 from clothlight.validation.response import ClothResponse, ResponseView, TableLayout
 from precompute.errors import ParameterError
-from precompute.table_layout import interpolate_rho, interpolate_unscattered_rho
+from precompute.tables.layout import interpolate_rho, interpolate_unscattered_rho
 from tests.helpers import cook_torrance_between, direction
 
 

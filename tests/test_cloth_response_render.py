@@ -6,9 +6,9 @@ import pytest
 
 from clothlight.validation.response import TableLayout
 from clothlight.yarn_tables import yarn_tables_from_bake
-from precompute import ballistic
-from precompute.grids import AngularGrid
-from precompute.table_layout import brdf_atlas
+from precompute.optics import ballistic
+from precompute.tables.grids import AngularGrid
+from precompute.tables.layout import brdf_atlas
 from tests.helpers import write_yarn_table_folder
 
 bpy = pytest.importorskip("bpy")
@@ -16,6 +16,8 @@ bpy = pytest.importorskip("bpy")
 from clothlight.blender.validation.response_render import measure_response  # noqa: E402
 from clothlight.blender.validation.rig import RigSettings  # noqa: E402
 from clothlight.blender.validation.run import run_validation  # noqa: E402
+
+pytestmark = pytest.mark.render
 
 SHIPPED_TABLES = "example_blends/tables/paper_2008"
 INCIDENCES = (0.0, 45.0)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from precompute.bake import bake
-from precompute.color import (
+from precompute.tables.color import (
     DEFAULT_OBSERVER,
     RGB_SPACE,
     blue_red_ratio,
@@ -19,8 +19,8 @@ from precompute.color import (
     white_balance_factors,
 )
 from precompute.errors import ParameterError
-from precompute.medium import load_preset
-from precompute.tables import read_table
+from precompute.optics.medium import load_preset
+from precompute.tables.exr import read_table
 
 PAPER_GRID = np.arange(390.0, 731.0, 10.0)
 UNEVEN_GRID = np.array([380.0, 400, 430, 470, 520, 560, 600, 640, 690, 780])

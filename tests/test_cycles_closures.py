@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from precompute import cycles_closures as cc
+from precompute.tables import cycles_closures as cc
 from tests.helpers import add_camera, add_sun, direction, empty_render_scene, script_material
 
 SUN_IRRADIANCE = 2.0
@@ -68,6 +68,7 @@ CASES = [
 ]
 
 
+@pytest.mark.render
 @pytest.mark.blender
 @pytest.mark.parametrize("kind, view_angles, light_angles, what", CASES, ids=[c[3] for c in CASES])
 def test_twin_matches_cycles(bpy, tmp_path, kind, view_angles, light_angles, what):

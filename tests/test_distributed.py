@@ -23,8 +23,10 @@ import pytest
 from precompute import distributed as layer
 from precompute.bake import SPECTRAL_FILE, bake, load_spectral
 from precompute.errors import SchedulerUnreachable, WorkerCodeMismatch
-from precompute.table_folder import FILE_HASHES_KEY
+from precompute.tables.folder import FILE_HASHES_KEY
 from tests.helpers import REPO
+
+pytestmark = pytest.mark.slow
 
 pytest.importorskip("distributed")
 
@@ -235,7 +237,7 @@ def test_map_tasks_keeps_the_order_of_its_items_wherever_it_runs(cluster):
 def test_a_dye_series_transport_on_the_cluster_is_bitwise_the_single_process_one(cluster):
     """The exits tallied again at absorption steps (precompute/transport/absorption.py) travel too."""
     from precompute.bake import SPECTRAL_SOURCES, bake_configuration
-    from precompute.optics import medium_optics
+    from precompute.optics.coefficients import medium_optics
     from precompute.transport import TransportGrids, YarnGeometry, simulate_yarn
 
     medium = bake_configuration(PRESET, SMALL).medium

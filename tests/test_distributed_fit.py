@@ -12,6 +12,8 @@ pytest.importorskip("distributed")
 from precompute.fit.optimise import FitCancelled
 from tests.test_fit_optimise import measured, preset_with_voids, run_fit  # noqa: F401 - the fixture
 
+pytestmark = pytest.mark.slow
+
 
 def test_a_fit_on_two_local_workers_is_the_fit_made_here(measured):  # noqa: F811
     here, _ = run_fit(measured, budget=40, seed=7)
@@ -35,16 +37,16 @@ def test_cancel_stops_a_fit_on_a_cluster(measured):  # noqa: F811
 
 
 def test_an_unreachable_scheduler_is_bad_input_before_any_work(tmp_path, capsys, monkeypatch):
-    import precompute.__main__ as precompute_cli
+    import clothlight.fit.__main__ as fit_cli
     from precompute.fit import report as fit_report
     from tests.test_fit_optimise import write_measurement
 
     # importing the forward model is the first work: a stand-in that cannot be imported says if it began
-    monkeypatch.setitem(sys.modules, "precompute.fit.forward", None)
+    monkeypatch.setitem(sys.modules, "clothlight.fit.forward", None)
     config, _ = preset_with_voids(specular_weight=0.6)
     preset = tmp_path / "with_voids.toml"
     preset.write_text(fit_report.to_toml(config))
-    code = precompute_cli.main(["fit", "--measured", str(write_measurement(tmp_path / "synthetic.csv")),
+    code = fit_cli.main(["--measured", str(write_measurement(tmp_path / "synthetic.csv")),
                                 "--config", str(preset), "--free", "dye_weight_percent", "--budget-evaluations", "12",
                                 "--scheduler", "tcp://127.0.0.1:9", "--out", str(tmp_path / "fit")])
     assert code == 2

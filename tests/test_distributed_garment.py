@@ -15,6 +15,8 @@ from clothlight.blender.garment.measure import GoniometerSettings, measure_cloth
 from clothlight.garment.goniometry import SIDES  # noqa: E402
 from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
 
+pytestmark = pytest.mark.slow
+
 YARN_BAKE = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
 SETTINGS = GoniometerSettings(incidence_resolution=3, exit_resolution=2, pixels_per_patch=8, samples=2)
 

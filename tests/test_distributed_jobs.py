@@ -8,8 +8,10 @@ import sys
 
 import pytest
 
-from clothlight.jobs import BakeRequest
+from clothlight.medium_settings import BakeRequest
 from tests.helpers import REPO
+
+pytestmark = pytest.mark.slow
 
 pytest.importorskip("distributed")
 

@@ -17,6 +17,8 @@ from clothlight.blender.validation.rig import RigSettings  # noqa: E402
 from clothlight.blender.validation.run import ValidationCancelled, run_validation  # noqa: E402
 from clothlight.validation.framing import ParameterError  # noqa: E402
 
+pytestmark = pytest.mark.slow
+
 YARN_BAKE = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
 SETTINGS = RigSettings(incidences_deg=(0.0, 45.0), views_deg=(-30.0, 0.0, 30.0), resolution=16, samples=2)
 

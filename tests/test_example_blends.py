@@ -11,7 +11,7 @@ bpy = pytest.importorskip("bpy")
 EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "example_blends"
 BLENDS = sorted(EXAMPLES.glob("*.blend"))
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.render]
 
 
 def test_the_examples_are_there():

@@ -13,8 +13,11 @@ import zipfile
 
 import pytest
 
-from clothlight.jobs import BUNDLED_DEPENDENCIES, BakeRequest, preset_request
+from clothlight.jobs import BUNDLED_DEPENDENCIES
+from clothlight.medium_settings import BakeRequest, preset_request
 from tests.helpers import PREBAKED_PRESET, PREBAKED_TRANSPORT
+
+pytestmark = pytest.mark.slow
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("build_extension", REPO_ROOT / "scripts" / "build_extension.py")

@@ -1,6 +1,6 @@
-"""``python -m precompute fit``: exit codes (0 done, 2 bad input, 130 interrupted, 1 internal) and an
+"""``python -m clothlight.fit``: exit codes (0 done, 2 bad input, 130 interrupted, 1 internal) and an
 --out folder written as a whole.  In-process (``--scheduler none``), with the synthetic forward model
-standing in for ``precompute.fit.forward`` (put in sys.modules, where the command's lazy import finds it)."""
+standing in for ``clothlight.fit.forward`` (put in sys.modules, where the command's lazy import finds it)."""
 
 from __future__ import annotations
 
@@ -10,19 +10,19 @@ import types
 
 import pytest
 
-import precompute.__main__ as precompute_cli
+import clothlight.fit.__main__ as fit_cli
 from precompute.fit import report as fit_report
 from precompute.fit.parameters import PARAMETERS
 from precompute.fit.report import FIT_FOLDER_FILES, PLOT_FILES
-from precompute.medium import load_preset
+from precompute.optics.medium import load_preset
 from tests.test_fit_optimise import SyntheticForward, preset_with_voids, write_measurement
 
 
 @pytest.fixture
 def fake_forward(monkeypatch):
-    """A ``precompute.fit.forward`` module whose build_forward_model returns the synthetic model;
+    """A ``clothlight.fit.forward`` module whose build_forward_model returns the synthetic model;
     records its calls."""
-    module = types.ModuleType("precompute.fit.forward")
+    module = types.ModuleType("clothlight.fit.forward")
     module.calls = []
 
     def build_forward_model(measured_views, preset_config, base_dir, *, seed=0, progress=None, **kwargs):
@@ -33,7 +33,7 @@ def fake_forward(monkeypatch):
         return SyntheticForward(measured_views)
 
     module.build_forward_model = build_forward_model
-    monkeypatch.setitem(sys.modules, "precompute.fit.forward", module)
+    monkeypatch.setitem(sys.modules, "clothlight.fit.forward", module)
     return module
 
 
@@ -57,7 +57,7 @@ def inputs(tmp_path):
 
 
 def fit(inputs, out, *extra):
-    return precompute_cli.main(["fit", "--measured", str(inputs["measured"]), "--config", str(inputs["config"]),
+    return fit_cli.main(["--measured", str(inputs["measured"]), "--config", str(inputs["config"]),
                                 "--free", "void_fraction,dye_weight_percent", "--budget-evaluations", "30",
                                 "--scheduler", "none", "--out", str(out), *extra])
 
@@ -83,7 +83,7 @@ def test_a_fit_writes_its_folder_and_a_preset_the_bake_accepts(inputs, tmp_path,
 
 
 def test_unknown_parameter_is_bad_input(inputs, tmp_path, fake_forward, capsys):
-    code = precompute_cli.main(["fit", "--measured", str(inputs["measured"]), "--free", "void_fraction,sheen",
+    code = fit_cli.main(["--measured", str(inputs["measured"]), "--free", "void_fraction,sheen",
                                 "--out", str(tmp_path / "fit")])
     assert code == 2
     error = capsys.readouterr().err
@@ -105,8 +105,8 @@ def test_bad_inputs_exit_with_2_before_any_work(inputs, tmp_path, fake_forward, 
     if "--preset" in given:
         argv.pop("--config")
     argv.update(given)
-    flat = ["fit", "--free", "void_fraction,dye_weight_percent"] + [x for kv in argv.items() for x in kv]
-    assert precompute_cli.main(flat) == 2
+    flat = ["--free", "void_fraction,dye_weight_percent"] + [x for kv in argv.items() for x in kv]
+    assert fit_cli.main(flat) == 2
     error = capsys.readouterr().err
     for word in words:
         assert word in error
@@ -117,7 +117,7 @@ def test_bad_inputs_exit_with_2_before_any_work(inputs, tmp_path, fake_forward, 
 def test_dye_series_is_for_a_fit_of_the_dye_alone(inputs, tmp_path, fake_forward, plots_as_text, capsys):
     assert fit(inputs, tmp_path / "refused", "--dye-series") == 2  # void_fraction is free too
     assert "--dye-series" in capsys.readouterr().err and not fake_forward.calls
-    code = precompute_cli.main(["fit", "--measured", str(inputs["measured"]), "--config", str(inputs["config"]),
+    code = fit_cli.main(["--measured", str(inputs["measured"]), "--config", str(inputs["config"]),
                                 "--free", "dye_weight_percent,specular_weight", "--budget-evaluations", "12",
                                 "--dye-series", "--out", str(tmp_path / "fit")])
     assert code == 0
@@ -166,6 +166,6 @@ def test_interrupt_exits_130_and_writes_nothing(inputs, tmp_path, fake_forward, 
 
 
 def test_without_the_forward_model_module_it_is_an_internal_error(inputs, tmp_path, monkeypatch, capsys):
-    monkeypatch.setitem(sys.modules, "precompute.fit.forward", None)  # import fails as if the file were absent
+    monkeypatch.setitem(sys.modules, "clothlight.fit.forward", None)  # import fails as if the file were absent
     assert fit(inputs, tmp_path / "fit") == 1
     assert not (tmp_path / "fit").exists()

@@ -1,5 +1,5 @@
 """The fit's forward model for a dye-only fit: one transport for the dye range, every candidate's
-tables read from it (precompute.fit.forward.DyeSeriesForwardModel), against the per-candidate one."""
+tables read from it (clothlight.fit.forward.DyeSeriesForwardModel), against the per-candidate one."""
 
 import copy
 
@@ -7,8 +7,10 @@ import numpy as np
 import pytest
 
 from precompute.errors import ParameterError
-from precompute.fit.forward import DyeSeriesForwardModel, ForwardModel
-from precompute.medium import PRESET_DIR, load_preset_config
+from clothlight.fit.forward import DyeSeriesForwardModel, ForwardModel
+from precompute.optics.medium import PRESET_DIR, load_preset_config
+
+pytestmark = pytest.mark.slow
 
 SMALL = {"n_around": 8, "n_along": 4, "angular_resolution": 4}
 

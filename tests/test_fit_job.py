@@ -1,5 +1,5 @@
 """The Yarn Medium panel's Fit: the request (clothlight/fit_job.py), its child process
-(clothlight/fit_worker.py, the fit of ``python -m precompute fit`` with JSON-line progress, cancel and
+(clothlight/fit/worker.py, the fit of ``python -m clothlight.fit`` with JSON-line progress, cancel and
 exit codes), which child runs it (Blender itself inside Blender, ``python -m`` under the bpy module),
 and the operator through bpy, in background mode and interactively (Esc).
 
@@ -21,7 +21,8 @@ from types import SimpleNamespace
 import pytest
 
 from clothlight.fit_job import FREE_PARAMETERS, FitFailed, FitJob, FitJobCancelled, FitRequest
-from clothlight.jobs import BLENDER_BOOTSTRAP, BakeRequest, child_command, is_blender_executable
+from clothlight.jobs import BLENDER_BOOTSTRAP, child_command, is_blender_executable
+from clothlight.medium_settings import BakeRequest
 from precompute.errors import ParameterError
 from precompute.fit.parameters import PARAMETERS
 from tests.test_fit_optimise import TRUTH, synthetic_brdf
@@ -142,29 +143,30 @@ exec {sys.executable} -E -c "$expr" "$@"
 
 def test_the_child_is_blender_in_background_mode_only_when_the_binary_is_blender(tmp_path):
     arguments = ["--request", "{}", "--cache-dir", "c"]
-    python = [sys.executable, "-m", "clothlight.fit_worker", *arguments]
+    python = [sys.executable, "-m", "clothlight.fit.worker", *arguments]
     not_executable = tmp_path / "blender.txt"
     not_executable.write_text("")
     # the bpy module reports "" (or a Python); no binary, a missing or non-executable file: this Python
     for binary in ("", None, sys.executable, str(tmp_path / "missing"), str(not_executable)):
-        assert child_command("clothlight.fit_worker", arguments, blender=binary) == python, binary
+        assert child_command("clothlight.fit.worker", arguments, blender=binary) == python, binary
         assert not is_blender_executable(binary, sys.executable)
     blender = str(_fake_blender(tmp_path))
-    command = child_command("clothlight.fit_worker", arguments, blender=blender)
+    command = child_command("clothlight.fit.worker", arguments, blender=blender)
     assert command[:5] == [blender, "--background", "--factory-startup", "--python-expr",
-                           BLENDER_BOOTSTRAP.format(module="clothlight.fit_worker")]
+                           BLENDER_BOOTSTRAP.format(module="clothlight.fit.worker")]
     assert command[5:] == ["--", *arguments]
     compile(command[4], "<python-expr>", "exec")
-    assert "'clothlight.fit_worker'" in command[4]
+    assert "'clothlight.fit.worker'" in command[4]
     # a job that needs no bpy (the bake) runs in this Python whatever Blender is
     assert child_command("clothlight.bake_worker", arguments) == [sys.executable, "-m", "clothlight.bake_worker",
                                                                    *arguments]
 
 
+@pytest.mark.render
 def test_under_the_bpy_module_the_fit_child_is_this_python(bpy, tmp_path):
     assert not is_blender_executable(bpy.app.binary_path, sys.executable), repr(bpy.app.binary_path)
     job = FitJob(FitRequest(), cache_dir=tmp_path, blender=bpy.app.binary_path)
-    assert job.command()[:3] == [sys.executable, "-m", "clothlight.fit_worker"]
+    assert job.command()[:3] == [sys.executable, "-m", "clothlight.fit.worker"]
 
 
 def test_a_child_started_as_blender_finds_the_add_on_and_exits_2_naming_the_bad_field(measured, tmp_path):
@@ -199,7 +201,7 @@ def run_to_the_end(job: FitJob) -> list[tuple[float, str]]:
 
 @pytest.fixture(scope="module")
 def fitted(measured, response_cache, tmp_path_factory):
-    """A real fit in its child (``python -m clothlight.fit_worker``): the job and the progress it showed."""
+    """A real fit in its child (``python -m clothlight.fit.worker``): the job and the progress it showed."""
     pytest.importorskip("bpy")  # the child renders the cloth response
     request = small_request(measured, tmp_path_factory.mktemp("fitted") / "fit").check()
     job = FitJob(request, cache_dir=response_cache)
@@ -208,10 +210,12 @@ def fitted(measured, response_cache, tmp_path_factory):
     return job, seen
 
 
+@pytest.mark.render
+@pytest.mark.slow
 @pytest.mark.blender
 def test_a_fit_in_its_child_shows_progress_and_writes_the_fit_folder(fitted):
     from precompute.fit.report import FIT_FOLDER_FILES
-    from precompute.medium import load_preset, load_preset_config
+    from precompute.optics.medium import load_preset, load_preset_config
 
     job, seen = fitted
     fractions = [fraction for fraction, _ in seen]
@@ -236,14 +240,16 @@ def test_a_fit_in_its_child_shows_progress_and_writes_the_fit_folder(fitted):
                                                      "fit.specular_weight": outcome.parameters["specular_weight"]})
 
 
+@pytest.mark.render
+@pytest.mark.slow
 @pytest.mark.blender
 def test_the_childs_fit_is_the_command_lines(fitted, measured, response_cache, tmp_path, capsys):
-    """``python -m precompute fit`` on the same medium (written as a preset TOML), measurement, seed
+    """``python -m clothlight.fit`` on the same medium (written as a preset TOML), measurement, seed
     and budget writes the same preset."""
     import precompute.__main__ as precompute_cli
     from precompute.bake import apply_overrides
     from precompute.fit.report import to_toml
-    from precompute.medium import load_preset_config
+    from precompute.optics.medium import load_preset_config
 
     job, _ = fitted
     config, _ = load_preset_config("red_cotton")
@@ -260,6 +266,8 @@ def test_the_childs_fit_is_the_command_lines(fitted, measured, response_cache, t
     assert [e["objective"] for e in mine["history"]] == [e["objective"] for e in theirs["history"]]
 
 
+@pytest.mark.render
+@pytest.mark.slow
 @pytest.mark.blender
 def test_cancel_mid_fit_exits_130_and_leaves_no_folder(measured, response_cache, tmp_path):
     pytest.importorskip("bpy")
@@ -278,6 +286,7 @@ def test_cancel_mid_fit_exits_130_and_leaves_no_folder(measured, response_cache,
     assert not out.exists() and not list(out.parent.iterdir())  # no folder, no staging folder either
 
 
+@pytest.mark.slow
 def test_a_preset_without_the_species_a_parameter_needs_exits_2_from_the_child(measured, tmp_path):
     """What only the child can check (it reads the preset): paper_2008 has no voids species."""
     request = small_request(measured, tmp_path / "fit", free=("void_fraction",), dye_series=False,
@@ -296,17 +305,17 @@ def test_a_preset_without_the_species_a_parameter_needs_exits_2_from_the_child(m
 @pytest.fixture
 def addon(bpy, response_cache, tmp_path, monkeypatch):
     """The development checkout registered as an add-on, its caches in the session's fit cache."""
-    import clothlight
+    from clothlight.blender import registration
     from clothlight.blender import preferences
 
     monkeypatch.setattr(preferences, "cache_directory", lambda context=None: str(response_cache))
     monkeypatch.setattr(preferences, "fit_directory", lambda: str(tmp_path / "fits"))
-    clothlight.register()
+    registration.register()
     try:
         bpy.ops.wm.read_homefile(use_empty=True)
         yield bpy.context.scene
     finally:
-        clothlight.unregister()
+        registration.unregister()
         assert not hasattr(bpy.types, "CLOTHLIGHT_OT_fit_medium") and not hasattr(bpy.types, "CLOTHLIGHT_PT_medium_fit")
         bpy.ops.wm.read_homefile(use_empty=True)
 
@@ -320,9 +329,11 @@ def set_up_small_fit(scene, measured) -> None:
     fit.budget = 8
 
 
+@pytest.mark.render
+@pytest.mark.slow
 @pytest.mark.blender
 def test_the_fit_operator_fits_in_background_mode_and_loads_the_fitted_values(addon, bpy, measured, tmp_path):
-    from clothlight.blender import operators
+    from clothlight.blender import running_jobs
     from tests.test_addon_operators import _Layout
 
     scene = addon
@@ -364,12 +375,14 @@ def test_the_fit_operator_fits_in_background_mode_and_loads_the_fitted_values(ad
     for name in ("CLOTHLIGHT_PT_medium", "CLOTHLIGHT_PT_medium_fit"):
         getattr(bpy.types, name).draw(SimpleNamespace(layout=_Layout(labels)), context)
     assert any(label.startswith("Last fit: relative RMS") for label in labels)
-    assert operators.running_fit() is None
+    assert running_jobs.running_fit() is None
 
 
+@pytest.mark.render
+@pytest.mark.slow
 @pytest.mark.blender
 def test_esc_cancels_an_interactive_fit_and_nothing_is_written(addon, bpy, measured, tmp_path):
-    from clothlight.blender import operators
+    from clothlight.blender import operators, running_jobs
     from tests.test_addon_operators import _tick, interactive_operator
 
     scene = addon
@@ -378,7 +391,7 @@ def test_esc_cancels_an_interactive_fit_and_nothing_is_written(addon, bpy, measu
     scene.clothlight.fit.out_dir = str(tmp_path / "interactive")
     operator, context = interactive_operator(operators.CLOTHLIGHT_OT_fit_medium, scene)
     assert operator._start_modal(context) == {"RUNNING_MODAL"}
-    job = operators.running_fit()
+    job = running_jobs.running_fit()
     assert job is not None and not bpy.ops.clothlight.fit_medium.poll()
     assert operator.modal(context, SimpleNamespace(type="MOUSEMOVE", value="NOTHING")) == {"PASS_THROUGH"}
     _tick(operator, context, lambda result: job.stage.startswith("evaluation") or result != {"PASS_THROUGH"})
@@ -388,13 +401,13 @@ def test_esc_cancels_an_interactive_fit_and_nothing_is_written(addon, bpy, measu
     assert isinstance(job.error, FitJobCancelled) and job.returncode == 130
     assert operator.reports[-1][0] == "WARNING" and "nothing was written" in operator.reports[-1][1]
     assert callable(context.workspace.status[0]) and context.workspace.status[-1] is None
-    assert operators.running_fit() is None and scene.clothlight.fit.last() is None
+    assert running_jobs.running_fit() is None and scene.clothlight.fit.last() is None
     assert not (tmp_path / "interactive").exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".interactive")]
 
 
 def test_the_response_renders_with_the_example_tables_or_in_the_extension_a_prebaked_presets(tmp_path):
-    from precompute.fit.forward import PROJECT_ROOT, lookup_tables_folder
+    from clothlight.fit.forward import PROJECT_ROOT, lookup_tables_folder
 
     assert lookup_tables_folder() == PROJECT_ROOT / "example_blends" / "tables" / "paper_2008"
     with pytest.raises(FileNotFoundError, match="no yarn tables"):

@@ -2,7 +2,7 @@
 parameters from a measurement the test writes, the same seed gives the same preset, a fit that ends
 at a bound says so, and the baseline fit recovers a known Lambert + Cook–Torrance.
 
-The synthetic model stands in for ``precompute.fit.forward``: a Lambert-like cloth whose albedo
+The synthetic model stands in for ``clothlight.fit.forward``: a Lambert-like cloth whose albedo
 rises with the void fraction and whose colour follows the dye amount (Beer–Lambert per channel),
 plus the shader's Cook–Torrance, with multiplicative Gaussian noise of the relative error asked
 for, seeded by the call's seed (as a Monte-Carlo estimate would be)."""
@@ -14,15 +14,16 @@ import math
 import numpy as np
 import pytest
 
-from precompute.cook_torrance import cloth_specular
+from precompute.optics.cook_torrance import cloth_specular
 from precompute.errors import ParameterError
-from precompute.fit import Budget, fit_medium, load_measurement, split_views
+from precompute.fit.objective import load_measurement, split_views
+from precompute.fit.optimise import Budget, fit_medium
 from precompute.fit.baseline import baseline_brdf, fit_baseline
 from precompute.fit.objective import Objective
 from precompute.fit.optimise import FitCancelled
 from precompute.fit.parameters import VOIDS, species_table
 from precompute.fit.report import preset_toml
-from precompute.medium import load_preset_config
+from precompute.optics.medium import load_preset_config
 
 #: Per-channel dye absorption of the synthetic model, per weight-%: red passes, green least.
 DYE_ABSORPTION = np.array([0.05, 1.2, 0.8])
@@ -55,7 +56,7 @@ class SyntheticForward:
 
 
 class SeparableForward(SyntheticForward):
-    """The same cloth, also split as precompute.fit.forward's model splits it: the medium's part and
+    """The same cloth, also split as clothlight.fit.forward's model splits it: the medium's part and
     the specular term as a function of its weight and slope, so the fit can profile the latter."""
 
     def parts(self, config, *, relative_error, seed):
@@ -199,6 +200,7 @@ def test_baseline_is_the_flat_cloth_form():
     np.testing.assert_allclose(rgb, expected)
 
 
+@pytest.mark.slow
 def test_the_specular_term_is_profiled_when_the_model_splits_it_off(measured):
     measurement = load_measurement(measured)
     model = SeparableForward(split_views(measurement).forward_views)
@@ -216,7 +218,7 @@ def test_the_specular_term_is_profiled_when_the_model_splits_it_off(measured):
 
 
 class SwatchForward(SeparableForward):
-    """The separable cloth with the §6.1 swatches after the measured views, as precompute.fit.forward
+    """The separable cloth with the §6.1 swatches after the measured views, as clothlight.fit.forward
     gives them: lit from the front as at normal view, lit from behind brighter the fewer voids scatter."""
 
     swatch_count = 2
@@ -230,6 +232,7 @@ class SwatchForward(SeparableForward):
         return rows, lambda weight, slope: np.concatenate([specular(weight, slope), [0.0, 0.0]])
 
 
+@pytest.mark.slow
 def test_the_back_lit_constraint_keeps_the_cloth_darker_from_behind(measured):
     measurement = load_measurement(measured)
     views = split_views(measurement).forward_views

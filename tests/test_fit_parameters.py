@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from precompute import bounds
-from precompute.cook_torrance import cook_torrance, cook_torrance_between, direction
+from precompute.optics.cook_torrance import cook_torrance, cook_torrance_between, direction, specular_from_config
 from precompute.errors import InputError, ParameterError
 from precompute.fit.objective import Objective, parse_target_ratios, split_views
 from precompute.fit.parameters import (
@@ -21,10 +21,9 @@ from precompute.fit.parameters import (
     apply,
     initial_values,
     parse_free,
-    specular_from_config,
 )
 from precompute.fit.report import to_toml
-from precompute.medium import MAX_VOLUME_FRACTION, load_preset_config, medium_from_dict
+from precompute.optics.medium import MAX_VOLUME_FRACTION, load_preset_config, medium_from_dict
 from tests.test_fit_optimise import preset_with_voids, real_fabric_views, synthetic_brdf
 
 

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from precompute import bake as bake_module
-from precompute import cache
-from precompute.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT
+from precompute.cache import entries as cache
+from precompute.optics.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT
 from precompute.errors import ParameterError
-from precompute.fit.parameters import FIT_TABLE
-from precompute.medium import load_preset_config
-from precompute.table_folder import (
+from precompute.optics.cook_torrance import FIT_TABLE
+from precompute.optics.medium import load_preset_config
+from precompute.tables.folder import (
     SPECULAR_FROM_PRESET,
     SPECULAR_KEY,
     SUMMARY_FILE,
@@ -21,7 +21,7 @@ from precompute.table_folder import (
     default_specular,
     summary_specular,
 )
-from precompute.tables import TableError, read_table
+from precompute.tables.exr import TableError, read_table
 from tests.helpers import write_yarn_table_folder
 
 #: A reduced grid, as tests/test_cache.py bakes.

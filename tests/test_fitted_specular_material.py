@@ -9,7 +9,7 @@ from clothlight.blender.garment.bake import measurement_inputs  # noqa: E402
 from clothlight.blender.garment.measure import GoniometerSettings  # noqa: E402
 from clothlight.blender.materials import SPECULAR_SOCKETS, build_yarn_material, shader_node  # noqa: E402
 from clothlight.yarn_tables import yarn_tables_from_bake  # noqa: E402
-from precompute.table_folder import default_specular  # noqa: E402
+from precompute.tables.folder import default_specular  # noqa: E402
 from tests.helpers import empty_render_scene  # noqa: E402
 from tests.test_fitted_specular import RECORDED, folder  # noqa: E402
 

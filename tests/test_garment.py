@@ -25,11 +25,11 @@ from clothlight.garment.tables import (
     lobe_image,
     projected_view_grid,
 )
-from precompute.closure_fit import LobeShape, lobe_responses
-from precompute.grids import AngularGrid
-from precompute.table_layout import brdf_atlas, interpolate_rho
-from precompute.tables import TableError
-from tests.helpers import add_sun_and_camera, cook_torrance_between, empty_render_scene, unit, write_exr
+from precompute.tables.closure_fit import LobeShape, lobe_responses
+from precompute.tables.grids import AngularGrid
+from precompute.tables.layout import brdf_atlas, interpolate_rho
+from precompute.tables.exr import TableError
+from tests.helpers import add_sun_and_camera, cook_torrance_between, empty_render_scene, slow_fixture, unit, write_exr
 
 bpy = pytest.importorskip("bpy")
 
@@ -47,7 +47,7 @@ from clothlight.validation.framing import ParameterError  # noqa: E402
 from clothlight.blender.validation.rig import RigSettings  # noqa: E402
 from clothlight.blender.validation.run import ValidationRun, run_validation  # noqa: E402
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.render]
 
 N_I, N_O, N_LOBES = 5, 6, 8
 SUN_IRRADIANCE = 2.0
@@ -236,6 +236,7 @@ def test_garment_material_refuses_meshes_without_uvs_and_incomplete_bakes(tmp_pa
 
 
 @pytest.fixture(scope="module")
+@slow_fixture
 def red_cotton_cloth(tmp_path_factory):
     cache = tmp_path_factory.mktemp("cache")
     settings = GoniometerSettings(incidence_resolution=3, exit_resolution=3, pixels_per_patch=10, samples=2)
@@ -245,7 +246,7 @@ def red_cotton_cloth(tmp_path_factory):
 
 
 def test_cloth_bake_is_cached_and_self_describing(tmp_path, red_cotton_cloth):
-    from precompute.tables import read_table
+    from precompute.tables.exr import read_table
 
     folder, settings, cache = red_cotton_cloth
     again, measured = bake_cloth(YARN_BAKE, settings, cache_dir=cache)
@@ -253,8 +254,8 @@ def test_cloth_bake_is_cached_and_self_describing(tmp_path, red_cotton_cloth):
     # A yarn bake whose lobes were refitted (another cache key, the same ρ) measures nothing again.
     import shutil
 
-    from precompute.table_folder import FILE_HASHES_KEY, file_hashes
-    from precompute.tables import write_table
+    from precompute.tables.folder import FILE_HASHES_KEY, file_hashes
+    from precompute.tables.exr import write_table
 
     refitted = tmp_path / "refitted"
     shutil.copytree(YARN_BAKE, refitted)
@@ -300,8 +301,8 @@ def test_cloth_bsdf_has_the_plain_weaves_mirror_symmetry(red_cotton_cloth):
     incidence and exit cells must agree, within the measurement's noise.  That noise is heavy-
     tailed (light grazing through the gaps reaches a few pixels), so the check is on the whole
     table: the RMS of the mirror differences against the RMS of ρ, and the median cell."""
-    from precompute.table_layout import rho_from_brdf_atlas
-    from precompute.tables import read_table
+    from precompute.tables.layout import rho_from_brdf_atlas
+    from precompute.tables.exr import read_table
 
     folder, settings, _ = red_cotton_cloth
     tables = cloth_tables_from_bake(folder)

@@ -18,7 +18,7 @@ from clothlight.garment.goniometry import (
     view_of,
 )
 from clothlight.garment.tables import energy_balance
-from precompute.grids import AngularGrid
+from precompute.tables.grids import AngularGrid
 
 VIEWS = [(0.0, 0.0, 1.0), (0.6, 0.3, 0.74), (-0.9, 0.1, 0.2), (0.0, 0.3, -0.95), (0.5, -0.5, -0.3)]
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from precompute.errors import ParameterError
-from precompute.grids import AngularGrid
+from precompute.tables.grids import AngularGrid
 
 
 @pytest.mark.parametrize("domain", ["hemisphere", "sphere"])
@@ -66,6 +66,7 @@ shader map_probe(int Sphere = 1, output closure color BSDF = 0)
 """
 
 
+@pytest.mark.render
 @pytest.mark.blender
 @pytest.mark.parametrize("domain", ["hemisphere", "sphere"])
 def test_osl_header_maps_match_python(bpy, tmp_path, domain):

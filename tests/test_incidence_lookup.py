@@ -10,8 +10,8 @@ the light were more grazing.
 import numpy as np
 import pytest
 
-from precompute.grids import AngularGrid
-from precompute.table_layout import brdf_atlas, interpolate_rho
+from precompute.tables.grids import AngularGrid
+from precompute.tables.layout import brdf_atlas, interpolate_rho
 from precompute.transport.brdf import INCIDENCE_RESOLUTIONS
 
 ZENITHS_DEG = (10.0, 30.0, 45.0, 60.0)

@@ -3,13 +3,14 @@ transport kernel's cache when any transport source (or the direction grids they 
 
 import pathlib
 
-from precompute import grids, kernel_sources
+from precompute.tables import grids
+from precompute.cache import kernel_sources
 from precompute.transport import _kernels, _paths, kernel_cache
 
 
 def test_the_digest_covers_the_sources_that_kernels_inline_from_other_files():
     assert {"transport/_paths.py", "transport/_interactions.py", "transport/_rng.py", "transport/_kernels.py",
-            "grids.py", "slab_layout.py", "native_slab.py"} <= set(kernel_sources.kernel_sources())
+            "tables/grids.py", "slab/layout.py", "slab/native.py"} <= set(kernel_sources.kernel_sources())
 
 
 def test_a_changed_source_flushes_every_kernel_cache_beside_it():

@@ -4,8 +4,8 @@ reweighting compile no new specialisation."""
 
 import numpy as np
 
-from precompute.medium import load_preset
-from precompute.optics import medium_optics
+from precompute.optics.medium import load_preset
+from precompute.optics.coefficients import medium_optics
 from precompute.transport import TransportGrids, YarnGeometry, _kernels, simulate_hg_slab, simulate_yarn
 from precompute.transport.absorption import absorption_steps, reweighted_transport
 from precompute.transport.compile import compile_kernels

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from clothlight.validation.measured_data import (
+from precompute.fit.measured_data import (
     RGB_HEADER,
     MeasurementFormatError,
     parse_measurement,

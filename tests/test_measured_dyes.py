@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from precompute.dye import dye_absorption_coefficient
-from precompute.medium import DATA_DIR, Dye, read_spectrum_csv
+from precompute.optics.dye import dye_absorption_coefficient
+from precompute.optics.medium import DATA_DIR, Dye, read_spectrum_csv
 
 SIMULATION_NM = (390.0, 730.0)
 RED_COTTON_WEIGHT_PERCENT, COTTON_DENSITY = 3.0, 1.52

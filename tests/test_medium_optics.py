@@ -14,7 +14,7 @@ from scipy import stats
 from scipy.integrate import quad
 
 from precompute.__main__ import main
-from precompute.medium import (
+from precompute.optics.medium import (
     DATA_DIR,
     Host,
     MediumParameters,
@@ -23,9 +23,9 @@ from precompute.medium import (
     WavelengthGrid,
     preset_names,
 )
-from precompute.mie import differential_scattering_cross_section, percus_yevick_structure_factor
-from precompute.optics import MediumOptics, load_preset, medium_optics
-from precompute.phase import (
+from precompute.optics.mie import differential_scattering_cross_section, percus_yevick_structure_factor
+from precompute.optics.coefficients import MediumOptics, load_preset, medium_optics
+from precompute.optics.phase import (
     asymmetry_parameter,
     cos_theta_grid,
     henyey_greenstein_phase,

@@ -9,7 +9,7 @@ import pytest
 
 from precompute.__main__ import main
 from precompute.errors import ParameterError
-from precompute.medium import (
+from precompute.optics.medium import (
     PRESET_DIR,
     MediumParameters,
     RefractiveIndex,
@@ -20,7 +20,7 @@ from precompute.medium import (
     preset_names,
     read_spectrum_csv,
 )
-from precompute.optics import medium_optics
+from precompute.optics.coefficients import medium_optics
 
 BASE, BASE_DIR = load_preset_config("paper_2008")
 

@@ -1,4 +1,4 @@
-"""The native slab library (precompute/transport/native.py, precompute/native_slab.py): numba's slab task
+"""The native slab library (precompute/transport/native.py, precompute/slab/native.py): numba's slab task
 compiled ahead of time, which the slab command runs without importing numba or NumPy, with the numba
 kernel's answer bit for bit."""
 
@@ -10,17 +10,20 @@ import sys
 import numba
 import pytest
 
-from precompute import native_slab
+from precompute.slab import native as native_slab
 from precompute.__main__ import main
 from precompute.errors import ParameterError
-from precompute.kernel_sources import sources_digest
+from precompute.cache.kernel_sources import sources_digest
 from precompute.transport import simulate_hg_slab
 from precompute.transport.native import build_native_slab
+
+from tests.helpers import slow_fixture
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 @pytest.fixture(scope="module")
+@slow_fixture
 def native_slab_library(tmp_path_factory):
     """A library built for the current sources in a folder of its own, as NUMBA_CACHE_DIR would place it."""
     folder = tmp_path_factory.mktemp("native")

@@ -16,6 +16,8 @@ bpy = pytest.importorskip("bpy")
 
 from clothlight.blender.measurement_render import render_to_array  # noqa: E402
 
+pytestmark = pytest.mark.render
+
 SUN_IRRADIANCE = 3.0  # W/m²
 
 

@@ -8,8 +8,8 @@ import re
 import pytest
 
 from clothlight.yarn_tables import GENERAL_MODE_MIN_WEIGHT
-from precompute import ballistic
-from precompute.closure_fit import LOBES
+from precompute.optics import ballistic
+from precompute.tables.closure_fit import LOBES
 
 HEADER = pathlib.Path(__file__).resolve().parents[1] / "osl" / "clothlight.h"
 

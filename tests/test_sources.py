@@ -1,5 +1,5 @@
 """Cache keys digest the code that really made an entry: each stage's entry modules, every project
-module they import (transitively) and the OSL shaders they compile (precompute/sources.py)."""
+module they import (transitively) and the OSL shaders they compile (precompute/cache/sources.py)."""
 
 import ast
 import shutil
@@ -7,27 +7,20 @@ import shutil
 import pytest
 
 from precompute import bake as bake_module
-from precompute import cache
-from precompute.sources import (
-    _absolute,
-    imported_names,
-    module_file,
-    python_sources,
-    stage_digest,
-    stage_sources,
-)
+from precompute.cache import entries as cache
+from precompute.cache.sources import _absolute, imported_names, module_file, python_sources, stage_digest, stage_sources
 
 REPO = bake_module.PROJECT_ROOT
 #: The hand-typed lists the stages had before their sources were derived: each missed code.
-OLD_TABLE_SOURCES = {"precompute/color.py", "precompute/tables.py", "precompute/table_layout.py",
-                     "precompute/closure_fit.py", "precompute/bake.py"}
+OLD_TABLE_SOURCES = {"precompute/tables/color.py", "precompute/tables/exr.py", "precompute/tables/layout.py",
+                     "precompute/tables/closure_fit.py", "precompute/bake.py"}
 OLD_MEASUREMENT_SOURCES = {
     "clothlight/garment/goniometry.py", "clothlight/blender/garment/measure.py",
     "clothlight/blender/materials.py", "clothlight/blender/measurement_render.py", "clothlight/weave/geometry.py",
     "osl/cloth_yarn.osl", "osl/clothlight.h",
 }
 #: Files no stage of the yarn bake runs: editing them must not cost a bake.
-NOT_IN_THE_BAKE = ("precompute/plots.py", "precompute/cli/bake.py", "precompute/__main__.py",
+NOT_IN_THE_BAKE = ("precompute/tables/plots.py", "precompute/cli/bake.py", "precompute/__main__.py",
                    "clothlight/blender/ui.py", "osl/cloth_garment.osl")
 
 
@@ -67,9 +60,6 @@ def modules_called_from(relative: str, functions) -> set[str]:
                 imported[alias.asname or alias.name] = member if module_file(REPO, member) else target
         elif isinstance(node, ast.Import):
             imported.update({alias.asname or alias.name.partition(".")[0]: alias.name for alias in node.names})
-        elif (isinstance(node, ast.Assign) and isinstance(node.value, ast.Call)
-              and getattr(node.value.func, "id", "") == "import_precompute"):
-            imported[node.targets[0].id] = f"precompute.{node.value.args[0].value}"
     # The functions asked for may be nested (their bodies are walked whole); calls are followed to the
     # file's top-level functions.
     nested = [node for node in ast.walk(tree) if isinstance(node, ast.FunctionDef) and node.name in functions]
@@ -95,22 +85,23 @@ def _touch(path):
 
 def test_the_table_stage_covers_the_closure_twins_the_old_list_missed():
     table = set(stage_sources(REPO, **bake_module.TABLE_SOURCES))
-    assert "precompute/cycles_closures.py" in table  # closure_fit.py imports it to fit lobes.exr
-    assert "precompute/cycles_closures.py" not in OLD_TABLE_SOURCES
+    assert "precompute/tables/cycles_closures.py" in table  # closure_fit.py imports it to fit lobes.exr
+    assert "precompute/tables/cycles_closures.py" not in OLD_TABLE_SOURCES
     assert OLD_TABLE_SOURCES < table
 
 
 def test_the_spectral_stage_is_the_physics_without_the_colour_and_the_fit():
     spectral = set(stage_sources(REPO, **bake_module.SPECTRAL_SOURCES))
-    assert {"precompute/optics.py", "precompute/mie.py", "precompute/dye.py", "precompute/phase.py",
-            "precompute/grids.py", "precompute/transport/_kernels.py", "precompute/bake.py"} <= spectral
-    assert not {"precompute/color.py", "precompute/closure_fit.py", "precompute/tables.py"} & spectral
+    assert {"precompute/optics/coefficients.py", "precompute/optics/mie.py", "precompute/optics/dye.py",
+            "precompute/optics/phase.py",
+            "precompute/tables/grids.py", "precompute/transport/_kernels.py", "precompute/bake.py"} <= spectral
+    assert not {"precompute/tables/color.py", "precompute/tables/closure_fit.py", "precompute/tables/exr.py"} & spectral
 
 
 def test_what_the_spectral_stage_runs_of_bake_py_comes_from_the_spectral_modules():
     spectral = set(stage_sources(REPO, **bake_module.SPECTRAL_SOURCES))
     used = modules_called_from("precompute/bake.py", ["_simulate", "_simulate_series", "_reweighted_spectral"])
-    assert {"precompute.optics", "precompute.transport", "precompute.transport.absorption"} <= used
+    assert {"precompute.optics.coefficients", "precompute.transport", "precompute.transport.absorption"} <= used
     assert {module_file(REPO, m).relative_to(REPO).as_posix() for m in used} <= spectral
 
 
@@ -125,7 +116,7 @@ def test_every_file_of_a_stage_changes_its_key(tree, bake_keys):
             (tree / relative).write_bytes(original)
     assert bake_keys() == before
     # The keys themselves: the closure twins are the tables' code, the transport the simulation's too.
-    _touch(tree / "precompute" / "cycles_closures.py")
+    _touch(tree / "precompute" / "tables" / "cycles_closures.py")
     twins = bake_keys()
     assert twins["spectral"] == before["spectral"] and twins["tables"] != before["tables"]
     _touch(tree / "precompute" / "transport" / "__init__.py")
@@ -145,7 +136,7 @@ def test_a_new_module_joins_the_key_of_the_stage_that_imports_it(tree, bake_keys
     (tree / "precompute" / "ballistic_twin.py").write_text("SPEED = 1.0\n")
     assert bake_keys() == before  # not imported yet
     beam = tree / "precompute" / "transport" / "beam.py"
-    beam.write_text(beam.read_text() + "\nfrom .. import ballistic_twin  # noqa: E402,F401\n")
+    beam.write_text(beam.read_text() + "\nfrom precompute import ballistic_twin  # noqa: E402,F401\n")
     assert "precompute/ballistic_twin.py" in stage_sources(tree, **bake_module.SPECTRAL_SOURCES)
     edited = bake_keys()
     assert edited["spectral"] != before["spectral"]
@@ -161,12 +152,13 @@ def test_imports_are_read_as_python_resolves_them():
         "from .pkg.sub import name",
         "def lazy():",
         "    import clothlight.validation.rig",
-        "    return import_precompute('grids'), importlib.import_module('precompute.color')",
+        "    from precompute.tables import grids",
+        "    return grids, importlib.import_module('precompute.tables.color')",
     ])
     names = imported_names(source, "clothlight.garment.bake", is_package=False)
     assert {"numpy", "clothlight.garment", "clothlight.garment.sibling", "clothlight.weave",
             "clothlight.weave.params", "clothlight.garment.pkg.sub", "clothlight.validation.rig",
-            "precompute.grids", "precompute.color"} <= names
+            "precompute.tables.grids", "precompute.tables.color"} <= names
     assert "precompute.transport" in imported_names("from . import transport", "precompute", is_package=True)
     assert module_file(REPO, "numpy") is None and module_file(REPO, "precompute.bake.CONSTANT") is None
     assert module_file(REPO, "precompute.transport").name == "__init__.py"
@@ -188,7 +180,7 @@ def test_the_garment_measurement_covers_the_rig_and_the_shaders_the_old_list_mis
     assert "clothlight/garment/tables.py" not in measurement  # a new fit re-renders nothing
     tables = set(stage_sources(REPO, **garment_bake.TABLE_SOURCES))
     assert {"clothlight/garment/tables.py", "clothlight/blender/garment/detail.py",
-            "precompute/cycles_closures.py"} <= tables
+            "precompute/tables/cycles_closures.py"} <= tables
 
 
 def test_what_the_measurement_runs_of_the_garment_bake_comes_from_its_modules(bpy):

@@ -1,4 +1,4 @@
-"""One check of a table folder (precompute/table_folder.py), used by every reader, and output folders
+"""One check of a table folder (precompute/tables/folder.py), used by every reader, and output folders
 written as a whole.
 
 A bake folder passes with exactly the data it was written with, or is refused with a TableError that
@@ -24,9 +24,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from precompute import table_folder
+from precompute.tables import folder as table_folder
 from precompute.errors import ParameterError
-from precompute.table_folder import (
+from precompute.tables.folder import (
     FILE_HASHES_KEY,
     SPECTRAL_FILE,
     SUMMARY_FILE,
@@ -35,7 +35,7 @@ from precompute.table_folder import (
     check_yarn_table_folder,
     replace_folder,
 )
-from precompute.tables import (
+from precompute.tables.exr import (
     CACHE_KEY_KEY,
     HASH_KEY,
     KIND_KEY,
@@ -339,9 +339,9 @@ def test_a_cloth_bake_passes_and_broken_ones_are_refused_naming_the_file(cloth_b
 
 
 def test_apply_material_refuses_a_truncated_folder_and_builds_nothing(bpy, bakes, cloth_bake, tmp_path):
-    import clothlight
+    from clothlight.blender import registration
 
-    clothlight.register()
+    registration.register()
     try:
         bpy.ops.wm.read_homefile(use_empty=True)
         scene = bpy.context.scene
@@ -360,7 +360,7 @@ def test_apply_material_refuses_a_truncated_folder_and_builds_nothing(bpy, bakes
             bpy.ops.clothlight.apply_garment_material()
         assert (set(bpy.data.materials.keys()), [slot.material for slot in sample.material_slots]) == before
     finally:
-        clothlight.unregister()
+        registration.unregister()
 
 
 # ---- fuzz: the reader and the folder check ------------------------------------------------------
@@ -586,7 +586,7 @@ def test_out_must_be_new_empty_or_an_earlier_bakes_folder(bakes, tmp_path):
 #: ``sys.argv[1]``-th step that changes the file system (a copy, a rename, the swap, a removal).
 KILLED_AT_A_STEP = """
 import os, shutil, signal, sys
-from precompute import table_folder
+from precompute.tables import folder as table_folder
 count, kill_at = [0], int(sys.argv[1])
 def step(function):
     def run(*args, **kwargs):

@@ -7,8 +7,8 @@ import numpy as np
 import OpenEXR
 import pytest
 
-from precompute import tables
-from precompute.tables import (
+from precompute.tables import exr as tables
+from precompute.tables.exr import (
     CACHE_KEY_KEY,
     HASH_KEY,
     KIND_KEY,

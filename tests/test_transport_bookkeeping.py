@@ -125,8 +125,8 @@ def test_a_borrowed_view_is_the_same_array_and_a_borrowed_tuple_holds_the_same_a
 def test_the_albedo_power_table_holds_each_power_a_path_multiplies_in_at_its_checks_and_end():
     """A spectral path keeps α^n by multiplying in α^interval at each roulette check and α^(n mod interval)
     at its end: the table's rows are those powers, to round-off, for an interval of either kind of medium."""
-    from precompute.medium import DEFAULT_PRESET, load_preset
-    from precompute.optics import medium_optics
+    from precompute.optics.medium import DEFAULT_PRESET, load_preset
+    from precompute.optics.coefficients import medium_optics
     from precompute.transport import medium_from_optics
     from precompute.transport._paths import ROULETTE_INTERVAL_ABSORBING, albedo_power_table
 

@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from precompute import ballistic
+from precompute.optics import ballistic
 from precompute.transport import (
     TransportGrids,
     YarnGeometry,
@@ -100,6 +100,7 @@ def test_eq5_matches_the_beam_direction_by_direction(transport, beams):
         assert np.all(excess < [0.04, 0.3])
 
 
+@pytest.mark.slow
 def test_discretisation_error_shrinks_with_the_grids(beams):
     """Refining the BSSRDF's grids (4 × 4 directions, 8 cells around → 8 × 8, 16) brings eq. (5)
     closer to the beam: the residual is discretisation, not a flaw of the method."""
@@ -173,7 +174,7 @@ def test_light_from_behind_reaches_the_point_through_the_yarn(transport):
 
 def test_the_closed_form_unscattered_light_is_what_the_beam_sees_leave_without_a_collision():
     """The beam tallies the light that crosses the yarn without a collision by receiving point and
-    exit direction; the closed form (precompute/ballistic.py), its deltas spread over a narrow cone
+    exit direction; the closed form (precompute/optics/ballistic.py), its deltas spread over a narrow cone
     and averaged over the same cells, must give the same radiance cell by cell."""
     thin = henyey_greenstein_medium([0.5], [0.3], mu_t=[3.0])
     toward_light = BEAMS[1]

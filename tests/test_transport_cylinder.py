@@ -9,7 +9,7 @@ import pytest
 import scipy.stats
 
 from precompute.errors import ParameterError
-from precompute.grids import AngularGrid
+from precompute.tables.grids import AngularGrid
 from precompute.transport import (
     TransportGrids,
     TransportMedium,
@@ -183,6 +183,7 @@ def test_same_seed_gives_identical_tables_whatever_the_thread_count():
     assert not np.array_equal(one.bssrdf, other.bssrdf)
 
 
+@pytest.mark.slow
 def test_error_target_is_reached_deterministically():
     medium = dyed_medium()
     reports = []

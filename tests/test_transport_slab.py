@@ -31,6 +31,7 @@ def agrees(value, stderr, exact, sigmas=3.0):
     return abs(value - exact) < sigmas * stderr + 1e-3
 
 
+@pytest.mark.slow
 def test_iadpython_totals_include_specular_and_unscattered_light():
     # A purely absorbing slab: R = r + (1-r)² r t² / (1 - r² t²), T = (1-r)² t / (1 - r² t²), t = e^-tau.
     r, t = ((1.5 - 1) / (1.5 + 1)) ** 2, math.exp(-1.0)
@@ -184,8 +185,8 @@ def test_roulette_shortcut_skips_only_checks_the_full_check_passes():
     path's weight at or above ROULETTE_THRESHOLD too, within 1e-6 of the threshold included, with the
     plain roulette (s ≡ 1) and with an error-target run's importance; and on the default red cotton
     it answers True for most states clearly above it, or it would spare nothing."""
-    from precompute.medium import DEFAULT_PRESET, load_preset
-    from precompute.optics import medium_optics
+    from precompute.optics.medium import DEFAULT_PRESET, load_preset
+    from precompute.optics.coefficients import medium_optics
     from precompute.transport._paths import ROULETTE_THRESHOLD, largest_weight, mis_ratios, surely_above_threshold
     from precompute.transport.media import medium_from_optics
 

@@ -14,8 +14,8 @@ from clothlight.yarn_tables import (
     renders_in_nodes,
     shortest_unscattered_path,
 )
-from precompute import ballistic
-from precompute.table_layout import interpolate_attenuation
+from precompute.optics import ballistic
+from precompute.tables.layout import interpolate_attenuation
 
 
 def test_the_reach_is_where_the_attenuation_falls_below_the_general_modes_floor_for_good():

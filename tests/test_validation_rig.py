@@ -21,8 +21,8 @@ from clothlight.validation.framing import SampleBounds, frame_size_mm, largest_p
 from clothlight.validation.measure import measure_view
 from clothlight.weave import WeaveParameters
 from clothlight.yarn_tables import yarn_tables_from_bake
-from precompute.ballistic import ATTENUATION_SAMPLES
-from precompute.closure_fit import LOBES
+from precompute.optics.ballistic import ATTENUATION_SAMPLES
+from precompute.tables.closure_fit import LOBES
 from precompute.errors import ParameterError
 from tests.helpers import cook_torrance_between, write_yarn_table_folder
 
@@ -37,6 +37,8 @@ from clothlight.blender.materials import (  # noqa: E402
 )
 from clothlight.blender.validation.rig import RIG_SCENE, RigSettings, build_rig, calibration_plane  # noqa: E402
 from clothlight.blender.validation.run import ValidationCancelled, ValidationRun, run_validation  # noqa: E402
+
+pytestmark = pytest.mark.render
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SYNTHETIC_CSV = REPO / "clothlight" / "validation" / "data" / "synthetic_red_cotton.csv"
@@ -321,14 +323,14 @@ def test_a_run_stepped_like_the_modal_operator_can_be_closed_midway(tmp_path):
 
 @pytest.fixture
 def operator_registered():
-    from clothlight.blender.validation.operator import CLOTHLIGHT_OT_validate, register, unregister
+    from clothlight.blender.validation.operator import CLOTHLIGHT_OT_validate
 
     registered = hasattr(bpy.types, CLOTHLIGHT_OT_validate.__name__)
     if not registered:
-        register()
+        bpy.utils.register_class(CLOTHLIGHT_OT_validate)
     yield
     if not registered:
-        unregister()
+        bpy.utils.unregister_class(CLOTHLIGHT_OT_validate)
 
 
 @pytest.mark.blender

@@ -13,15 +13,15 @@ import numpy as np
 import pytest
 
 from precompute import bake as bake_module
-from precompute.medium import Host, MediumParameters, ParticleSpecies, RefractiveIndex, WavelengthGrid
-from precompute.mie import (
+from precompute.optics.medium import Host, MediumParameters, ParticleSpecies, RefractiveIndex, WavelengthGrid
+from precompute.optics.mie import (
     PHASE_TABLE_TOLERANCE,
     PhaseGridTooCoarse,
     differential_scattering_cross_section,
     largest_size_parameter,
 )
-from precompute.optics import medium_optics, planned_phase_grid
-from precompute.phase import (
+from precompute.optics.coefficients import medium_optics, planned_phase_grid
+from precompute.optics.phase import (
     angle_cos_theta_grid,
     asymmetry_parameter,
     cos_theta_grid,
@@ -137,7 +137,7 @@ def test_explicit_too_coarse_phase_samples_still_raise():
 
 def test_auto_grid_refines_a_plan_that_falls_short(monkeypatch):
     # A plan far too coarse (as if the size estimate missed the particles) is refined, not refused.
-    from precompute import optics as optics_module
+    from precompute.optics import coefficients as optics_module
 
     monkeypatch.setattr(optics_module, "auto_phase_grid", lambda *args: ("uniform-angle", 401))
     optics = medium_optics(voids(20000.0, wavelengths=(390.0,)))

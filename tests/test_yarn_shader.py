@@ -13,10 +13,10 @@ import math
 import numpy as np
 import pytest
 
-from precompute.closure_fit import LOBES, LobeShape, lobe_responses
-from precompute.grids import AngularGrid
-from precompute import ballistic
-from precompute.table_layout import (
+from precompute.tables.closure_fit import LOBES, LobeShape, lobe_responses
+from precompute.tables.grids import AngularGrid
+from precompute.optics import ballistic
+from precompute.tables.layout import (
     brdf_atlas,
     interpolate_attenuation,
     interpolate_exit_tile,
@@ -39,6 +39,8 @@ from clothlight.blender.materials import (  # noqa: E402
 from clothlight.blender.measurement_render import configure_measurement_render, render_to_array  # noqa: E402
 from clothlight.mesh_attributes import CLOTH_NORMAL, YARN_TANGENT  # noqa: E402
 from clothlight.yarn_tables import YarnTableFiles, attenuation_reach  # noqa: E402
+
+pytestmark = pytest.mark.render
 
 N_I, N_O = 13, 8
 SUN_IRRADIANCE = 2.0

@@ -18,17 +18,16 @@ import pathlib
 
 import bpy
 
-from ..addon import import_precompute
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from .osl_shaders import add_script_node
 from ..yarn_tables import renders_in_nodes
 from .yarn_nodes import general_mode_surface
 
-_ballistic = import_precompute("ballistic")
+from precompute.optics import ballistic as _ballistic
 
 SUN_MODE = "SUN"
 GENERAL_MODE = "GENERAL"
-#: cloth_yarn.osl's inputs for the bake's ``lobe_shape`` (precompute.closure_fit.LobeShape).
+#: cloth_yarn.osl's inputs for the bake's ``lobe_shape`` (precompute.tables.closure_fit.LobeShape).
 LOBE_SHAPE_SOCKETS = {
     "FibreReflectionRoughness": "reflection_longitudinal",
     "FibreReflectionAzimuthal": "reflection_azimuthal",
@@ -41,7 +40,7 @@ LOBE_SHAPE_SOCKETS = {
 SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope"}
 
 #: cloth_yarn.osl's inputs for the closure-mixture weights, keyed by lobe in the order of the tiles
-#: of ``lobes.exr`` (precompute.closure_fit.LOBES).
+#: of ``lobes.exr`` (precompute.tables.closure_fit.LOBES).
 LOBE_WEIGHT_SOCKETS = {
     "diffuse": "DiffuseWeight",
     "translucent": "TranslucentWeight",

@@ -24,16 +24,8 @@ import bpy
 
 from . import preferences
 from ..fit_job import FitJob, fit_unavailable_reason
-from ..jobs import (
-    BakeCancelled,
-    BakeFailed,
-    BakeJob,
-    BakeRequest,
-    JobCancelled,
-    JobFailed,
-    bake_unavailable_reason,
-    preset_request,
-)
+from ..jobs import BakeCancelled, BakeFailed, BakeJob, JobCancelled, JobFailed, bake_unavailable_reason
+from ..medium_settings import BakeRequest, preset_request
 from .materials import (
     GENERAL_MODE,
     SUN_MODE,
@@ -47,6 +39,7 @@ from .materials import (
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from ..prebaked import tables_for_request
 from .properties import ParameterError, millimetre_scale
+from .running_jobs import RunningBake, RunningFit
 from .render_setup import use_cycles, use_cycles_osl_on_cpu
 from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
 from .sun_link import SUN_PROPERTY
@@ -251,17 +244,6 @@ class CLOTHLIGHT_OT_apply_material(bpy.types.Operator):
 # -- Bake Tables ---------------------------------------------------------------------------------
 
 
-class _RunningBake:
-    """The one bake the interface is running (None when idle); the panel draws its progress."""
-
-    job: BakeJob | None = None
-    scene_name: str = ""
-
-
-def running_bake() -> BakeJob | None:
-    return _RunningBake.job
-
-
 def _job_for(context, request: BakeRequest) -> BakeJob:
     prefs = preferences.preferences(context)
     threads = prefs.threads if prefs is not None and prefs.threads > 0 else None
@@ -434,41 +416,6 @@ class _ChildJobOperator:
         _end_job(self, self._running)
 
 
-#: Seconds after the last dye change before a recolouring bake starts (a slider drag changes it often).
-RECOLOUR_DELAY_SECONDS = 0.4
-
-
-def schedule_recolour(scene_name: str) -> None:
-    """Start Bake Tables for ``scene_name`` once the dye stops changing and no bake runs (a timer)."""
-
-    def start():
-        if _RunningBake.job is not None:
-            return RECOLOUR_DELAY_SECONDS  # the latest dye bakes after the running one
-        scene = bpy.data.scenes.get(scene_name)
-        window = bpy.context.window_manager.windows[0] if bpy.context.window_manager.windows else None
-        if scene is None or window is None:
-            return None
-        with bpy.context.temp_override(window=window, scene=scene):
-            bpy.ops.clothlight.bake_tables("INVOKE_DEFAULT")
-        return None
-
-    _ScheduledRecolour.cancel()
-    _ScheduledRecolour.start = start
-    bpy.app.timers.register(start, first_interval=RECOLOUR_DELAY_SECONDS)
-
-
-class _ScheduledRecolour:
-    """The pending recolouring bake's timer function (None when none is pending)."""
-
-    start = None
-
-    @classmethod
-    def cancel(cls) -> None:
-        if cls.start is not None and bpy.app.timers.is_registered(cls.start):
-            bpy.app.timers.unregister(cls.start)
-        cls.start = None
-
-
 class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
     """Bake the yarn's BRDF tables from the medium settings (Monte-Carlo light transport in a background
     process; cached, so an unchanged medium is instant). Esc cancels"""
@@ -506,7 +453,7 @@ class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
         self.report({"INFO"}, f"Tables {how}: {outcome.folder}{_ratios_text(outcome)}")
         return {"FINISHED"}
 
-    _running = _RunningBake
+    _running = RunningBake
     _what = "Bake"
     _unavailable_reason = staticmethod(bake_unavailable_reason)
 
@@ -523,25 +470,14 @@ class CLOTHLIGHT_OT_cancel_bake(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return _RunningBake.job is not None
+        return RunningBake.job is not None
 
     def execute(self, context):
-        _RunningBake.job.cancel()
+        RunningBake.job.cancel()
         return {"FINISHED"}
 
 
 # -- Fit to Measurement --------------------------------------------------------------------------
-
-
-class _RunningFit:
-    """The one fit the interface is running (None when idle); the panel draws its progress."""
-
-    job: FitJob | None = None
-    scene_name: str = ""
-
-
-def running_fit() -> FitJob | None:
-    return _RunningFit.job
 
 
 def _fit_job_for(context, request) -> FitJob:
@@ -566,7 +502,7 @@ def _fit_summary(outcome) -> str:
 
 
 class CLOTHLIGHT_OT_fit_medium(_ChildJobOperator, bpy.types.Operator):
-    """Fit the medium's free parameters to a measured cloth BRDF (python -m precompute fit: CMA-ES over the
+    """Fit the medium's free parameters to a measured cloth BRDF (python -m clothlight.fit: CMA-ES over the
     rendered cloth response, in a background process; docs/fitting.md). Esc cancels: nothing is written"""
 
     bl_idname = "clothlight.fit_medium"
@@ -608,7 +544,7 @@ class CLOTHLIGHT_OT_fit_medium(_ChildJobOperator, bpy.types.Operator):
                               f"Preset: {outcome.preset}")
         return {"FINISHED"}
 
-    _running = _RunningFit
+    _running = RunningFit
     _what = "Fit"
     _unavailable_reason = staticmethod(fit_unavailable_reason)
 
@@ -625,10 +561,10 @@ class CLOTHLIGHT_OT_cancel_fit(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return _RunningFit.job is not None
+        return RunningFit.job is not None
 
     def execute(self, context):
-        _RunningFit.job.cancel()
+        RunningFit.job.cancel()
         return {"FINISHED"}
 
 
@@ -723,18 +659,3 @@ CLASSES = (
     CLOTHLIGHT_OT_apply_material,
     CLOTHLIGHT_OT_setup_render,
 )
-
-
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    _ScheduledRecolour.cancel()
-    for holder in (_RunningBake, _RunningFit):
-        if holder.job is not None:
-            holder.job.cancel()
-            holder.job = None
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)

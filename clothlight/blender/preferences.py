@@ -15,9 +15,13 @@ import os
 
 import bpy
 
-from ..addon import EXTENSION_PACKAGE, import_precompute
 from ..fit_job import fit_unavailable_reason
 from ..jobs import bake_unavailable_reason
+
+
+#: The extension's package (``bl_ext.<repo>.clothlight``), or "" in development, where ``clothlight`` is
+#: a top-level package: this module is ``<extension>.clothlight.blender.preferences``.
+EXTENSION_PACKAGE = __package__.rpartition(".")[0].rpartition(".")[0]
 
 
 class ClothLightPreferences(bpy.types.AddonPreferences):
@@ -69,20 +73,22 @@ def preferences(context=None) -> ClothLightPreferences | None:
 def cache_directory(context=None) -> str:
     """Folder for baked tables: the preference if set, else the extension's user cache folder
     (in development, outside an extension, the bake's own default cache)."""
+    from precompute.cache import entries as cache
     prefs = preferences(context)
     if prefs and prefs.cache_dir:
         return bpy.path.abspath(prefs.cache_dir)
     if not EXTENSION_PACKAGE:
-        return str(import_precompute("cache").default_cache_dir())
+        return str(cache.default_cache_dir())
     return bpy.utils.extension_path_user(EXTENSION_PACKAGE, path="cache", create=True)
 
 
 def fit_directory() -> str:
     """Where a fit writes when the panel names no folder: ``fits/`` in the extension's user folder
     (in development, in the user cache folder)."""
+    from precompute.cache import entries as cache
     folder = _user_folder("fits")
     if folder is None:
-        return str(import_precompute("cache").default_cache_dir() / "fits")
+        return str(cache.default_cache_dir() / "fits")
     return folder
 
 
@@ -97,10 +103,9 @@ def numba_cache_directory(in_blender: bool = False) -> str | None:
     """Where numba keeps ClothLight's compiled kernels: the extension's user folder, since an extension
     must not write into its own folder.  None in development (numba's default, next to the sources).
 
-    The bake child and Blender's own process (``in_blender``) each have their own folder: a cached
-    kernel records the name of the module it was compiled in, and the child imports the kernels as
-    ``precompute.…`` while Blender imports them as ``bl_ext.<repo>.clothlight.precompute.…`` — a
-    kernel cached by one fails to load in the other (``No module named 'precompute'``)."""
+    The bake child and Blender's own process (``in_blender``) each have their own folder, so that
+    neither loads a kernel while the other writes it.  Both import the kernels as ``precompute.…``
+    (the extension's root ``__init__.py``), the name a cached kernel records."""
     return _user_folder("numba_blender" if in_blender else "numba")
 
 
@@ -152,13 +157,3 @@ def restore_numba_cache() -> None:
     numba = sys.modules.get("numba")
     if numba is not None and numba.config.CACHE_DIR == folder:
         numba.config.CACHE_DIR = ""
-
-
-def register() -> None:
-    bpy.utils.register_class(ClothLightPreferences)
-    use_user_numba_cache()
-
-
-def unregister() -> None:
-    restore_numba_cache()
-    bpy.utils.unregister_class(ClothLightPreferences)

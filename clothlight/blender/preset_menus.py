@@ -71,15 +71,3 @@ class CLOTHLIGHT_OT_medium_preset_add(AddPresetBase, bpy.types.Operator):
 
 CLASSES = (CLOTHLIGHT_PT_weave_presets, CLOTHLIGHT_PT_medium_presets, CLOTHLIGHT_OT_weave_preset_add,
            CLOTHLIGHT_OT_medium_preset_add)
-
-
-def register() -> None:
-    bpy.utils.register_preset_path(str(PRESET_ROOT))
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
-    bpy.utils.unregister_preset_path(str(PRESET_ROOT))

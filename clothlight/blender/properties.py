@@ -12,14 +12,13 @@ the bake as overrides, so an untouched preset bakes exactly what ``python -m pre
 fit found that the panel does not expose (a second particle species, the fibre's absorption, the
 sheen) are kept as overrides of their own (``fitted_overrides``) and baked with the rest.
 
-The fit settings (``Scene.clothlight.fit``) say what ``python -m precompute fit`` would be told:
+The fit settings (``Scene.clothlight.fit``) say what ``python -m clothlight.fit`` would be told:
 the measurement, the free parameters, the budget, the colour targets, the output folder
 (:class:`clothlight.fit_job.FitRequest`).
 """
 
 from __future__ import annotations
 
-import functools
 import json
 import pathlib
 
@@ -27,16 +26,28 @@ import bpy
 import numpy as np
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
-from ..addon import import_precompute
 from ..fit_job import FREE_PARAMETERS, FitRequest
-from ..jobs import BakeRequest, preset_request, typed_number
+from ..medium_settings import (
+    BakeRequest,
+    config_value,
+    exposed_values,
+    fitted_values_json,
+    medium_keys,
+    particle_size_key,
+    preset_config,
+    preset_request,
+    request_overrides,
+    shown_key,
+    typed_number,
+)
+from . import running_jobs
 from ..weave import BUILT_IN, WeaveParameterError, WeaveParameters
 from ..weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
 
-_medium = import_precompute("medium")
+from precompute.optics import medium as _medium
 #: The allowed ranges, one definition shared with the bake's API and command line (precompute/bounds.py).
-_bounds = import_precompute("bounds")
-ParameterError = import_precompute("errors").ParameterError
+from precompute import bounds as _bounds
+from precompute.errors import ParameterError
 
 _WEAVE = WeaveParameters()
 _REQUEST = preset_request(_medium.DEFAULT_PRESET)
@@ -170,39 +181,6 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
 
 # -- the medium ------------------------------------------------------------------------------
 
-def _particle_size_key(config: dict) -> str | None:
-    particles = config.get("particles") or [{}]
-    for key in ("diameter_nm", "median_diameter_nm"):
-        if key in particles[0]:
-            return f"particles.0.{key}"
-    return None
-
-
-def medium_keys(config: dict) -> dict[str, str]:
-    """The dotted TOML keys of the exposed values that a preset has: property name → key."""
-    keys = {"yarn_radius_mm": "yarn.radius_mm"}
-    if isinstance(config.get("dye"), dict):
-        keys["dye_weight_percent"] = "dye.weight_percent"
-    size = _particle_size_key(config)
-    if size is not None:
-        keys["particle_diameter_nm"] = size
-        keys["particle_volume_fraction"] = "particles.0.volume_fraction"
-    return keys
-
-
-def config_value(config: dict, key: str):
-    node = config
-    for part in key.split("."):
-        node = node[int(part)] if isinstance(node, list) else node[part]
-    return node
-
-
-@functools.lru_cache(maxsize=None)
-def preset_config(name: str) -> dict:
-    """The TOML content of the shipped preset ``name`` (ParameterError for an unknown name)."""
-    return _medium.load_preset_config(name)[0]
-
-
 _DEFAULT_CONFIG = preset_config(_medium.DEFAULT_PRESET)
 
 
@@ -242,20 +220,10 @@ def _recolour(self, context) -> None:
         return
     low, high = baked.dye_series
     if low <= typed_number(self.dye_weight_percent) <= high:
-        from . import operators
-
-        operators.schedule_recolour(context.scene.name)
+        running_jobs.schedule_recolour(context.scene.name)
 
 
-def _show_key(key: str, config: dict) -> str:
-    """A dotted override key as the panel shows it: a particle species by its name."""
-    parts = key.split(".")
-    if parts[0] == "particles" and len(parts) == 3 and parts[1].isdigit():
-        particles = config.get("particles") or []
-        index = int(parts[1])
-        if index < len(particles) and isinstance(particles[index], dict) and particles[index].get("name"):
-            return f"{particles[index]['name']}.{parts[2]}"
-    return key
+
 
 
 def _forget_request(self, _context) -> None:
@@ -288,7 +256,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         name="To (%)", default=DYE_SERIES_DEFAULT[1], min=0.01, max=99.9, soft_max=10.0, precision=2, step=10,
         description="Most dye of the range, % of fibre weight (a wider range takes more memory while baking)")
     particle_diameter_nm: FloatProperty(
-        name="Particle Diameter (nm)", default=_default(_particle_size_key(_DEFAULT_CONFIG) or "", 150.0),
+        name="Particle Diameter (nm)", default=_default(particle_size_key(_DEFAULT_CONFIG) or "", 150.0),
         **_bounds.PARTICLE_DIAMETER_NM.limits(), soft_min=10.0, soft_max=2000.0, precision=1, step=100,
         description="Diameter of the scattering particles in nanometres (the paper's 150 nm, §6.2); for a "
                     "log-normal size distribution, its number median")
@@ -348,7 +316,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
 
     def load_preset(self, name: str) -> None:
         """Set every exposed value from the shipped preset ``name`` (its [transport] table included);
-        ``request()`` is then :func:`clothlight.jobs.preset_request` of it."""
+        ``request()`` is then :func:`clothlight.medium_settings.preset_request` of it."""
         config = preset_config(name)
         for prop, key in medium_keys(config).items():
             setattr(self, prop, float(config_value(config, key)))
@@ -377,42 +345,31 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
     def extra_overrides_text(self) -> str:
         """The fitted values the panel does not expose, as one line ("" for none)."""
         config = preset_config(self.base)
-        return ", ".join(f"{_show_key(key, config)} {value:.4g}" for key, value in self.extra_overrides())
+        return ", ".join(f"{shown_key(key, config)} {value:.4g}" for key, value in self.extra_overrides())
 
     def set_values(self, base: str, overrides) -> None:
         """Make these settings the medium ``base`` with ``overrides`` ((dotted key, value) pairs, as a
-        :class:`~clothlight.jobs.BakeRequest` holds them): the exposed values from them or the preset,
+        :class:`~clothlight.medium_settings.BakeRequest` holds them): the exposed values from them or the preset,
         the rest kept in ``fitted_overrides``.  The bake settings (budget, seed, grids) stay."""
         if self.base != base:
             self.base = base  # loads the preset's values and bake settings
-        config = preset_config(base)
-        given = {str(key): float(value) for key, value in overrides}
-        exposed = medium_keys(config)
-        for prop, key in exposed.items():
-            value = given.pop(key, None)
-            setattr(self, prop, float(config_value(config, key)) if value is None else value)
-        self.fitted_overrides = json.dumps(sorted([key, value] for key, value in given.items())) if given else ""
+        values, fitted = exposed_values(preset_config(base), overrides)
+        for prop, value in values.items():
+            setattr(self, prop, value)
+        self.fitted_overrides = fitted_values_json(fitted)
 
     def request(self) -> BakeRequest:
         """The bake these settings ask for: overrides only where a value differs from the preset."""
         config = preset_config(self.base)
-        overrides = [(key, typed_number(getattr(self, prop))) for prop, key in medium_keys(config).items()
-                     if typed_number(getattr(self, prop)) != typed_number(config_value(config, key))]
-        exposed = set(medium_keys(config).values())
-        for key, value in self.extra_overrides():
-            try:
-                preset_value = typed_number(config_value(config, key))
-            except (KeyError, IndexError, TypeError, ValueError):
-                preset_value = None
-            if key not in exposed and typed_number(value) != preset_value:
-                overrides.append((key, typed_number(value)))
+        values = {prop: getattr(self, prop) for prop in medium_keys(config)}
+        overrides = request_overrides(config, values, self.extra_overrides())
         fixed = self.budget == "PATHS"
         series = None
         if self.use_dye_series and "dye_weight_percent" in medium_keys(config):
             series = (typed_number(self.dye_series_low), typed_number(self.dye_series_high))
         return BakeRequest(
             dye_series=series,
-            preset=self.base, overrides=tuple(overrides), seed=self.seed,
+            preset=self.base, overrides=overrides, seed=self.seed,
             paths_per_cell=self.paths_per_cell if fixed else None,
             target_rel_stderr=None if fixed else self.target_error,
             n_around=self.n_around, n_along=self.n_along,
@@ -433,7 +390,7 @@ DEFAULT_FREE = {"dye_weight_percent", "specular_weight", "specular_slope"}
 
 
 class ClothLightFitSettings(bpy.types.PropertyGroup):
-    """A fit of the yarn medium to a measured cloth BRDF (``python -m precompute fit``, docs/fitting.md)."""
+    """A fit of the yarn medium to a measured cloth BRDF (``python -m clothlight.fit``, docs/fitting.md)."""
 
     measured_path: StringProperty(
         name="Measurement", subtype="FILE_PATH", default="",
@@ -551,19 +508,6 @@ class ClothLightSceneSettings(bpy.types.PropertyGroup):
 
 
 CLASSES = (ClothLightWeaveSettings, ClothLightMediumSettings, ClothLightFitSettings, ClothLightSceneSettings)
-
-
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-    bpy.types.Scene.clothlight = PointerProperty(type=ClothLightSceneSettings, name="ClothLight")
-
-
-def unregister() -> None:
-    del bpy.types.Scene.clothlight
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
-
 
 __all__ = ["ClothLightFitSettings", "ClothLightMediumSettings", "ClothLightSceneSettings", "ClothLightWeaveSettings",
            "ParameterError", "millimetre_scale", "parse_draft"]

@@ -46,12 +46,12 @@ def _on_frame_change(_scene, _depsgraph=None) -> None:
     sync_linked_suns()
 
 
-def register() -> None:
+def add_handlers() -> None:
     bpy.app.handlers.depsgraph_update_post.append(_on_depsgraph_update)
     bpy.app.handlers.frame_change_post.append(_on_frame_change)
 
 
-def unregister() -> None:
+def remove_handlers() -> None:
     for handlers, function in ((bpy.app.handlers.depsgraph_update_post, _on_depsgraph_update),
                                (bpy.app.handlers.frame_change_post, _on_frame_change)):
         if function in handlers:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import operators
+from . import operators, running_jobs
 from ..fit_job import fit_unavailable_reason
 from ..jobs import bake_unavailable_reason
 from ..prebaked import prebaked_tables
@@ -119,7 +119,7 @@ class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
                                               <= medium.dye_series_high):
                 layout.label(text="The dye lies outside the range", icon="ERROR")
 
-        job = operators.running_bake()
+        job = running_jobs.running_bake()
         if job is not None:
             row = layout.row(align=True)
             row.progress(factor=job.progress, type="BAR", text=f"Baking: {job.progress:.0%}")
@@ -167,7 +167,7 @@ class CLOTHLIGHT_PT_bake_grids(_SidebarPanel, bpy.types.Panel):
 
 
 class CLOTHLIGHT_PT_medium_fit(_SidebarPanel, bpy.types.Panel):
-    """Fit the medium above to a measured cloth BRDF (python -m precompute fit, docs/fitting.md)."""
+    """Fit the medium above to a measured cloth BRDF (python -m clothlight.fit, docs/fitting.md)."""
 
     bl_label = "Fit to Measurement"
     bl_parent_id = "CLOTHLIGHT_PT_medium"
@@ -191,7 +191,7 @@ class CLOTHLIGHT_PT_medium_fit(_SidebarPanel, bpy.types.Panel):
         layout.prop(fit, "seed")
         layout.prop(fit, "out_dir")
         layout.prop(fit, "load_result")
-        job = operators.running_fit()
+        job = running_jobs.running_fit()
         if job is not None:
             row = layout.row(align=True)
             row.progress(factor=job.progress, type="BAR", text=f"Fitting: {job.progress:.0%}")
@@ -319,13 +319,3 @@ CLASSES = (
     CLOTHLIGHT_PT_validation,
     CLOTHLIGHT_PT_material_properties,
 )
-
-
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)

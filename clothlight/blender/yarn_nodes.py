@@ -2,7 +2,7 @@
 default SVM, on the CPU or a GPU.
 
 The same closures as ``osl/cloth_yarn.osl``'s general mode: the five lobes of ``lobes.exr`` in the
-yarn frame (``cl_closure_mixture``; precompute.closure_fit: Diffuse, Translucent, Hair reflection
+yarn frame (``cl_closure_mixture``; precompute.tables.closure_fit: Diffuse, Translucent, Hair reflection
 and transmission about the yarn axis, GGX Glossy about the view), weighted by the lobe atlas where
 the view falls in it, plus the cloth's Cook–Torrance sheen about the cloth normal
 (``cl_cloth_specular_closure``).  The view is placed in the atlas by the tables' concentric
@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import math
 
-from ..addon import import_precompute
 from .node_builder import NodeBuilder
 
 #: Roughness inputs of the Hair BSDF nodes for the bake's ``lobe_shape``, per hair component.
@@ -35,12 +34,13 @@ HAIR_ROUGHNESS = {
 
 
 def lobes_present(lobe_image) -> tuple[bool, ...]:
-    """Per lobe (precompute.closure_fit.LOBES), whether its tile of the lobe atlas (a Blender image
+    """Per lobe (precompute.tables.closure_fit.LOBES), whether its tile of the lobe atlas (a Blender image
     of ``lobes.exr``) has any weight: the fit leaves out minor lobes (MIN_LOBE_SHARE), and a lobe of
     zero weight everywhere needs neither its image lookup nor its closure."""
+    from precompute.tables import closure_fit
     import numpy as np
 
-    lobe_count = len(import_precompute("closure_fit").LOBES)
+    lobe_count = len(closure_fit.LOBES)
     width, height = lobe_image.size
     pixels = np.empty(width * height * lobe_image.channels, np.float32)
     lobe_image.pixels.foreach_get(pixels)
@@ -147,7 +147,8 @@ def _clamped(socket):
 def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal) -> list:
     """The cloth's specular closures (``cl_cloth_specular_closure``): about the cloth normal turned
     toward the viewer, on faces whose normal is on its side only, weighted by the specular weight."""
-    specular = tables.specular or import_precompute("table_folder").default_specular()
+    from precompute.tables import folder as table_folder
+    specular = tables.specular or table_folder.default_specular()
     weight, slope = float(specular["weight"]), float(specular["slope"])
     if weight <= 0.0:
         return []

@@ -22,7 +22,6 @@ try:  # a Ctrl-C before the handler in main() is in place still exits with 130, 
     import sys
     import time
 
-    from ..addon import import_precompute
 except KeyboardInterrupt:
     if __name__ != "__main__":
         raise
@@ -61,7 +60,7 @@ def build_parser():
                            f"(default {pixels})")
     bake.add_argument("--samples", type=GONIO_SAMPLES.argument("--samples"), default=samples,
                       help=f"Cycles samples per pixel, {GONIO_SAMPLES.allowed()} (default {samples})")
-    distributed = import_precompute("distributed")
+    from precompute import distributed
     default_scheduler = distributed.default_scheduler() or distributed.NO_SCHEDULER
     bake.add_argument("--scheduler", default=default_scheduler, metavar="local|tcp://HOST:PORT|none",
                       help=f"where the renders run: {distributed.LOCAL!r}, a worker per core of this machine; a "
@@ -107,27 +106,30 @@ def _measure(args, interrupt):
 
 def main(argv=None) -> int:
     """Run a command; the exit code (module docstring)."""
-    return import_precompute("exit_codes").run_cli(lambda: _main(argv))
+    from precompute import exit_codes
+    return exit_codes.run_cli(lambda: _main(argv))
 
 
 def _main(argv) -> int:
+    from precompute import distributed
+    from precompute import exit_codes
     args = build_parser().parse_args(argv)
-    ParameterError = import_precompute("errors").ParameterError
-    table_folder = import_precompute("table_folder")
-    outputs = import_precompute("outputs")
+    from precompute.errors import ParameterError
+    from precompute.tables import folder as table_folder
+    from precompute import outputs
     from .tables import CLOTH_FOLDER_FILES, check_cloth_table_folder
 
     # Before Blender and minutes of renders: the output folder, the cache, the yarn bake.
     table_folder.check_output_folder(args.out, CLOTH_FOLDER_FILES)
     if args.cache_dir is not None:
         outputs.check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
-    args.scheduler = import_precompute("distributed").check_scheduler(args.scheduler)
+    args.scheduler = distributed.check_scheduler(args.scheduler)
     if not pathlib.Path(args.tables).is_dir():
         raise ParameterError("--tables", args.tables, "an existing yarn bake folder (python -m precompute bake --out)")
 
     # Blender prints and swallows an exception raised in its callbacks (Cycles' render engine): a
     # Ctrl-C is held and raised between renders instead, so it always stops the bake (code 130).
-    with import_precompute("exit_codes").DeferredInterrupt("interrupting after the current render…") as interrupt:
+    with exit_codes.DeferredInterrupt("interrupting after the current render…") as interrupt:
         folder, measured, summary_of = _measure(args, interrupt)
 
     def write(staging: pathlib.Path) -> None:

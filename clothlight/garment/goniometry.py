@@ -43,10 +43,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..addon import import_precompute
 
-ParameterError = import_precompute("errors").ParameterError
-AngularGrid = import_precompute("grids").AngularGrid
+from precompute.errors import ParameterError
+from precompute.tables.grids import AngularGrid
 
 SIDES = ("front", "back")
 #: Rotation taking a side's frame to the world: front = identity, back = half-turn about x.

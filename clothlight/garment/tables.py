@@ -20,7 +20,7 @@ and for both sides together:
 
 ``lobes.exr``
     The general-lighting closure mixture: per view, the weights of :data:`GARMENT_LOBES`
-    fitted to each side's ρ (:func:`precompute.closure_fit.fit_closure_weights`), and the open
+    fitted to each side's ρ (:func:`precompute.tables.closure_fit.fit_closure_weights`), and the open
     weave, 1 − the fraction of the cloth hidden by yarn along the view, through which light
     passes unscattered (a transparent closure).  Laid out for a node-based material
     (:func:`lobe_image`): views on a square grid over the projected hemisphere, front side on top.
@@ -39,23 +39,22 @@ import time
 
 import numpy as np
 
-from ..addon import import_precompute
 from .goniometry import SIDES, side_to_world
 
-precompute_tables = import_precompute("tables")
-table_layout = import_precompute("table_layout")
-closure_fit = import_precompute("closure_fit")
-AngularGrid = import_precompute("grids").AngularGrid
+from precompute.tables import exr as precompute_tables
+from precompute.tables import layout as table_layout
+from precompute.tables import closure_fit
+from precompute.tables.grids import AngularGrid
 
 SUMMARY_SCHEMA = "clothlight-cloth/2"
-#: The garment material's closure mixture (names of precompute.closure_fit lobes, in tile order).
+#: The garment material's closure mixture (names of precompute.tables.closure_fit lobes, in tile order).
 #: At cloth scale the fibre reflection cone and the retro-reflection lobe barely lower the fit
 #: error (red cotton, median relative error front 0.248 with the yarn's five, 0.249 with diffuse,
 #: translucent and fibre transmission, 0.263 with diffuse and translucent alone), and every
 #: closure costs render time; a gloss lobe about the normal, Beckmann as the yarns' Cook–Torrance
 #: term, carries the cloth's specular peak.
 GARMENT_LOBES = ("diffuse", "translucent", "fibre_transmission", "gloss")
-#: The garment mixture is fitted where ρ is large (precompute.closure_fit.fit_closure_weights):
+#: The garment mixture is fitted where ρ is large (precompute.tables.closure_fit.fit_closure_weights):
 #: a garment under broad light reflects an integral of ρ.  Red cotton, N_o = 12, general mode vs
 #: the yarn sample: validation sweep 13.4 % (14.2 % weighing every incidence alike), lit from
 #: straight behind 1.03 of the sample's red glow (1.38).
@@ -228,20 +227,20 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
 
 def write_cloth_summary(folder, summary: dict) -> None:
     """Write a cloth bake's ``summary.json`` with the SHA-256 of every file of the folder
-    (``precompute.table_folder.FILE_HASHES_KEY``), last."""
-    table_folder = import_precompute("table_folder")
+    (``precompute.tables.folder.FILE_HASHES_KEY``), last."""
+    from precompute.tables import folder as table_folder
     hashes = table_folder.file_hashes(folder, [name for name in CLOTH_FOLDER_FILES if name != SUMMARY_FILE])
     summary[table_folder.FILE_HASHES_KEY] = hashes
     (pathlib.Path(folder) / SUMMARY_FILE).write_text(json.dumps(summary, indent=1))
 
 
 def check_cloth_table_folder(folder):
-    """Check a cloth bake folder as a whole, as ``precompute.table_folder`` checks a yarn's: its summary
+    """Check a cloth bake folder as a whole, as ``precompute.tables.folder`` checks a yarn's: its summary
     (this schema, measured from yarn tables of this table schema, these lobe tiles), every table read
     and validated against its kind, the summary's resolutions, side and quantity, and the bake's cache
     key, the weave detail texture, and every file's bytes against the summary's list.  Returns the
-    ``CheckedFolder``; ``precompute.tables.TableError`` naming the file and the reason otherwise."""
-    table_folder = import_precompute("table_folder")
+    ``CheckedFolder``; ``precompute.tables.exr.TableError`` naming the file and the reason otherwise."""
+    from precompute.tables import folder as table_folder
     TableError = precompute_tables.TableError
     folder = pathlib.Path(folder).absolute()
     summary = table_folder.load_summary(folder, SUMMARY_SCHEMA, "bake the cloth again")

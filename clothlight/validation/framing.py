@@ -28,9 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..addon import import_precompute
 
-ParameterError = import_precompute("errors").ParameterError
+from precompute.errors import ParameterError
 
 #: The paper's incidences (§6, graphs 1–6), degrees.
 DEFAULT_INCIDENCES_DEG = (0.0, 30.0, 45.0, 60.0)

@@ -18,7 +18,6 @@ import zlib
 try:
     import numpy as np
 
-    from ..addon import import_precompute
 except KeyboardInterrupt:  # Ctrl-C while ``python -m clothlight.validation.report`` starts: code 130, no traceback
     if __name__ != "__main__":
         raise
@@ -30,8 +29,9 @@ CHANNELS = ("R", "G", "B")
 
 def write_json(results: dict, path) -> pathlib.Path:
     """``results`` as standard JSON (NaN → null)."""
+    from precompute import outputs
     path = pathlib.Path(path)
-    standard = import_precompute("outputs").json_ready(results)
+    standard = outputs.json_ready(results)
     path.write_text(json.dumps(standard, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     return path
 
@@ -258,21 +258,24 @@ USAGE = "usage: python -m clothlight.validation.report RESULTS_JSON"
 def main(argv=None) -> int:
     """``python -m clothlight.validation.report results.json``: redraw the plots and the report beside
     the results.  Exit codes as every ClothLight command (``precompute/exit_codes.py``)."""
-    return import_precompute("exit_codes").run_cli(lambda: _main(sys.argv[1:] if argv is None else argv))
+    from precompute import exit_codes
+    return exit_codes.run_cli(lambda: _main(sys.argv[1:] if argv is None else argv))
 
 
 def _main(argv) -> int:
-    ParameterError = import_precompute("errors").ParameterError
+    from precompute import exit_codes
+    from precompute import outputs
+    from precompute.errors import ParameterError
     if list(argv) in (["-h"], ["--help"]):
         print(USAGE + "\n\n" + (main.__doc__ or "").split("\n\n")[0])
         return 0
     if len(argv) != 1:
         print(USAGE, file=sys.stderr)
-        return import_precompute("exit_codes").BAD_INPUT
+        return exit_codes.BAD_INPUT
     path = pathlib.Path(argv[0])
     if not path.is_file():
         raise ParameterError("RESULTS_JSON", argv[0], "the results.json of a validation sweep (no such file)")
-    import_precompute("outputs").check_writable_folder(
+    outputs.check_writable_folder(
         path.parent, "RESULTS_JSON", what="a results.json in a folder this user can write (the plots go beside it)")
     try:
         results = json.loads(path.read_text(encoding="utf-8"))

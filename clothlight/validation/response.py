@@ -4,8 +4,8 @@ In sun mode every cloth pixel of a view emits ``(ρ(ω_i, ω_o) + ρ_u(ω_i, ω_
 other yarn shadows it (``osl/cloth_yarn.osl``), and the calibrated cloth BRDF of the view is the sum
 of those pixels over ``N² E cos θi`` (:func:`.measure.measure_view` with the rig's framing: every
 pixel covers (P/N)² of cloth).  The shader reads ρ as a fixed blend of 16 atlas pixels
-(:func:`precompute.table_layout.rho_taps`) and ρ_u as a fixed blend of attenuation-table pixels
-(:func:`precompute.ballistic.unscattered_cone_weights`), so the whole view is linear in the tables::
+(:func:`precompute.tables.layout.rho_taps`) and ρ_u as a fixed blend of attenuation-table pixels
+(:func:`precompute.optics.ballistic.unscattered_cone_weights`), so the whole view is linear in the tables::
 
     f_cloth(view) = A_ρ(view) · atlas + A_u(view) · attenuation + w · f_CT(view; m) · s(view)
 
@@ -33,11 +33,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..addon import import_precompute
 
-ParameterError = import_precompute("errors").ParameterError
-_ballistic = import_precompute("ballistic")
-_table_layout = import_precompute("table_layout")
+from precompute.errors import ParameterError
+from precompute.optics import ballistic as _ballistic
+from precompute.tables import layout as _table_layout
 
 #: Format tag of a stored response (``.npz``).
 SCHEMA = "clothlight-response/1"
@@ -128,7 +127,8 @@ class ClothResponse:
 
     def specular_brdf(self, weight: float, slope: float, index: float) -> np.ndarray:
         """The Cook–Torrance term's share of each view's cloth BRDF (n_views,), 1/sr: w f_CT (n_c·l) s."""
-        cook_torrance = import_precompute("cook_torrance").cook_torrance(self._toward_sun, self._toward_camera,
+        from precompute.optics import cook_torrance
+        cook_torrance = cook_torrance.cook_torrance(self._toward_sun, self._toward_camera,
                                                                           slope, index)
         return weight * cook_torrance * self._toward_sun[:, 2] * self._specular_share
 

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-from ..addon import import_precompute
 
-ParameterError = import_precompute("errors").ParameterError
+from precompute.errors import ParameterError
 
 
 class WeaveParameterError(ParameterError):

@@ -21,9 +21,11 @@ from numbers import Integral, Real
 
 import numpy as np
 
+from precompute.bounds import Bound as _Bound
+from precompute.errors import ParameterError
+
 from .centerline import crimp_percent, max_curvature
 from .clearance import crossing_gaps
-from ..addon import import_precompute
 from .errors import WeaveParameterError
 from .patterns import plain, validate_interlacing, weave_pattern
 
@@ -33,8 +35,6 @@ DEFAULT_YARN_RADIUS_MM = 0.1
 #: sharing surface (coincident faces render as noise).
 CROSSING_CLEARANCE = 0.02
 
-_Bound = import_precompute("bounds").Bound
-ParameterError = import_precompute("errors").ParameterError
 #: The integer settings' ranges, read by the API (below) and the Weave panel (clothlight/blender/properties.py).
 COUNT_BOUNDS = {
     "warp_count": _Bound("warp_count", 1, 1000, integer=True),

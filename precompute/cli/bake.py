@@ -10,12 +10,12 @@ import json
 import pathlib
 import sys
 
-from .. import bounds
-from ..bake import bake, export_bake
-from ..distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
-from ..medium import DEFAULT_PRESET, preset_names
-from ..outputs import check_writable_folder
-from ..table_folder import YARN_FOLDER_FILES, check_output_folder
+from precompute import bounds
+from precompute.bake import bake, export_bake
+from precompute.distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
+from precompute.optics.medium import DEFAULT_PRESET, preset_names
+from precompute.outputs import check_writable_folder
+from precompute.tables.folder import YARN_FOLDER_FILES, check_output_folder
 
 
 def add_parser(subparsers) -> None:

@@ -16,9 +16,9 @@ import sys
 
 import numpy as np
 
-from ..medium import DEFAULT_PRESET, MediumParameters, load_preset, preset_names
-from ..optics import MediumOptics, medium_optics
-from ..outputs import check_writable_file
+from precompute.optics.medium import DEFAULT_PRESET, MediumParameters, load_preset, preset_names
+from precompute.optics.coefficients import MediumOptics, medium_optics
+from precompute.outputs import check_writable_file
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -122,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
     optics, other = (corrected, independent) if chosen_model == "percus-yevick" else (independent, corrected)
     report = _report(params, optics, independent, corrected)
     if args.plot:
-        from ..plots_optics import plot_medium_optics  # matplotlib only when a plot is asked for
+        from precompute.optics.plots import plot_medium_optics  # matplotlib only when a plot is asked for
 
         other_label = "independent" if other.dependent_scattering == "none" else other.dependent_scattering
         path = plot_medium_optics(

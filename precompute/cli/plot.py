@@ -1,4 +1,4 @@
-"""``python -m precompute plot TABLE.exr --out DIR``: PNG plots of a baked yarn (see precompute/plots.py).
+"""``python -m precompute plot TABLE.exr --out DIR``: PNG plots of a baked yarn (see precompute/tables/plots.py).
 
 ``TABLE`` is a bake's ``brdf.exr`` or its folder.  The in-plane and polar
 plots need the table alone; the albedo spectra and the front/back swatches
@@ -12,12 +12,12 @@ import json
 import pathlib
 import sys
 
-from .. import plots
-from ..bake import SPECTRAL_FILE, TABLE_FILES, load_spectral
-from ..errors import ParameterError
-from ..outputs import check_writable_folder
-from ..table_folder import check_yarn_table_folder
-from ..tables import TableError, read_table
+from precompute.tables import plots
+from precompute.bake import SPECTRAL_FILE, TABLE_FILES, load_spectral
+from precompute.errors import ParameterError
+from precompute.outputs import check_writable_folder
+from precompute.tables.folder import check_yarn_table_folder
+from precompute.tables.exr import TableError, read_table
 
 
 def add_parser(subparsers) -> None:

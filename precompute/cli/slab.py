@@ -7,7 +7,7 @@ unscattered parts included, as iadpython's ``Sample(...).rt()`` gives them) with
 their Monte-Carlo standard errors, then the parts.
 
 The paths run in the native slab library where ``make setup`` built it for these sources
-(:mod:`precompute.native_slab`: no numba, no NumPy, the same numbers bit for bit), else in numba's
+(:mod:`precompute.slab.native`: no numba, no NumPy, the same numbers bit for bit), else in numba's
 kernel; ``--engine`` chooses.
 """
 
@@ -16,8 +16,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from ..bounds import SLAB_ALBEDO, SLAB_G, SLAB_INDEX, SLAB_PATHS, SLAB_SEED, SLAB_TAU
-from ..errors import ParameterError
+from precompute.bounds import SLAB_ALBEDO, SLAB_G, SLAB_INDEX, SLAB_PATHS, SLAB_SEED, SLAB_TAU
+from precompute.errors import ParameterError
 
 ENGINES = ("auto", "native", "numba")
 KEYS = ("R_total", "R_total_stderr", "T_total", "T_total_stderr", "R_specular", "R_unscattered", "R_diffuse",
@@ -67,7 +67,7 @@ def slab_summary(albedo: float, g: float, tau: float, index: float, *, paths: in
                  threads: int | None, engine: str) -> dict:
     """``simulate_hg_slab(...).summary()`` from ``engine`` (:data:`ENGINES`; the module docstring)."""
     if engine != "numba":
-        from .. import native_slab  # neither numba nor NumPy
+        from precompute.slab import native as native_slab  # neither numba nor NumPy
 
         library = native_slab.load_library()
         if library is not None:
@@ -76,6 +76,6 @@ def slab_summary(albedo: float, g: float, tau: float, index: float, *, paths: in
         if engine == "native":
             raise ParameterError("--engine", "native", "an engine that is built: the native slab library is not "
                                  f"built for these sources ({native_slab.library_path()}); run make setup")
-    from ..transport import simulate_hg_slab
+    from precompute.transport import simulate_hg_slab
 
     return simulate_hg_slab(albedo, g, tau, index, paths=paths, seed=seed, threads=threads).summary()

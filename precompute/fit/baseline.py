@@ -10,7 +10,7 @@ The baseline's cloth BRDF at a view is the flat-cloth form
 
     f(l, v) = a_c / π + w · f_CT(l, v; n = (0, 0, 1), m, n_host = 1.557)           [1/sr]
 
-with f_CT the shader's Cook–Torrance (:mod:`precompute.cook_torrance`, ``cl_cook_torrance``): the
+with f_CT the shader's Cook–Torrance (:mod:`precompute.optics.cook_torrance`, ``cl_cook_torrance``): the
 cloth a flat sheet, no weave, no shadowing by yarns.  Fitted with scipy's bounded least squares
 (trust-region reflective) from three starting slopes, the best kept.
 """
@@ -23,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..cook_torrance import DEFAULT_IOR, cloth_specular
-from .objective import CHANNELS, Objective
+from precompute.optics.cook_torrance import DEFAULT_IOR, cloth_specular
+from precompute.fit.objective import CHANNELS, Objective
 
 #: Bounds of the baseline's parameters: albedo (each channel), weight, rms slope m.
 ALBEDO_BOUNDS = (0.0, 1.0)

@@ -2,7 +2,7 @@
 
 Views
 -----
-A measurement (``clothlight/validation/measured_data.py``: the project's CSV, read with
+A measurement (``precompute/fit/measured_data.py``: the project's CSV, read with
 ``read_measurement``) is split by the view's azimuth relative to the light's, Δφ = φo − φi:
 
 * **fit views**: the plane of incidence (Δφ = 0° or 180°, and the normal view), the paper's graphs;
@@ -38,7 +38,6 @@ off costs about as much as a 10 % RMS misfit.
 
 from __future__ import annotations
 
-import importlib
 import math
 import pathlib
 import re
@@ -47,8 +46,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..outputs import json_ready
+from precompute.errors import ParameterError
+from precompute.fit.measured_data import read_measurement, relative_rms_error
+from precompute.outputs import json_ready
 
 CHANNELS = ("R", "G", "B")
 #: Angles closer than this are the same, degrees (measured_data.ANGLE_TOLERANCE_DEG).
@@ -60,13 +60,6 @@ FORWARD_PHI_I_DEG = 180.0
 _RATIO = re.compile(r"^\s*([RGB])\s*/\s*([RGB])\s*=\s*([^,]+?)\s*$")
 
 
-def measured_data():
-    """``clothlight.validation.measured_data`` wherever this package runs (development, or inside
-    the Blender extension, where both packages sit in one parent)."""
-    prefix = __name__[: -len("precompute.fit.objective")]
-    return importlib.import_module(f"{prefix}clothlight.validation.measured_data")
-
-
 def load_measurement(path: str | pathlib.Path, option: str = "--measured"):
     """``read_measurement(path)``; a missing or unreadable file as ParameterError naming ``option``
     (its format errors are MeasurementFormatError, also bad input)."""
@@ -74,7 +67,7 @@ def load_measurement(path: str | pathlib.Path, option: str = "--measured"):
     if not path.is_file():
         raise ParameterError(option, str(path), "an existing measured-data CSV file (docs/validation.md)")
     try:
-        return measured_data().read_measurement(path)
+        return read_measurement(path)
     except OSError as error:
         raise ParameterError(option, str(path), f"a measured-data CSV this user can read ({error.strerror})") from None
 
@@ -183,7 +176,7 @@ def channel_relative_rms(model: np.ndarray, measured: np.ndarray) -> np.ndarray:
     model, measured = np.asarray(model, float), np.asarray(measured, float)
     if not len(measured):
         return np.full(3, math.nan)
-    relative = measured_data().relative_rms_error
+    relative = relative_rms_error
     return np.array([relative(model[:, c], measured[:, c]) for c in range(3)])
 
 
@@ -274,4 +267,4 @@ class Objective:
 
 
 __all__ = ["CHANNELS", "Objective", "Views", "channel_relative_rms", "combined", "load_measurement",
-           "measured_data", "parse_target_ratios", "ratios_at_normal", "split_views"]
+           "parse_target_ratios", "ratios_at_normal", "split_views"]

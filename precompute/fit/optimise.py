@@ -54,20 +54,13 @@ from typing import Protocol
 
 import numpy as np
 
-from ..distributed import ClusterExecutor, open_executor
-from ..errors import InputError, ParameterError
-from ..medium import MAX_VOLUME_FRACTION, medium_from_dict
-from .baseline import BaselineFit, fit_baseline
-from .objective import Objective, Views, load_measurement, parse_target_ratios, split_views
-from .parameters import (
-    FIT_TABLE,
-    FitParameter,
-    apply,
-    initial_values,
-    parse_free,
-    specular_from_config,
-    total_volume_fraction,
-)
+from precompute.distributed import ClusterExecutor, open_executor
+from precompute.errors import InputError, ParameterError
+from precompute.optics.medium import MAX_VOLUME_FRACTION, medium_from_dict
+from precompute.fit.baseline import BaselineFit, fit_baseline
+from precompute.fit.objective import Objective, Views, load_measurement, parse_target_ratios, split_views
+from precompute.fit.parameters import FitParameter, apply, initial_values, parse_free, total_volume_fraction
+from precompute.optics.cook_torrance import FIT_TABLE, specular_from_config
 
 #: The objective of a candidate the medium refuses (volume fractions summing to 0.74 or more), plus
 #: 100 × how far over it is: far above any misfit (a zero model scores 1).
@@ -418,10 +411,10 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
     Parameters
     ----------
     measurement
-        A ``clothlight.validation.measured_data.Measurement``, or the path of a measured-data CSV.
+        A ``precompute.fit.measured_data.Measurement``, or the path of a measured-data CSV.
     preset_config, base_dir
         The preset's content and the folder its relative paths resolve in
-        (:func:`precompute.medium.load_preset_config`); the values of the parameters that are not
+        (:func:`precompute.optics.medium.load_preset_config`); the values of the parameters that are not
         free stay as they are.
     free
         Names of :data:`precompute.fit.parameters.PARAMETERS` (a sequence or ``"a,b,c"``).

@@ -1,12 +1,12 @@
 """The free parameters of a medium fit: what each sets, its unit, its fit range and its scale.
 
 Each :class:`FitParameter` either sets one value of a preset's content (the dict a preset TOML
-reads as, :func:`precompute.medium.load_preset_config`) or is a keyword of the forward model (the
+reads as, :func:`precompute.optics.medium.load_preset_config`) or is a keyword of the forward model (the
 cloth's specular term, which is not part of the medium).  The optimiser works on every parameter
 mapped to [0, 1] (:meth:`FitParameter.to_unit`): linearly, or linearly in log(value) where the
 parameter spans decades (sizes and amounts).
 
-The fit ranges lie inside what the medium accepts (``precompute.medium``: volume fractions in
+The fit ranges lie inside what the medium accepts (``precompute.optics.medium``: volume fractions in
 (0, 0.74) and < 0.74 in total, diameters within :data:`precompute.bounds.PARTICLE_DIAMETER_NM`,
 dye in [0, 100) %, yarn radius within :data:`precompute.bounds.YARN_RADIUS_MM`), narrowed to what a
 woven cloth's yarn can physically be, so the optimiser spends no evaluations on media no fabric is
@@ -22,14 +22,11 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
-from .. import bounds
-from ..cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT
-from ..errors import ParameterError
-from ..medium import MAX_VOLUME_FRACTION
+from precompute import bounds
+from precompute.optics.cook_torrance import SPECULAR_DEFAULTS
+from precompute.errors import ParameterError
+from precompute.optics.medium import MAX_VOLUME_FRACTION
 
-#: The preset table holding the fitted specular term (``[fit]``, keys ``specular_weight`` and
-#: ``specular_slope``, the shader's SpecularWeight and Slope); the medium's loader ignores it.
-FIT_TABLE = "fit"
 #: The particle species the void and scatterer parameters act on, by their preset ``name``.
 VOIDS = "voids"
 SCATTERERS = "scatterers"
@@ -42,7 +39,7 @@ _SPECIES_TEMPLATES = {
 }
 
 
-#: Values the medium takes where a preset leaves them out (precompute.medium.Yarn).
+#: Values the medium takes where a preset leaves them out (precompute.optics.medium.Yarn).
 _MEDIUM_DEFAULTS = {"yarn.radius_mm": 0.1}
 
 
@@ -131,7 +128,7 @@ class FitParameter:
         ``specular`` (``{"specular_weight": …, "specular_slope": …}``); the medium's default where the
         preset leaves it out (the yarn radius)."""
         if self.is_specular:
-            return float((specular or {}).get(self.path, _SPECULAR_DEFAULTS[self.path]))
+            return float((specular or {}).get(self.path, SPECULAR_DEFAULTS[self.path]))
         table, key = self._place(config)
         if key not in table:
             if self.path in _MEDIUM_DEFAULTS:
@@ -182,7 +179,6 @@ def species_table(config: Mapping, species: str, parameter: str) -> dict:
                               f"{template}")
 
 
-_SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE}
 
 #: Every parameter a fit may free, by name.  The ranges (docs/fitting.md, "Parameters"):
 PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
@@ -248,7 +244,7 @@ def apply(config: Mapping, specular: Mapping | None, values: Mapping[str, float]
     keywords ``{"specular_weight", "specular_slope"}`` (those of ``specular`` or the shader's defaults,
     overridden by ``values``)."""
     new = copy.deepcopy(dict(config))
-    keywords = {key: float((specular or {}).get(key, default)) for key, default in _SPECULAR_DEFAULTS.items()}
+    keywords = {key: float((specular or {}).get(key, default)) for key, default in SPECULAR_DEFAULTS.items()}
     for name, value in values.items():
         parameter = PARAMETERS[name]
         if parameter.is_specular:
@@ -264,14 +260,6 @@ def total_volume_fraction(config: Mapping) -> float:
                      if isinstance(t, dict)))
 
 
-def specular_from_config(config: Mapping) -> dict[str, float]:
-    """The specular keywords a preset records in its ``[fit]`` table (a fitted preset), else the
-    shader's defaults."""
-    table = config.get(FIT_TABLE, {})
-    table = table if isinstance(table, dict) else {}
-    return {key: float(table.get(key, default)) for key, default in _SPECULAR_DEFAULTS.items()}
-
-
-__all__ = ["FIT_TABLE", "PARAMETERS", "SCATTERERS", "VOIDS", "FitParameter", "MissingSpeciesError",
+__all__ = ["PARAMETERS", "SCATTERERS", "VOIDS", "FitParameter", "MissingSpeciesError",
            "UnknownFitParameterError", "apply", "initial_values", "parse_free", "species_table",
-           "specular_from_config", "total_volume_fraction"]
+           "total_volume_fraction"]

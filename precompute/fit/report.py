@@ -1,6 +1,6 @@
 """What a fit writes: the fitted preset, ``fit.json``, ``report.md`` and three plots, as one folder.
 
-``--out DIR`` receives, all at once (:func:`precompute.table_folder.replace_folder`: written into a
+``--out DIR`` receives, all at once (:func:`precompute.tables.folder.replace_folder`: written into a
 staging folder beside it and swapped in at the end, so an interrupted or failed fit leaves no
 partial folder):
 
@@ -31,12 +31,12 @@ import re
 
 import numpy as np
 
-from .. import medium as medium_module
-from ..outputs import json_ready
-from ..table_folder import check_output_folder, replace_folder
-from .objective import CHANNELS
-from .optimise import FitResult
-from .parameters import FIT_TABLE
+from precompute.optics import medium as medium_module
+from precompute.outputs import json_ready
+from precompute.tables.folder import check_output_folder, replace_folder
+from precompute.fit.objective import CHANNELS
+from precompute.fit.optimise import FitResult
+from precompute.optics.cook_torrance import FIT_TABLE
 
 PRESET_FILE = "preset.toml"
 JSON_FILE = "fit.json"
@@ -91,7 +91,7 @@ def fitted_preset_config(result: FitResult, measured_name: str = "") -> dict:
     name = str(config.get("name", "custom"))
     config["name"] = name if name.endswith("_fit") else f"{name}_fit"
     values = ", ".join(f"{p.name} = {result.parameters[p.name]:.4g}" for p in result.free)
-    config["description"] = (f"{name} fitted to {measured_name or 'a measurement'} by python -m precompute fit "
+    config["description"] = (f"{name} fitted to {measured_name or 'a measurement'} by python -m clothlight.fit "
                              f"({values})")
     _absolute_data_files(config, result.base_dir)
     config[FIT_TABLE] = {key: float(value) for key, value in result.specular.items()}
@@ -119,7 +119,7 @@ def _absolute_data_files(config: dict, base_dir: pathlib.Path) -> None:
 def preset_toml(result: FitResult, measured_name: str = "") -> str:
     """The fitted preset as TOML text (module docstring), with a header saying how it was made."""
     config = fitted_preset_config(result, measured_name)
-    lines = [f"# Fitted by `python -m precompute fit` to {measured_name or 'a measurement'} (seed {result.seed}).",
+    lines = [f"# Fitted by `python -m clothlight.fit` to {measured_name or 'a measurement'} (seed {result.seed}).",
              f"# Objective (relative RMS on the plane of incidence): {result.objective:.4g}; "
              f"held-out views: {_show(result.metrics['model']['held_out_views']['relative_rms'])}.",
              "# Free parameters: " + ", ".join(f"{p.name} = {result.parameters[p.name]:.6g}"

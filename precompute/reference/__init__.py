@@ -18,9 +18,9 @@ Mitsuba is imported only by the render functions.  Method: docs/transport.md, "I
 reference: Mitsuba 3".
 """
 
-from .cap import CapLight, cap_frame
-from .geometry import bin_edges, glint_paths, light_direction, unscattered_paths, yarn_frames
-from .prediction import (
+from precompute.reference.cap import CapLight, cap_frame
+from precompute.reference.geometry import bin_edges, glint_paths, light_direction, unscattered_paths, yarn_frames
+from precompute.reference.prediction import (
     BakeWavelength,
     BinPrediction,
     bake_wavelength,
@@ -33,7 +33,15 @@ from .prediction import (
     transport_prediction,
     transport_rho,
 )
-from .render import DEFAULT_EDGE, ReferenceMedium, ReferenceResult, check_cap_map, mitsuba, render_reference, scene_dict
+from precompute.reference.render import (
+    DEFAULT_EDGE,
+    ReferenceMedium,
+    ReferenceResult,
+    check_cap_map,
+    mitsuba,
+    render_reference,
+    scene_dict,
+)
 
 __all__ = [
     "DEFAULT_EDGE",

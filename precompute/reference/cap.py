@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
+from precompute.errors import ParameterError
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ exact unscattered (ballistic) paths and first-surface glint of a smooth dielectr
 Scene (world) frame, lengths in mm: the yarn axis is +x, the orthographic camera looks along −z
 (so the view direction ω_o, toward the camera, is +z everywhere), and the image's horizontal axis
 is +y.  A camera ray at impact parameter ``b`` (mm, −R < b < R) meets the yarn at
-``p = (x, b, √(R² − b²))``.  The yarn frame there follows :mod:`precompute.grids`:
+``p = (x, b, √(R² − b²))``.  The yarn frame there follows :mod:`precompute.tables.grids`:
 x = tangent (the axis), y = n × t, z = outward normal.
 
 Everything here is NumPy only (no Mitsuba): it is the table side of the comparison and the
@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ..errors import ParameterError
+from precompute.errors import ParameterError
 
 #: Unit vectors of the scene frame: yarn axis, image horizontal (across the yarn), toward the camera.
 AXIS = np.array([1.0, 0.0, 0.0])
@@ -101,7 +101,7 @@ def _refract(d: np.ndarray, normal: np.ndarray, eta: float) -> np.ndarray:
 def unscattered_paths(wo: np.ndarray, index: float, orders: int = 4):
     """The unscattered light paths through a smooth dielectric cylinder that leave toward ``wo``.
 
-    The contract of ``precompute.ballistic.unscattered_paths``, computed here independently (by
+    The contract of ``precompute.optics.ballistic.unscattered_paths``, computed here independently (by
     tracing the exit ray backward, which the reciprocity of refraction and Fresnel makes exact),
     with the Fresnel factor of every hit evaluated on its own:
 

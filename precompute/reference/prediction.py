@@ -8,7 +8,7 @@ yarn frame (:func:`~.geometry.yarn_frames`), ω_o (the view, +z of the scene) an
 
 with the cap quadrature (:meth:`~.cap.CapLight.quadrature`, w_j = L dω_j / E⊥).  The unscattered
 (ballistic) light, when a function for it is given (the contract of
-``precompute.ballistic.unscattered_paths``: ``(wo, index, orders) -> (wi (…, K, 3), fresnel_factor
+``precompute.optics.ballistic.unscattered_paths``: ``(wo, index, orders) -> (wi (…, K, 3), fresnel_factor
 (…, K), length_over_radius (…, K))``), adds
 
     ballistic = mean over positions of Σ_k fresnel_factor_k · exp(−μt R chord_k) · L(ω_i,k) / E⊥
@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
-from .cap import CapLight, cap_frame
-from .geometry import VIEW, bin_edges, bin_positions, glint_paths, to_local, to_world, yarn_frames
-from .render import DEFAULT_EDGE, ReferenceMedium
+from precompute.errors import ParameterError
+from precompute.reference.cap import CapLight, cap_frame
+from precompute.reference.geometry import VIEW, bin_edges, bin_positions, glint_paths, to_local, to_world, yarn_frames
+from precompute.reference.render import DEFAULT_EDGE, ReferenceMedium
 
 Rho = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
@@ -106,7 +106,7 @@ def predict_bins(rho: Rho | None, light, *, bins: int = 16, edge: float = DEFAUL
     """The table-side prediction for the bins of :func:`~.render.render_reference` (same ``bins``, ``edge``, ``cap``).
 
     ``rho(wi, wo) -> (…,)`` in 1/sr, both (…, 3) in the yarn frame (None: no scattered term);
-    ``ballistic``: a function with the contract of ``precompute.ballistic.unscattered_paths`` or None;
+    ``ballistic``: a function with the contract of ``precompute.optics.ballistic.unscattered_paths`` or None;
     ``medium`` (its index, μt and R) is needed for the ballistic term and the glint.
     """
     edges = bin_edges(bins, edge)
@@ -130,7 +130,7 @@ def transport_rho(transport, wavelength_index: int = 0, *, chunk: int = 1024) ->
     """ρ and its standard error straight from a :class:`~precompute.transport.YarnTransport`: eq. (5) at
     the exact ω_i (``yarn_brdf_at``), read between exit-cell centres at ω_o as a table tile is read.
     No incidence grid is involved.  Returns two functions ``(wi, wo) -> (…,)`` in 1/sr."""
-    from ..transport import yarn_brdf_at
+    from precompute.transport import yarn_brdf_at
 
     grid = transport.exit_grid
 
@@ -149,7 +149,7 @@ def transport_rho(transport, wavelength_index: int = 0, *, chunk: int = 1024) ->
 
 def _exit_weights(grid, wo: np.ndarray) -> np.ndarray:
     """Bilinear weights (n, N²) of the exit cells for directions ``wo`` (n, 3): between pixel centres,
-    clamped, as :func:`precompute.table_layout.interpolate_exit_tile` reads one tile."""
+    clamped, as :func:`precompute.tables.layout.interpolate_exit_tile` reads one tile."""
     n = grid.resolution
     st = grid.direction_to_square(wo)
     half = 0.5 / n
@@ -193,7 +193,7 @@ def transport_prediction(transport, light, *, bins: int = 16, edge: float = DEFA
     adds to one (δ, o) bin of its incidence cell c only, so the standard error is exact:
     Var = Σ_c (Σ_{δ,o} A² M2[c, δ, o] − (Σ_{δ,o} A S)²) / (N_c − 1), c over the traced cells.
     """
-    from ..transport import source_weights
+    from precompute.transport import source_weights
 
     light = np.asarray(light, float) / np.linalg.norm(light)
     edges = bin_edges(bins, edge)
@@ -224,8 +224,8 @@ def transport_prediction(transport, light, *, bins: int = 16, edge: float = DEFA
 
 def table_rho(rho_table: np.ndarray, incidence_resolution: int) -> Rho:
     """ρ read from a spectral table at one wavelength (N_i², N_o²) exactly as the shader reads it
-    (:func:`precompute.table_layout.interpolate_rho` on the atlas)."""
-    from ..table_layout import brdf_atlas, interpolate_rho
+    (:func:`precompute.tables.layout.interpolate_rho` on the atlas)."""
+    from precompute.tables.layout import brdf_atlas, interpolate_rho
 
     atlas = brdf_atlas(np.asarray(rho_table, float)[:, :, None])
 
@@ -253,8 +253,16 @@ class BakeWavelength:
 
 
 def medium_from_record(record: dict):
-    """:class:`precompute.medium.MediumParameters` from its ``to_dict()`` record (a bake's ``medium``)."""
-    from ..medium import Dye, Host, MediumParameters, ParticleSpecies, RefractiveIndex, WavelengthGrid, Yarn
+    """:class:`precompute.optics.medium.MediumParameters` from its ``to_dict()`` record (a bake's ``medium``)."""
+    from precompute.optics.medium import (
+        Dye,
+        Host,
+        MediumParameters,
+        ParticleSpecies,
+        RefractiveIndex,
+        WavelengthGrid,
+        Yarn,
+    )
 
     def tuples(value):
         return tuple(value) if isinstance(value, list) else value
@@ -284,7 +292,7 @@ def find_spectral(folder, cache_dir=None) -> pathlib.Path | None:
     summary = folder / "summary.json"
     if not summary.is_file():
         return None
-    from ..cache import default_cache_dir, lookup
+    from precompute.cache.entries import default_cache_dir, lookup
 
     key = json.loads(summary.read_text()).get("spectral_key")
     entry = lookup(pathlib.Path(cache_dir) if cache_dir else default_cache_dir(), "spectral", key) if key else None
@@ -295,15 +303,15 @@ def bake_wavelength(spectral_path, wavelength_nm: float) -> BakeWavelength:
     """The bake's data at its simulated wavelength nearest ``wavelength_nm``.
 
     μs and μa come from ``spectral.npz``; the phase table is not stored there, so it is recomputed
-    from the medium record (:func:`precompute.optics.medium_optics`, deterministic, its cos θ grid
+    from the medium record (:func:`precompute.optics.coefficients.medium_optics`, deterministic, its cos θ grid
     chosen again when ``phase_samples`` is ``"auto"``) and the μs, μa it gives are checked against the
     stored ones, the grid against the bake's ``phase_grid`` where recorded.  The phase table is the
     transport's (:func:`precompute.transport.media.medium_from_optics`), on the uniform cos θ grid.
     R and the boundary index are the bake's.
     """
-    from ..bake import load_spectral
-    from ..optics import medium_optics
-    from ..transport.media import medium_from_optics
+    from precompute.bake import load_spectral
+    from precompute.optics.coefficients import medium_optics
+    from precompute.transport.media import medium_from_optics
 
     spectral_path = pathlib.Path(spectral_path)
     arrays, metadata = load_spectral(spectral_path)
@@ -330,18 +338,18 @@ def bake_wavelength(spectral_path, wavelength_nm: float) -> BakeWavelength:
 
 
 def default_ballistic():
-    """The project's unscattered-path function if ``precompute/ballistic.py`` exists, else None:
+    """The project's unscattered-path function if ``precompute/optics/ballistic.py`` exists, else None:
     ``ballistic_paths``, or ``unscattered_paths`` (the same contract), whichever it defines."""
     import importlib
     import importlib.util
 
-    if importlib.util.find_spec("precompute.ballistic") is None:
+    if importlib.util.find_spec("precompute.optics.ballistic") is None:
         return None
-    module = importlib.import_module("precompute.ballistic")
+    module = importlib.import_module("precompute.optics.ballistic")
     for name in ("ballistic_paths", "unscattered_paths"):
         if callable(getattr(module, name, None)):
             return getattr(module, name)
-    raise ImportError("precompute.ballistic defines neither ballistic_paths nor unscattered_paths")
+    raise ImportError("precompute.optics.ballistic defines neither ballistic_paths nor unscattered_paths")
 
 
 __all__ = [

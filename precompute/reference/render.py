@@ -17,7 +17,7 @@ and from inside it is the plain dielectric (internal reflection and refraction o
 
 Conventions checked on Mitsuba 3.9.1 (tests/test_brute_force_reference.py): ``tabphase`` values
 run over cos θ from −1 to +1 with cos θ = +1 forward scattering, the project's convention
-(``precompute/phase.py``); an ``envmap`` row k lies at θ = kπ/(H − 1) from the map's +y pole,
+(``precompute/optics/phase.py``); an ``envmap`` row k lies at θ = kπ/(H − 1) from the map's +y pole,
 bilinear in between (:func:`check_cap_map`).
 """
 
@@ -34,9 +34,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ParameterError
-from .cap import CapLight, cap_frame
-from .geometry import bin_edges
+from precompute.errors import ParameterError
+from precompute.reference.cap import CapLight, cap_frame
+from precompute.reference.geometry import bin_edges
 
 #: Variants tried in order: one wavelength per render, no JIT (the llvm variants need a newer libLLVM).
 VARIANTS = ("scalar_mono", "scalar_rgb")
@@ -119,7 +119,7 @@ class ReferenceMedium:
     index : real refractive index of the host (the boundary); exterior 1
     mu_s, mu_a : scattering and absorption coefficients, 1/mm
     phase : (M,) phase function on the uniform grid of M ≥ 2 values of cos θ over [−1, 1], cos θ = +1
-        forward (``precompute.phase`` convention), 1/sr, any normalisation (Mitsuba normalises the
+        forward (``precompute.optics.phase`` convention), 1/sr, any normalisation (Mitsuba normalises the
         piecewise-linear function, as the project's transport does); None: isotropic
     """
 

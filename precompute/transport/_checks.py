@@ -7,7 +7,7 @@ import math
 import numba
 import numpy as np
 
-from ..errors import ParameterError
+from precompute.errors import ParameterError
 
 
 def integer_at_least(name: str, value, minimum: int) -> int:

@@ -7,7 +7,7 @@ wavelength must be the one its sampler draws from (docs/transport.md).
 
 * Table: ``p(μ)`` given on a uniform grid of μ over [−1, 1] and linear between
   grid points, normalised so that ``2π ∫ p dμ = 1`` for that piecewise-linear
-  function (the trapezoidal rule of :mod:`precompute.phase`).  Sampling picks a
+  function (the trapezoidal rule of :mod:`precompute.optics.phase`).  Sampling picks a
   segment by Walker's alias method (:func:`alias_tables`: one draw and one pair
   of loads, no search) and a point inside it from the segment's linear density.
 * Henyey–Greenstein with asymmetry g: analytic inversion and evaluation.
@@ -20,7 +20,7 @@ import math
 import numba
 import numpy as np
 
-from ._rng import uniform
+from precompute.transport._rng import uniform
 
 PHASE_TABLE = 0
 PHASE_HG = 1

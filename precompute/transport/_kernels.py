@@ -18,8 +18,8 @@ from collections import namedtuple
 import numba
 import numpy as np
 
-from ..grids import hemisphere_cell, square_to_hemisphere
-from ..slab_layout import (
+from precompute.tables.grids import hemisphere_cell, square_to_hemisphere
+from precompute.slab.layout import (
     SLAB_ABSORBED,
     SLAB_LOST,
     SLAB_R_DIFFUSE,
@@ -30,11 +30,11 @@ from ..slab_layout import (
     SLAB_T_SQUARES,
     SLAB_T_UNSCATTERED,
 )
-from ._borrow import borrowed
-from ._interactions import fresnel_reflectance, refract
-from ._paths import CYLINDER, EXITED, LOST, SLAB, path_arrays, trace
-from ._prefetch import prefetch_for_write
-from ._rng import seed_stream, uniform
+from precompute.transport._borrow import borrowed
+from precompute.transport._interactions import fresnel_reflectance, refract
+from precompute.transport._paths import CYLINDER, EXITED, LOST, SLAB, path_arrays, trace
+from precompute.transport._prefetch import prefetch_for_write
+from precompute.transport._rng import seed_stream, uniform
 
 #: The yarn kernel's absorption-reweighting tallies (:func:`yarn_kernel`).
 DecayTallies = namedtuple("DecayTallies", ["extra_mu_a", "bssrdf", "exit_sum", "exit_sq", "unscattered"])
@@ -137,7 +137,7 @@ def _task_mean(sums, row, k, paths):
 @numba.njit(cache=True, error_model="numpy")
 def slab_results(sums, paths, eta, out):
     """A slab's result from its tasks' tallies ``sums`` (tasks, 8, L) of ``paths`` paths in all, at index
-    ratio ``eta``: ``out`` (len(SLAB_RESULTS), L), the rows :data:`precompute.slab_layout.SLAB_RESULTS`.
+    ratio ``eta``: ``out`` (len(SLAB_RESULTS), L), the rows :data:`precompute.slab.layout.SLAB_RESULTS`.
 
     Totals include the specular reflection at entry ((n − 1)/(n + 1))² and the unscattered parts; the
     standard errors are those of the Monte-Carlo means (the specular part is exact).  It allocates
@@ -293,7 +293,7 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
                     for j in range(n_decay):
                         factors[k, j] = weights[k] * math.exp(-decay.extra_mu_a[j, k] * length)
             if status == EXITED and collisions == 0:
-                # a deterministic caustic, given in closed form (precompute/ballistic.py): kept out of the BSSRDF
+                # a deterministic caustic, given in closed form (precompute/optics/ballistic.py): kept out of the BSSRDF
                 for k in range(n_wl):
                     cell_unscattered[k] += weights[k]
                     for j in range(n_decay):

@@ -49,7 +49,7 @@ from collections import namedtuple
 import numba
 import numpy as np
 
-from ._interactions import (
+from precompute.transport._interactions import (
     PHASE_HG,
     fresnel_reflectance,
     hg_value,
@@ -59,8 +59,8 @@ from ._interactions import (
     sample_table,
     turn,
 )
-from ._exp import exp_nonpositive
-from ._rng import exponential, uniform
+from precompute.transport._exp import exp_nonpositive
+from precompute.transport._rng import exponential, uniform
 
 SLAB = 0  #: dims = (thickness,): medium 0 ≤ z ≤ thickness, light enters at z = 0 going +z
 CYLINDER = 1  #: dims = (a, b): elliptic cross-section x²/a² + y²/b² ≤ 1, axis z (a = b: circle)

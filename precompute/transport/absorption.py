@@ -26,9 +26,9 @@ import math
 
 import numpy as np
 
-from ..errors import ParameterError
-from ._kernels import interpolate_steps
-from .cylinder import YarnTransport, relative_stderr
+from precompute.errors import ParameterError
+from precompute.transport._kernels import interpolate_steps
+from precompute.transport.cylinder import YarnTransport, relative_stderr
 
 #: Absorption (1/mm) below which the steps are uniform in μa rather than geometric: a change of
 #: μa by it alters a path of 1 mm (five 0.2 mm yarn crossings) by 10 %.

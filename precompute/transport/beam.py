@@ -22,13 +22,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..grids import AngularGrid
-from . import _kernels
-from ._checks import integer_at_least, seed_value, thread_count
-from ._threads import numba_threads
-from .cylinder import YarnGeometry, mean_cos_per_cell
-from .media import TransportMedium, medium_from_optics
+from precompute.errors import ParameterError
+from precompute.tables.grids import AngularGrid
+from precompute.transport import _kernels
+from precompute.transport._checks import integer_at_least, seed_value, thread_count
+from precompute.transport._threads import numba_threads
+from precompute.transport.cylinder import YarnGeometry, mean_cos_per_cell
+from precompute.transport.media import TransportMedium, medium_from_optics
 
 #: Independent random streams of a beam run.
 BEAM_TASKS = 32
@@ -42,7 +42,7 @@ class ParallelBeamRadiance:
     = z; receiving cell j spans azimuths [j, j + 1) · 2π / n_around).  ``rho``,
     ``rho_stderr`` (n_around, n_out, L), 1/sr: L_o / E⊥ of the scattered light by receiving
     cell and exit cell of ``exit_grid`` (what the tables hold); ``unscattered_rho`` the same
-    for the light that crossed without a collision (:mod:`precompute.ballistic`).
+    for the light that crossed without a collision (:mod:`precompute.optics.ballistic`).
     ``specular``, ``exit_fraction`` (scattered), ``unscattered_fraction``,
     ``absorbed_fraction``, ``lost_fraction`` (L,): shares of the flux intercepted by the yarn.
     """

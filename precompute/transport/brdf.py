@@ -29,11 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..grids import AngularGrid
-from ..table_layout import incidence_corners
-from ._checks import integer_at_least
-from .cylinder import ALBEDO_FLOOR, YarnTransport, mean_cos_per_cell
+from precompute.errors import ParameterError
+from precompute.tables.grids import AngularGrid
+from precompute.tables.layout import incidence_corners
+from precompute.transport._checks import integer_at_least
+from precompute.transport.cylinder import ALBEDO_FLOOR, YarnTransport, mean_cos_per_cell
 
 #: Positions per source cell around the circumference in the sum of eq. (5).
 CIRCUMFERENTIAL_SUBSAMPLES = 16
@@ -235,7 +235,7 @@ def fibonacci_sphere(count: int) -> np.ndarray:
 def incidence_lookup(rho: np.ndarray, resolution: int, wi: np.ndarray) -> np.ndarray:
     """ρ (n_dirs, n_out, L) for light from ``wi`` (n_dirs, 3) by the tables' bilinear incidence
     lookup between the cell centres of ``rho`` (N_i², n_out, L)
-    (:func:`precompute.table_layout.interpolate_rho` without the exit interpolation)."""
+    (:func:`precompute.tables.layout.interpolate_rho` without the exit interpolation)."""
     columns, rows, weights = incidence_corners(resolution, wi)
     return np.einsum("dk,dkol->dol", weights, rho[rows * resolution + columns])
 

@@ -18,13 +18,13 @@ import time
 
 import numpy as np
 
-from ..grids import AngularGrid
-from .absorption import absorption_steps, interpolate_absorption
-from .beam import simulate_parallel_beam
-from .cylinder import TransportGrids, YarnGeometry, simulate_yarn
-from .media import henyey_greenstein_medium
-from .native import build_native_slab
-from .slab import simulate_hg_slab, simulate_slab
+from precompute.tables.grids import AngularGrid
+from precompute.transport.absorption import absorption_steps, interpolate_absorption
+from precompute.transport.beam import simulate_parallel_beam
+from precompute.transport.cylinder import TransportGrids, YarnGeometry, simulate_yarn
+from precompute.transport.media import henyey_greenstein_medium
+from precompute.transport.native import build_native_slab
+from precompute.transport.slab import simulate_hg_slab, simulate_slab
 
 
 def compile_kernels() -> list[str]:

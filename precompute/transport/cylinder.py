@@ -30,15 +30,15 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .. import bounds
-from ..errors import ParameterError
-from ..grids import AngularGrid
-from . import _kernels
-from ._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
-from ._paths import ROULETTE_THRESHOLD
-from ._threads import numba_threads
-from .media import TransportMedium, medium_from_optics
-from .symmetry import CellSymmetry
+from precompute import bounds
+from precompute.errors import ParameterError
+from precompute.tables.grids import AngularGrid
+from precompute.transport import _kernels
+from precompute.transport._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
+from precompute.transport._paths import ROULETTE_THRESHOLD
+from precompute.transport._threads import numba_threads
+from precompute.transport.media import TransportMedium, medium_from_optics
+from precompute.transport.symmetry import CellSymmetry
 
 #: Paths per random stream (task) of a yarn run; a cell's paths are a sequence of such tasks.
 TASK_PATHS = 2048
@@ -158,7 +158,7 @@ class YarnTransport:
     specular, exit_fraction, unscattered_fraction, absorbed_fraction, lost_fraction : (n_in, L)
         Shares of the incident flux: Fresnel reflection at entry, exits after scattering (what
         ``bssrdf`` holds), exits without any collision (the unscattered light, given exactly by
-        :mod:`precompute.ballistic` and not binned), absorption, paths ended after the
+        :mod:`precompute.optics.ballistic` and not binned), absorption, paths ended after the
         interaction limit.  They sum to 1 within noise.
     albedo_rel_stderr : (n_in, L)
         Relative standard error of ``exit_fraction`` (the hemispherical albedo of the cell).
@@ -275,7 +275,7 @@ def simulate_yarn(
     Parameters
     ----------
     optics
-        :class:`precompute.optics.MediumOptics` or a :class:`TransportMedium`.
+        :class:`precompute.optics.coefficients.MediumOptics` or a :class:`TransportMedium`.
     geometry, grids
         The yarn and the tally grids.
     paths_per_cell

@@ -2,7 +2,7 @@
 
 numba keys a cached kernel by the source file of the function it caches only (its modification time
 and size): a kernel of ``_kernels.py`` that inlines ``trace`` from ``_paths.py``, or the direction maps
-of ``precompute/grids.py``, would go on loading the machine code of the old ``trace`` after
+of ``precompute/tables/grids.py``, would go on loading the machine code of the old ``trace`` after
 ``_paths.py`` changed, silently.  The digest of every transport source, kept beside the cache, flushes
 the cache of every kernel when any of them changes, so the next call compiles afresh.
 """
@@ -13,7 +13,7 @@ import pathlib
 
 from numba.core.registry import CPUDispatcher
 
-from ..kernel_sources import sources_digest
+from precompute.cache.kernel_sources import sources_digest
 
 #: Where the digest of the sources is kept, in each folder of cached kernels.
 DIGEST_FILE = "clothlight-kernel-sources.sha256"
@@ -29,7 +29,7 @@ def cached_kernels(modules) -> list:
 
 def flush_stale_kernel_caches(modules, digest: str | None = None) -> bool:
     """Flush the caches of the kernels of ``modules`` wherever the digest kept beside them is not
-    ``digest`` (by default :func:`precompute.kernel_sources.sources_digest`), and keep that digest there;
+    ``digest`` (by default :func:`precompute.cache.kernel_sources.sources_digest`), and keep that digest there;
     returns whether any cache was flushed.  A folder that cannot be written is left as it is."""
     digest = digest or sources_digest()
     by_folder: dict[pathlib.Path, list] = {}

@@ -1,6 +1,6 @@
 """The medium as the transport core sees it: per-wavelength μs, μa and a phase function.
 
-Built from :class:`precompute.optics.MediumOptics` (tabulated Mie phase
+Built from :class:`precompute.optics.coefficients.MediumOptics` (tabulated Mie phase
 functions) or as a Henyey–Greenstein medium (analytic phase function, for
 comparison with exact solutions).  See docs/transport.md for how the phase
 function is sampled and evaluated.
@@ -12,10 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
-from ._interactions import PHASE_HG, PHASE_TABLE, alias_tables, hg_phase_max
-from ._paths import KernelMedium, albedo_power_table, padded_width, roulette_interval
+from precompute.errors import ParameterError
+from precompute.optics.phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
+from precompute.transport._interactions import PHASE_HG, PHASE_TABLE, alias_tables, hg_phase_max
+from precompute.transport._paths import KernelMedium, albedo_power_table, padded_width, roulette_interval
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,7 +111,7 @@ def phase_sampling_tables(phase: np.ndarray):
 
     The phase function is taken linear in cos θ between the M uniform grid points and scaled
     so that 2π ∫ p dμ = 1 for that function (the trapezoidal rule, as in
-    :func:`precompute.phase.normalize_phase`).
+    :func:`precompute.optics.phase.normalize_phase`).
     """
     phase = np.asarray(phase, float)
     m = phase.shape[1]
@@ -123,11 +123,11 @@ def phase_sampling_tables(phase: np.ndarray):
 
 
 def medium_from_optics(optics) -> TransportMedium:
-    """The transport medium of :class:`precompute.optics.MediumOptics` (tabulated phase functions).
+    """The transport medium of :class:`precompute.optics.coefficients.MediumOptics` (tabulated phase functions).
 
     A phase table on another cos θ grid (the grid uniform in θ that
-    :func:`precompute.mie.auto_phase_grid` chooses for large particles) goes onto the
-    uniform grid of as many points by :func:`precompute.phase.resample_uniform_cos`, which
+    :func:`precompute.optics.mie.auto_phase_grid` chooses for large particles) goes onto the
+    uniform grid of as many points by :func:`precompute.optics.phase.resample_uniform_cos`, which
     keeps each cell's probability: a diffraction peak narrower than the uniform spacing keeps
     its weight, and g moves by less than half that spacing times the peak's probability.
     """

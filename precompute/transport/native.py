@@ -5,7 +5,7 @@ and NumPy and loading the cached kernels take ~0.5 s, where 10⁶ paths take ~0.
 compiles the slab's task (:func:`._kernels._slab_task`, the kernel's own code) and its result
 (:func:`._kernels.slab_results`) with numba's ahead-of-time code generator, as ``numba.pycc`` does,
 but without pycc's Python module, whose import needs NumPy: two functions in a shared library,
-linked by the C compiler, which :mod:`precompute.native_slab` calls through ``ctypes``.
+linked by the C compiler, which :mod:`precompute.slab.native` calls through ``ctypes``.
 
 Nothing in the library allocates: every array is a view (``numba.carray``) of memory its caller
 holds, so the library needs none of numba's runtime but the reference count's destructor, which no
@@ -16,7 +16,7 @@ in a shared cache folder runs on any machine that reads it; the slab's single-wa
 nothing from wider vectors (10.2 against 10.5 M paths/s with the host's).
 
 ``python -m precompute.transport.compile`` (``make setup``) builds it beside the numba cache,
-named by the digest of the transport's sources (:func:`precompute.native_slab.library_path`).
+named by the digest of the transport's sources (:func:`precompute.slab.native.library_path`).
 """
 
 from __future__ import annotations
@@ -34,11 +34,11 @@ from numba.core.compiler_lock import global_compiler_lock
 from numba.core.registry import cpu_target
 from numba.core.runtime import nrtdynmod
 
-from .. import native_slab
-from ..slab_layout import SLAB_RESULTS, SLAB_TALLY_ROWS, SLAB_TASKS
-from ._interactions import PHASE_HG, fresnel_reflectance, hg_phase_max
-from ._kernels import _slab_task, slab_results
-from ._paths import (
+from precompute.slab import native as native_slab
+from precompute.slab.layout import SLAB_RESULTS, SLAB_TALLY_ROWS, SLAB_TASKS
+from precompute.transport._interactions import PHASE_HG, fresnel_reflectance, hg_phase_max
+from precompute.transport._kernels import _slab_task, slab_results
+from precompute.transport._paths import (
     PHASE_WIDTH,
     ROULETTE_INTERVAL_ABSORBING,
     ROULETTE_INTERVAL_SCATTERING,
@@ -47,7 +47,7 @@ from ._paths import (
     albedo_power_table,
     roulette_interval,
 )
-from ._rng import seed_stream
+from precompute.transport._rng import seed_stream
 
 _F8P, _I8P = types.CPointer(types.float64), types.CPointer(types.int64)
 _U8P, _I4P = types.CPointer(types.uint64), types.CPointer(types.int32)
@@ -143,7 +143,7 @@ def _native_object() -> bytes:
 
 def build_native_slab(path: str | os.PathLike | None = None) -> pathlib.Path:
     """Compile and link the native slab library at ``path`` (default
-    :func:`precompute.native_slab.library_path`, whose folder's libraries of other sources are removed);
+    :func:`precompute.slab.native.library_path`, whose folder's libraries of other sources are removed);
     the path.  Raises ``RuntimeError`` where there is no C compiler to link it."""
     compiler = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     if compiler is None:

@@ -13,12 +13,12 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..slab_layout import SLAB_RESULTS, SLAB_TALLY_ROWS, SLAB_TASKS, task_paths
-from . import _kernels
-from ._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
-from ._threads import numba_threads
-from .media import TransportMedium, henyey_greenstein_medium
+from precompute.errors import ParameterError
+from precompute.slab.layout import SLAB_RESULTS, SLAB_TALLY_ROWS, SLAB_TASKS, task_paths
+from precompute.transport import _kernels
+from precompute.transport._checks import integer_at_least, positive_length, refractive_index, seed_value, thread_count
+from precompute.transport._threads import numba_threads
+from precompute.transport.media import TransportMedium, henyey_greenstein_medium
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..grids import AngularGrid
+from precompute.tables.grids import AngularGrid
 
 #: A reflection as permutations of the tally grids' indices (each its own inverse): ``cells`` of the
 #: incidence and exit hemisphere grids, the cells ``around``, the axial bins ``along`` (overflow too).

@@ -17,22 +17,21 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ...addon import import_precompute
 from ...yarn_tables import yarn_tables_from_bake
 from ...garment.goniometry import SIDES
 from .detail import render_weave_detail
 from .measure import ClothMeasurement, GoniometerSettings, _sample_weave, measure_cloth
 from ...garment.tables import DETAIL_FILE, SUMMARY_FILE, write_cloth_summary, write_cloth_tables
 
-cache = import_precompute("cache")
-sources = import_precompute("sources")
-precompute_tables = import_precompute("tables")
+from precompute.cache import entries as cache
+from precompute.cache import sources
+from precompute.tables import exr as precompute_tables
 
 MEASUREMENT_NAMESPACE = "cloth_measurement"
 TABLES_NAMESPACE = "cloth_tables"
 MEASUREMENT_FILE = "measurement.npz"
 _ROOT = pathlib.Path(__file__).resolve().parents[3]
-#: The code of each stage, digested into its key (``precompute.sources``): the modules it runs and
+#: The code of each stage, digested into its key (``precompute.cache.sources``): the modules it runs and
 #: every project module they import, transitively, with the OSL shaders they compile.  The
 #: measurement runs :mod:`.measure` on the yarn tables :mod:`clothlight.yarn_tables` finds, and of
 #: this file what stores it, without the fit this file imports (tests/test_sources.py checks that

@@ -58,7 +58,7 @@ class ClothTableFiles:
 def cloth_tables_from_bake(folder) -> ClothTableFiles:
     """The tables of a cloth bake folder (``python -m clothlight.garment bake``), checked as a whole
     first (:func:`.tables.check_cloth_table_folder`: every file read and validated, one bake); a
-    ``precompute.tables.TableError`` (a ValueError) names the file and the reason otherwise."""
+    ``precompute.tables.exr.TableError`` (a ValueError) names the file and the reason otherwise."""
     checked = check_cloth_table_folder(pathlib.Path(folder).resolve())
     folder, summary = checked.folder, checked.summary
     detail = summary.get("weave_detail")

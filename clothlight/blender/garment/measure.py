@@ -332,18 +332,18 @@ def measure_views(table_files: dict, settings: GoniometerSettings, views: tuple)
 
     The scene is built on a worker's first task and kept for the next ones; Cycles renders with
     the worker's threads."""
+    from precompute import distributed
     import hashlib
     import pickle
     import tempfile
 
-    from ...addon import import_precompute
     from ...yarn_tables import yarn_tables_from_bake
 
     key = hashlib.sha256(pickle.dumps((table_files, settings))).hexdigest()
     if key not in _worker_scene:
         _close_worker_scene()
         folder = tempfile.TemporaryDirectory(prefix="clothlight-gonio-tables-")
-        import_precompute("distributed").write_payload(table_files, folder.name)
+        distributed.write_payload(table_files, folder.name)
         _worker_scene[key] = (_GoniometerScene(yarn_tables_from_bake(folder.name), settings), folder)
     scene = _worker_scene[key][0]
     scene.scene.render.threads_mode = "FIXED"
@@ -368,11 +368,10 @@ atexit.register(_close_worker_scene)
 
 def _measure_on_cluster(table_folder, settings: GoniometerSettings, views, scheduler,
                         progress) -> tuple[list[dict], dict]:
-    from ...addon import import_precompute
 
     if table_folder is None:
         raise ParameterError("table_folder", table_folder, "the yarn bake's folder when a scheduler is given")
-    distributed = import_precompute("distributed")
+    from precompute import distributed
     table_files = distributed.folder_payload(table_folder)
     done = []
 

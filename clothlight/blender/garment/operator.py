@@ -61,13 +61,3 @@ class CLOTHLIGHT_OT_apply_garment_material(bpy.types.Operator):
 
 
 CLASSES = (CLOTHLIGHT_OT_apply_garment_material,)
-
-
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)

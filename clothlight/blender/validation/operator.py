@@ -20,18 +20,17 @@ from typing import TYPE_CHECKING
 
 import bpy
 
-from ...addon import import_precompute
 from ...mesh_attributes import CLOTH_NORMAL
 from ...render_bounds import VALIDATION_RESOLUTION, VALIDATION_SAMPLES
 from ...weave import WeaveParameterError
 from ...validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, MATERIALS
-from ...validation.measured_data import MeasurementFormatError
+from precompute.fit.measured_data import MeasurementFormatError
 from .rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES, RigSettings
 
 if TYPE_CHECKING:
     from .run import ValidationRun
 
-ParameterError = import_precompute("errors").ParameterError
+from precompute.errors import ParameterError
 #: Errors that are the user's input, reported without a traceback.
 INPUT_ERRORS = (ParameterError, WeaveParameterError, MeasurementFormatError)
 PLOT_IMAGE = "ClothLight Validation"
@@ -201,13 +200,3 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
 
 
 CLASSES = (CLOTHLIGHT_OT_validate,)
-
-
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)

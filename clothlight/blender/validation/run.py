@@ -39,7 +39,7 @@ from ...validation.framing import (
     ParameterError,
 )
 from ...validation.measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
-from ...validation.measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
+from precompute.fit.measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
 from ...validation.report import swatch_exposure, write_report, write_swatch_png
 from ..measurement_render import worker_threads
 from ...weave import WeaveParameters
@@ -241,13 +241,12 @@ class ValidationRun:
         :meth:`steps` (the renders come back as their EXR files); the sample must be a weave (or
         None), which every worker builds.  ``progress`` after every task; ``cancel()`` stops them all
         (ValidationCancelled)."""
-        from ...addon import import_precompute
 
         if self.sample is not None and not isinstance(self.sample, WeaveParameters):
             raise ParameterError("scheduler", scheduler, "no scheduler for a sample object: a cluster's workers "
                                                          "build the sample from a weave")
         start = time.perf_counter()
-        distributed = import_precompute("distributed")
+        from precompute import distributed
         inputs = {"sample": self.sample, "settings": self.settings, "materials": self.materials,
                   "specular_weight": self.specular_weight,
                   "tables": distributed.folder_payload(self.tables.brdf_path.parent) if self.tables else None,
@@ -534,9 +533,8 @@ def _worker_sweep(inputs: dict, garment: bool) -> _WorkerSweep:
 
     key = (hashlib.sha256(pickle.dumps(inputs)).hexdigest(), garment)
     if key not in _worker_sweeps:
-        from ...addon import import_precompute
 
-        write_payload = import_precompute("distributed").write_payload
+        from precompute.distributed import write_payload
         folder = tempfile.TemporaryDirectory(prefix="clothlight-sweep-")
         root = pathlib.Path(folder.name)
         run = ValidationRun(inputs["sample"], root / "out", materials=inputs["materials"],

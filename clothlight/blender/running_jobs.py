@@ -1,0 +1,79 @@
+"""The bake and the fit the interface is running, and the recolouring bake a dye change schedules.
+
+Held here, apart from the operators that start them, so that the settings (a dye change with Dye
+Range on schedules a bake: :mod:`.properties`), the operators and the panels (their progress) all
+read one state, and import it one way.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from ..fit_job import FitJob
+from ..jobs import BakeJob
+
+
+class RunningBake:
+    """The one bake the interface is running (None when idle); the panel draws its progress."""
+
+    job: BakeJob | None = None
+    scene_name: str = ""
+
+
+def running_bake() -> BakeJob | None:
+    return RunningBake.job
+
+
+#: Seconds after the last dye change before a recolouring bake starts (a slider drag changes it often).
+RECOLOUR_DELAY_SECONDS = 0.4
+
+
+def schedule_recolour(scene_name: str) -> None:
+    """Start Bake Tables for ``scene_name`` once the dye stops changing and no bake runs (a timer)."""
+
+    def start():
+        if RunningBake.job is not None:
+            return RECOLOUR_DELAY_SECONDS  # the latest dye bakes after the running one
+        scene = bpy.data.scenes.get(scene_name)
+        window = bpy.context.window_manager.windows[0] if bpy.context.window_manager.windows else None
+        if scene is None or window is None:
+            return None
+        with bpy.context.temp_override(window=window, scene=scene):
+            bpy.ops.clothlight.bake_tables("INVOKE_DEFAULT")
+        return None
+
+    ScheduledRecolour.cancel()
+    ScheduledRecolour.start = start
+    bpy.app.timers.register(start, first_interval=RECOLOUR_DELAY_SECONDS)
+
+
+class ScheduledRecolour:
+    """The pending recolouring bake's timer function (None when none is pending)."""
+
+    start = None
+
+    @classmethod
+    def cancel(cls) -> None:
+        if cls.start is not None and bpy.app.timers.is_registered(cls.start):
+            bpy.app.timers.unregister(cls.start)
+        cls.start = None
+
+
+class RunningFit:
+    """The one fit the interface is running (None when idle); the panel draws its progress."""
+
+    job: FitJob | None = None
+    scene_name: str = ""
+
+
+def running_fit() -> FitJob | None:
+    return RunningFit.job
+
+
+def stop_all() -> None:
+    """Cancel the pending recolouring bake and every running job (the add-on is being disabled)."""
+    ScheduledRecolour.cancel()
+    for holder in (RunningBake, RunningFit):
+        if holder.job is not None:
+            holder.job.cancel()
+            holder.job = None

@@ -1,0 +1,270 @@
+"""The fit's forward model: a medium → the cloth BRDF at the measured views, in seconds.
+
+A candidate runs the chain of a bake without what a sun-mode sweep does not read and without the
+cache: optics → transport (a path budget set by the accuracy asked for) → eq. (5) on one fixed
+incidence grid → RGB atlas and unscattered attenuation, clipped to the gamut as the tables are.
+The sweep itself is the cloth response (:mod:`clothlight.validation.response`), rendered once per
+weave, rig and view set and kept in the cache, then applied to each candidate's tables in
+milliseconds.  The validation weave is measured at sample azimuths 0° and 90° and averaged, as an
+instrument that measures cloth as an isotropic BRDF sees the warp and the weft alike
+(``../shared/data/real_fabrics/README.md``: MERL's samples were wrapped round a cylinder).
+
+Views are the measured-data CSV's ``(θi, φi, θo, φo)`` (``Measurement.angles_deg``): light at
+φi = 180°, φo = 180° on the light's side, 0° beyond the normal, 90° the perpendicular plane.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from precompute.optics import ballistic
+from precompute.bake import BAKE_DEFAULTS, transport_settings
+from precompute.cache.entries import cache_key, canonical_json, default_cache_dir, lookup, store
+from precompute.tables.color import clip_to_gamut, spectral_to_rgb
+from precompute.errors import ParameterError
+from precompute.optics.medium import medium_from_dict
+from precompute.optics.coefficients import medium_optics
+from precompute.cache.sources import stage_digest
+from precompute.tables.layout import brdf_atlas
+
+PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[2]
+#: Incidence grid of a candidate's eq. (5): the shipped tables' (an odd N_i puts the planes across
+#: and along the yarn through cell centres), fixed so that one linear map serves every candidate.
+FIT_INCIDENCE_RESOLUTION = 21
+#: Paths per incidence cell at a relative error of 5 %; the budget grows as 1 / error².
+PATHS_AT_FIVE_PERCENT = 1000
+#: The §6.1 colour swatches the model also gives, after the measured views: normal view, lit from the
+#: front and from straight behind, (θi, θv, φv) in degrees (clothlight.blender.validation.run's swatches).
+SWATCH_VIEWS = ((0.0, 0.0, 0.0), (180.0, 0.0, 0.0))
+#: Sample azimuths the response averages over, degrees (module docstring).
+SAMPLE_AZIMUTHS_DEG = (0.0, 90.0)
+#: The response's sweep resolution (pixels along the patch side) and camera samples per pixel
+#: along each axis: 16 samples per pixel, as a default validation sweep.
+RESPONSE_RESOLUTION = 64
+RESPONSE_SUPERSAMPLING = 4
+RESPONSE_FILE = "response.npz"
+
+
+def paths_per_cell(relative_error: float) -> int:
+    """The transport's paths per incidence cell for a cloth-level relative error (e.g. 0.05)."""
+    if not (isinstance(relative_error, (int, float)) and 0.0 < relative_error <= 0.5):
+        raise ParameterError("relative_error", relative_error, "a number in (0, 0.5]")
+    return max(64, int(round(PATHS_AT_FIVE_PERCENT * (0.05 / relative_error) ** 2)))
+
+
+def rig_views(measured_views: Sequence[tuple[float, float, float, float]]) -> list[tuple[float, float, float]]:
+    """The rig's (θi, θv, φv) of measured-data views (θi, φi, θo, φo): θv signed in the plane of
+    incidence (negative on the light's side), φv = 90° for the perpendicular plane."""
+    views = []
+    for theta_i, phi_i, theta_o, phi_o in measured_views:
+        if theta_i != 0.0 and not math.isclose(float(phi_i) % 360.0, 180.0):
+            raise ParameterError("view φi", phi_i, "180°: the rig's sun lies on the −x side")
+        phi = float(phi_o) % 360.0
+        if theta_o == 0.0 or math.isclose(phi, 0.0):
+            views.append((float(theta_i), float(theta_o), 0.0))
+        elif math.isclose(phi, 180.0):
+            views.append((float(theta_i), -float(theta_o), 0.0))
+        elif math.isclose(phi, 90.0) or math.isclose(phi, 270.0):
+            views.append((float(theta_i), float(theta_o), 90.0))
+        else:
+            raise ParameterError("view φo", phi_o, "0, 90, 180 or 270°: the plane of incidence or across it")
+    return views
+
+
+def lookup_tables_folder(root: pathlib.Path = PROJECT_ROOT) -> pathlib.Path:
+    """Tables for the cloth response's renders, which record the shader's lookup directions and so
+    take any medium's: the repository's example tables, or in the extension (which ships no
+    ``example_blends/``) the first pre-baked preset's (``prebaked/<preset>/``)."""
+    candidates = [root / "example_blends" / "tables" / "paper_2008", *sorted((root / "prebaked").glob("*"))]
+    for folder in candidates:
+        if (folder / "summary.json").is_file():
+            return folder
+    raise FileNotFoundError(f"no yarn tables to render the cloth response with: neither {candidates[0]} nor a "
+                            f"pre-baked folder in {root / 'prebaked'}")
+
+
+def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
+                   progress: Callable[[int, int], None] | None = None):
+    """The cloth response at ``measured_views`` and :data:`SAMPLE_AZIMUTHS_DEG`, from the cache or
+    rendered (Blender as the ``bpy`` module; a minute or two) with Cycles' ``seed``."""
+    from ..validation.response import ClothResponse
+
+    views = [(*view, azimuth) for view in (*rig_views(measured_views), *SWATCH_VIEWS)
+             for azimuth in SAMPLE_AZIMUTHS_DEG]
+    inputs = {
+        "schema": "clothlight-response-entry/1",
+        "views": views,
+        "resolution": RESPONSE_RESOLUTION,
+        "supersampling": RESPONSE_SUPERSAMPLING,
+        "seed": int(seed),
+        "code_digest": stage_digest(PROJECT_ROOT, ["clothlight.blender.validation.response_render"]),
+    }
+    cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    key = cache_key(inputs)
+    folder = lookup(cache_dir, "responses", key)
+    if folder is None:
+
+        def write(staging: pathlib.Path) -> None:
+            from ..blender.validation.response_render import measure_response
+            from ..yarn_tables import yarn_tables_from_bake
+
+            # Any tables: the lookup directions do not depend on the medium.
+            tables = yarn_tables_from_bake(lookup_tables_folder())
+            measure_response(tables, views, resolution=RESPONSE_RESOLUTION, supersampling=RESPONSE_SUPERSAMPLING,
+                             seed=seed, progress=progress).save(staging / RESPONSE_FILE)
+
+        folder, _ = store(cache_dir, "responses", key, inputs, write)
+    return ClothResponse.load(folder / RESPONSE_FILE)
+
+
+class ForwardModel:
+    """``model(config, specular_weight=, specular_slope=, relative_error=, seed=)`` → the cloth BRDF
+    (n_views + 2, 3), 1/sr, linear Rec.709, at the measured views given to :func:`build_forward_model`
+    and then at the :data:`SWATCH_VIEWS` (:attr:`swatch_count` rows: the BRDF lit from the front,
+    and the BTDF lit from straight behind, both at normal view)."""
+
+    swatch_count = len(SWATCH_VIEWS)
+
+    def __init__(self, response, view_count: int, base_dir: pathlib.Path, threads: int | None = None):
+        self.response = response
+        self.view_count = view_count + self.swatch_count
+        self.base_dir = pathlib.Path(base_dir)
+        self.threads = threads
+
+    def tables(self, config: dict, *, relative_error: float, seed: int):
+        """A candidate's BRDF atlas (N_i·N_o, N_i·N_o, 3), attenuation table (M, 3) and their layout."""
+        from precompute.transport import simulate_yarn, yarn_brdf
+
+        medium = medium_from_dict(config, self.base_dir)
+        optics = medium_optics(medium)
+        geometry, grids, settings = _yarn_and_grids(config, medium, optics, seed, paths_per_cell(relative_error))
+        transport = simulate_yarn(optics, geometry, grids, paths_per_cell=settings["paths_per_cell"],
+                                  seed=settings["seed"], threads=self.threads)
+        return _candidate_tables(config, optics, geometry, yarn_brdf(transport, FIT_INCIDENCE_RESOLUTION).rho)
+
+    def _mean_over_azimuths(self, per_view: np.ndarray) -> np.ndarray:
+        return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), *per_view.shape[1:]).mean(axis=1)
+
+    def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float) -> np.ndarray:
+        """The cloth BRDF of given tables at the measured views, averaged over the sample azimuths."""
+        return self._mean_over_azimuths(self.response.cloth_brdf(
+            atlas, attenuation, layout, specular_weight=specular_weight, specular_slope=specular_slope))
+
+    def parts(self, config: dict, *, relative_error: float, seed: int):
+        """The cloth BRDF split into what the medium gives and what the specular term adds: the
+        first (n_views, 3), 1/sr, with no specular, and ``specular(weight, slope)`` (n_views,), 1/sr,
+        white.  A fit optimises the specular term's two parameters for each medium in milliseconds."""
+        atlas, attenuation, layout = self.tables(config, relative_error=relative_error, seed=seed)
+        yarn = self.cloth_brdf(atlas, attenuation, layout, specular_weight=0.0, specular_slope=1.0)
+
+        def specular(weight: float, slope: float) -> np.ndarray:
+            return self._mean_over_azimuths(self.response.specular_brdf(weight, slope, layout.index))
+
+        return yarn, specular
+
+    def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
+                 seed: int) -> np.ndarray:
+        yarn, specular = self.parts(config, relative_error=relative_error, seed=seed)
+        return yarn + specular(specular_weight, specular_slope)[:, None]
+
+
+def _yarn_and_grids(config: dict, medium, optics, seed: int, paths: int):
+    """The yarn, the transport grids and the ``[transport]`` settings of a candidate at ``paths`` per cell."""
+    from precompute.transport import TransportGrids, YarnGeometry
+
+    settings = transport_settings(config, seed=seed, paths_per_cell=paths)
+    geometry = YarnGeometry(medium.yarn.radius_mm, optics.boundary_index)
+    grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
+    return geometry, grids, settings
+
+
+def _candidate_tables(config: dict, optics, geometry, rho: np.ndarray):
+    """Eq. (5)'s spectral ρ (N_i², N_o², L) on the fit's incidence grid → the BRDF atlas, the
+    attenuation table (RGB, clipped to the gamut as the bake's tables) and their layout."""
+    from ..validation.response import TableLayout
+
+    colour = {**BAKE_DEFAULTS, **config.get("bake", {})}
+
+    def to_rgb(values):
+        return clip_to_gamut(spectral_to_rgb(values, optics.wavelengths_nm, colour["illuminant"],
+                                             colour["observer"]))[0]
+
+    atlas = brdf_atlas(to_rgb(rho))
+    attenuation = to_rgb(ballistic.attenuation(optics.mu_s + optics.mu_a, geometry.radius_mm,
+                                               ballistic.attenuation_lengths()))
+    exit_resolution = round(math.sqrt(rho.shape[1]))
+    layout = TableLayout(FIT_INCIDENCE_RESOLUTION, exit_resolution, ballistic.ATTENUATION_SAMPLES,
+                         optics.boundary_index, ballistic.SUN_MODE_SPREAD_RAD)
+    return atlas, attenuation, layout
+
+
+class DyeSeriesForwardModel(ForwardModel):
+    """The forward model of a fit that frees only the dye amount (and the sheen): one transport for
+    the whole ``dye_range`` (% of fibre weight), at the least dye with its exits tallied at the
+    absorption steps up to the most, at ``relative_error``; every candidate's ρ is then read from it
+    in about a second (:mod:`precompute.transport.absorption`), all from the same paths, so the
+    candidates differ by no Monte-Carlo noise.  Every candidate has the series' accuracy, whatever
+    ``relative_error`` it asks for.  A candidate that changes anything but the dye amount starts a
+    new series."""
+
+    def __init__(self, response, view_count: int, base_dir: pathlib.Path, dye_range: tuple[float, float],
+                 threads: int | None = None, relative_error: float = 0.02, seed: int = 0):
+        super().__init__(response, view_count, base_dir, threads)
+        self.dye_range = (float(dye_range[0]), float(dye_range[1]))
+        self.relative_error = relative_error
+        self.seed = seed
+        self._series = None
+
+    def _series_for(self, config: dict, medium):
+        from precompute.transport import simulate_yarn, yarn_brdf
+        from precompute.transport.absorption import absorption_steps, step_transport
+
+        undyed = {**config, "dye": {**config["dye"], "weight_percent": None}}
+        identity = canonical_json(undyed)
+        if self._series is not None and self._series[0] == identity:
+            return self._series[1]
+        low, high = (medium_optics(medium.with_dye(w)) for w in self.dye_range)
+        geometry, grids, settings = _yarn_and_grids(config, medium, low, self.seed,
+                                                    paths_per_cell(self.relative_error))
+        steps = absorption_steps(low.mu_a, high.mu_a)
+        transport = simulate_yarn(low, geometry, grids, paths_per_cell=settings["paths_per_cell"],
+                                  seed=settings["seed"], threads=self.threads, extra_absorption_per_mm=steps)
+        rho_steps = np.stack([yarn_brdf(step_transport(transport, k), FIT_INCIDENCE_RESOLUTION).rho
+                              for k in range(len(steps))], axis=-1).astype(np.float32)
+        series = (low.mu_a, steps, rho_steps, geometry)
+        self._series = (identity, series)
+        return series
+
+    def tables(self, config: dict, *, relative_error: float, seed: int):
+        from precompute.transport.absorption import interpolate_absorption
+
+        if "dye" not in config:
+            raise ParameterError("dye", None, "a dyed medium (a dye series reads dye amounts)")
+        medium = medium_from_dict(config, self.base_dir)
+        if not self.dye_range[0] <= medium.dye.weight_percent <= self.dye_range[1]:
+            raise ParameterError("dye.weight_percent", medium.dye.weight_percent,
+                                 f"within the series' {self.dye_range[0]:g}–{self.dye_range[1]:g} %")
+        reference_mu_a, steps, rho_steps, geometry = self._series_for(config, medium)
+        optics = medium_optics(medium)
+        rho = interpolate_absorption(rho_steps, reference_mu_a, steps, optics.mu_a, optics.wavelengths_nm)
+        return _candidate_tables(config, optics, geometry, rho)
+
+
+def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: int = 0, cache_dir=None,
+                        threads: int | None = None, progress: Callable[[int, int], None] | None = None,
+                        dye_range: tuple[float, float] | None = None) -> ForwardModel:
+    """The forward model at ``measured_views`` ((θi, φi, θo, φo) in degrees, the CSV's convention)
+    for media written like ``preset_config`` (checked here, before any render; relative files
+    resolve against ``base_dir``).  ``progress(done, total)`` follows the response's renders when it
+    is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call).  With
+    ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone."""
+    medium_from_dict(preset_config, pathlib.Path(base_dir))
+    measured_views = [tuple(float(a) for a in view) for view in measured_views]
+    response = cloth_response(measured_views, seed=seed, cache_dir=cache_dir, progress=progress)
+    if dye_range is not None:
+        return DyeSeriesForwardModel(response, len(measured_views), base_dir, dye_range, threads, seed=seed)
+    return ForwardModel(response, len(measured_views), base_dir, threads)

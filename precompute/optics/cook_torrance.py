@@ -1,0 +1,123 @@
+"""The cloth's specular term: Cook–Torrance about the cloth normal, in NumPy (no bpy).
+
+Lobalzo & Voloboy 2008 compute the light reflected directly by the yarns' surface "in accordance
+with [10] (Cook and Torrance 1982) per implementation proposed in [21] (Blinn)", against the normal
+to the piece of cloth (§5.2), with the smoothness constant m = 0.8 (§6, the Lambert + Cook–Torrance
+baseline); the paper numbers no equation for it.  The form used here is the shader's
+``cl_cook_torrance`` (``osl/clothlight.h``):
+
+    f_CT(l, v) = F(v·h) D(h) G(l, v) / (4 (n·l)(n·v))                               [1/sr]
+
+with h the half vector, D the normalised Beckmann distribution of rms slope m,
+D = exp(−tan²α / m²) / (π m² cos⁴α), α = ∠(n, h); G Smith's height-correlated shadowing of that
+Beckmann surface, G = 1 / (1 + Λ(v) + Λ(l)), Λ = (erf(a) − 1)/2 + exp(−a²) / (2a√π),
+a = cot θ / m (Cook and Torrance's V-cavity G is not the shadowing of a Beckmann surface; Cycles'
+Beckmann closures use Smith's, so the shader does too); and F Cook and Torrance's unpolarised
+dielectric Fresnel, with g² = n² − 1 + c², c = v·h.  Zero unless both directions are above the
+plane.
+
+:func:`cook_torrance_between` is the scalar twin the tests compare renders with (it lived in
+``tests/helpers.py``); :func:`cook_torrance` the same, vectorised, for fits.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+from scipy.special import erf
+
+#: The shader's defaults (``osl/cloth_yarn.osl``): weight, rms slope m (the paper's 0.8), host index.
+DEFAULT_WEIGHT = 1.0
+DEFAULT_SLOPE = 0.8
+DEFAULT_IOR = 1.557
+#: The preset table holding the fitted specular term (``[fit]``, keys ``specular_weight`` and
+#: ``specular_slope``, the shader's SpecularWeight and Slope; ``python -m clothlight.fit`` writes it);
+#: the medium's loader ignores it.
+FIT_TABLE = "fit"
+#: The ``[fit]`` table's keys and the shader's defaults for them.
+SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE}
+
+
+def cook_torrance_between(light, view, m=DEFAULT_SLOPE, n=DEFAULT_IOR) -> float:
+    """Cook–Torrance (1/sr) about +z between unit directions toward the light and the viewer, from
+    its definition (module docstring): F D G / (4 (n·l)(n·v)), Beckmann D = exp(−tan²α/m²) / (π m²
+    cos⁴α), Smith's height-correlated G = 1 / (1 + Λ(v) + Λ(l)) of that surface with Λ = (erf(a) −
+    1)/2 + exp(−a²)/(2a√π), a = cot θ / m, F Cook and Torrance's dielectric Fresnel with g² = n² −
+    1 + c², c = v·h; 0 unless both are above the plane."""
+    light, view = np.asarray(light, float), np.asarray(view, float)
+    nl, nv = light[2], view[2]
+    if nl <= 0.0 or nv <= 0.0:
+        return 0.0
+    half = (light + view) / np.linalg.norm(light + view)
+    nh, vh = half[2], view @ half
+    alpha = math.acos(min(nh, 1.0))
+    d = math.exp(-((math.tan(alpha) / m) ** 2)) / (math.pi * m**2 * nh**4)
+
+    def smith_lambda(cos_theta):
+        a = cos_theta / (m * math.sqrt(1.0 - cos_theta**2)) if cos_theta < 1.0 else math.inf
+        return 0.0 if math.isinf(a) else (math.erf(a) - 1) / 2 + math.exp(-a * a) / (2 * a * math.sqrt(math.pi))
+
+    g_att = 1.0 / (1.0 + smith_lambda(nv) + smith_lambda(nl))
+    c = vh
+    g = math.sqrt(n * n - 1 + c * c)
+    f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1 + (c * (g + c) - 1) ** 2 / (c * (g - c) + 1) ** 2)
+    return f * d * g_att / (4 * nl * nv)
+
+
+def _smith_lambda(cos_theta: np.ndarray, m: float) -> np.ndarray:
+    c = np.clip(cos_theta, 1e-9, 1.0)
+    sin = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(sin > 0.0, c / (m * np.where(sin > 0.0, sin, 1.0)), np.inf)
+        value = (erf(a) - 1.0) / 2.0 + np.exp(-a * a) / (2.0 * a * math.sqrt(math.pi))
+    return np.where(np.isfinite(a), value, 0.0)
+
+
+def cook_torrance(light, view, m: float = DEFAULT_SLOPE, n: float = DEFAULT_IOR) -> np.ndarray:
+    """:func:`cook_torrance_between`, vectorised: ``light`` and ``view`` are (..., 3) unit vectors
+    (broadcast together) toward the light and the viewer; the BRDF (...), 1/sr, about +z."""
+    light, view = np.broadcast_arrays(np.asarray(light, float), np.asarray(view, float))
+    nl, nv = light[..., 2], view[..., 2]
+    above = (nl > 0.0) & (nv > 0.0)
+    half = light + view
+    norm = np.linalg.norm(half, axis=-1)
+    half = half / np.where(norm > 0.0, norm, 1.0)[..., None]
+    nh = np.clip(half[..., 2], 1e-9, 1.0)
+    c = np.clip(np.sum(view * half, axis=-1), 0.0, 1.0)
+    tan2 = (1.0 - nh * nh) / (nh * nh)
+    d = np.exp(-tan2 / (m * m)) / (math.pi * m * m * nh**4)
+    g_att = 1.0 / (1.0 + _smith_lambda(nv, m) + _smith_lambda(nl, m))
+    g = np.sqrt(n * n - 1.0 + c * c)
+    f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1.0 + (c * (g + c) - 1.0) ** 2 / (c * (g - c) + 1.0) ** 2)
+    safe = np.where(above, 4.0 * nl * nv, 1.0)
+    return np.where(above, f * d * g_att / safe, 0.0)
+
+
+def direction(theta_deg, phi_deg) -> np.ndarray:
+    """Unit vectors (..., 3) at zenith ``theta_deg`` from +z and azimuth ``phi_deg`` from +x."""
+    theta, phi = np.radians(np.asarray(theta_deg, float)), np.radians(np.asarray(phi_deg, float))
+    theta, phi = np.broadcast_arrays(theta, phi)
+    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
+
+
+def cloth_specular(angles_deg, weight: float = DEFAULT_WEIGHT, m: float = DEFAULT_SLOPE,
+                   n: float = DEFAULT_IOR) -> np.ndarray:
+    """The flat cloth's specular BRDF (M,), 1/sr, ``weight`` · f_CT about the cloth normal (0, 0, 1),
+    at direction pairs ``angles_deg`` (M, 4): θi, φi, θo, φo in degrees (the measured-data CSV's
+    columns)."""
+    a = np.asarray(angles_deg, float)
+    return weight * cook_torrance(direction(a[:, 0], a[:, 1]), direction(a[:, 2], a[:, 3]), m, n)
+
+
+def specular_from_config(config: Mapping) -> dict[str, float]:
+    """The specular keywords a preset records in its ``[fit]`` table (a fitted preset), else the
+    shader's defaults."""
+    table = config.get(FIT_TABLE, {})
+    table = table if isinstance(table, dict) else {}
+    return {key: float(table.get(key, default)) for key, default in SPECULAR_DEFAULTS.items()}
+
+
+__all__ = ["DEFAULT_IOR", "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "SPECULAR_DEFAULTS", "cloth_specular",
+           "cook_torrance", "cook_torrance_between", "direction", "specular_from_config"]

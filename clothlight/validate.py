@@ -196,7 +196,9 @@ def main(argv=None) -> int:
 
 def _main(argv) -> int:
     from precompute import exit_codes
-    args = build_parser().parse_args(argv)
+    from precompute.cli.arguments import parse_arguments
+
+    args = parse_arguments(build_parser(), sys.argv[1:] if argv is None else argv)
     check_arguments(args)
     # Blender prints and swallows an exception raised in its callbacks (Cycles' render engine): a
     # Ctrl-C is held and raised between renders instead, so it always stops the sweep (code 130).

@@ -60,7 +60,9 @@ def main(argv: list[str] | None = None) -> int:
     arguments = sys.argv[1:] if argv is None else list(argv)
 
     def command() -> int:
-        args = build_parser(arguments).parse_args(arguments)
+        from precompute.cli.arguments import parse_arguments
+
+        args = parse_arguments(build_parser(arguments), arguments)
         return args.func(args)
 
     return run_cli(command)

@@ -511,12 +511,7 @@ def check_dye_series(configuration: BakeConfiguration, dye_series) -> tuple[floa
     dye = configuration.medium.dye
     if dye is None:
         raise ParameterError("dye_series", dye_series, "a dyed medium (this preset has no [dye])")
-    try:
-        low, high = (float(v) for v in dye_series)
-    except (TypeError, ValueError):
-        raise ParameterError("dye_series", dye_series, "two dye amounts LOW,HIGH in % of fibre weight") from None
-    if not (0.0 <= low < high < 100.0):
-        raise ParameterError("dye_series", dye_series, "0 ≤ LOW < HIGH < 100 (% of fibre weight)")
+    low, high = bounds.check_dye_range(dye_series)
     if not low <= dye.weight_percent <= high:
         raise ParameterError("dye.weight_percent", dye.weight_percent, f"within the dye series' {low:g}–{high:g} %")
     return low, high

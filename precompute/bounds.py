@@ -183,8 +183,29 @@ TRANSPORT_DEFAULTS = MappingProxyType({
 #: and at 100 µm it is already ~1200 terms in the blue.
 PARTICLE_DIAMETER_NM = Bound("particles[*].diameter_nm", 1.0, 100_000.0, unit="nm")
 YARN_RADIUS_MM = Bound("yarn.radius_mm", 0.001, 10.0, unit="mm")
+#: The host's refractive index at every wavelength: the yarn sits in air (n = 1) and the transport's
+#: boundary refracts from air into a denser host; no fibre comes near the upper end.
+HOST_REFRACTIVE_INDEX = Bound("host.refractive_index.n", 1.0, 10.0)
 #: Wavelengths of the simulation: every table grows with their number.
 WAVELENGTH_COUNT = Bound("wavelengths (count)", 1, 1001, integer=True)
+
+def check_dye_range(value, name: str = "dye_series") -> tuple[float, float]:
+    """A dye range (low, high), % of fibre weight, as a pair of numbers or typed ``"LOW,HIGH"``:
+    0 ≤ low < high < 100.  ParameterError naming ``name`` otherwise."""
+    try:
+        low, high = (float(part) for part in (value.split(",") if isinstance(value, str) else value))
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, "two dye amounts LOW,HIGH in % of fibre weight, e.g. 0.5,5") from None
+    if not (0.0 <= low < high < 100.0):
+        raise ParameterError(name, value, "0 ≤ LOW < HIGH < 100 (% of fibre weight)")
+    return low, high
+
+
+# ---- the medium fit (python -m clothlight.fit, the Yarn Medium panel's Fit) ----
+
+#: Forward-model evaluations of a fit, the final one included: each takes about a second or more.
+FIT_EVALUATIONS = Bound("--budget-evaluations", 2, 100_000, integer=True)
+
 
 # ---- the slab check (python -m precompute slab) ----
 
@@ -245,8 +266,8 @@ def decayed_tally_bytes(n_around: int, angular_resolution: int, wavelengths: int
     return 4 * n_in * n_around * n_out * wavelengths * steps
 
 
-__all__ = ["ANGULAR_RESOLUTION", "Bound", "INCIDENCE_RESOLUTION", "MEMORY_FRACTION", "N_ALONG", "N_AROUND",
-           "PARTICLE_DIAMETER_NM", "PATHS_PER_CELL", "SEED", "SLAB_ALBEDO", "SLAB_G", "SLAB_INDEX", "SLAB_PATHS",
-           "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "TRANSPORT_DEFAULTS", "WAVELENGTH_COUNT", "YARN_RADIUS_MM",
-           "check_memory", "decayed_tally_bytes", "gib", "memory_limit_bytes", "physical_memory_bytes",
-           "transport_memory_bytes"]
+__all__ = ["ANGULAR_RESOLUTION", "HOST_REFRACTIVE_INDEX", "INCIDENCE_RESOLUTION", "MEMORY_FRACTION", "N_ALONG",
+           "N_AROUND", "PARTICLE_DIAMETER_NM", "PATHS_PER_CELL", "SEED", "SLAB_ALBEDO", "SLAB_G", "SLAB_INDEX",
+           "SLAB_PATHS", "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "TRANSPORT_DEFAULTS", "WAVELENGTH_COUNT",
+           "YARN_RADIUS_MM", "Bound", "check_memory", "decayed_tally_bytes", "gib", "memory_limit_bytes",
+           "physical_memory_bytes", "transport_memory_bytes"]

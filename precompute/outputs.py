@@ -11,6 +11,7 @@ import math
 import numbers
 import os
 import pathlib
+import tempfile
 
 from precompute.errors import ParameterError
 
@@ -23,6 +24,17 @@ def existing_place(path: pathlib.Path) -> pathlib.Path:
     return place
 
 
+def can_create_in(folder: pathlib.Path) -> bool:
+    """Whether this process can create an entry in the existing folder ``folder``: tried with a
+    temporary folder, removed at once, not read off the permission bits, which say yes to root
+    everywhere and know nothing of a read-only or virtual file system (``/sys``)."""
+    try:
+        with tempfile.TemporaryDirectory(prefix=".clothlight-write-check-", dir=folder):
+            return True
+    except OSError:
+        return False
+
+
 def check_writable_folder(path: str | os.PathLike, option: str, *, what: str = "an output folder") -> pathlib.Path:
     """``path`` (absolute) if a command can write files into it: an existing, writable folder, or a
     new one in a writable place (not created here).  ParameterError naming ``option`` otherwise."""
@@ -32,13 +44,13 @@ def check_writable_folder(path: str | os.PathLike, option: str, *, what: str = "
     if path.exists():
         if not path.is_dir():
             raise ParameterError(option, str(path), f"{what} (this is a file, not a folder)")
-        if not os.access(path, os.W_OK | os.X_OK):
+        if not can_create_in(path):
             raise ParameterError(option, str(path), f"{what} this user can write into (this one is not writable)")
         return path
     place = existing_place(path.parent)
     if not place.is_dir():
         raise ParameterError(option, str(path), f"{what} (its parent {place} is a file, not a folder)")
-    if not os.access(place, os.W_OK | os.X_OK):
+    if not can_create_in(place):
         raise ParameterError(option, str(path), f"{what} in a writable place ({place} is not writable)")
     return path
 

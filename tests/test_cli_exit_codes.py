@@ -15,6 +15,7 @@ import contextlib
 import json
 import math
 import os
+import pathlib
 import signal
 import subprocess
 import sys
@@ -24,6 +25,7 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+import clothlight.fit.__main__ as fit_cli
 import clothlight.garment.__main__ as garment_cli
 import clothlight.validate as validate_cli
 import clothlight.validation.report as report_cli
@@ -38,7 +40,11 @@ from tests.helpers import REPO
 
 YARN_BAKE = REPO / "example_blends" / "tables" / "paper_2008"
 CLIS = {"precompute": precompute_cli.main, "validate": validate_cli.main, "garment": garment_cli.main,
-        "report": report_cli.main}
+        "report": report_cli.main, "fit": fit_cli.main}
+#: A place no process can write into, root included: the permission bits of /sys say yes to root,
+#: the file system says no.
+UNWRITABLE = "/sys/clothlight-output"
+MEASURED = REPO / "clothlight" / "validation" / "data" / "synthetic_red_cotton.csv"
 
 
 class WorkStarted(BaseException):
@@ -73,6 +79,9 @@ def no_work(monkeypatch):
     monkeypatch.setattr(precompute.cli.slab, "slab_summary", _started(command="slab"))
     monkeypatch.setattr(validate_cli, "_sweep", lambda args, interrupt: _started(**vars(args))())
     monkeypatch.setattr(garment_cli, "_measure", lambda args, interrupt: _started(**vars(args))())
+    import clothlight.fit.run
+
+    monkeypatch.setattr(clothlight.fit.run, "run_fit", _started(command="fit"))
 
 
 @pytest.fixture(scope="module")
@@ -86,6 +95,9 @@ def files(tmp_path_factory):
     made["bad_csv"].write_text("theta_i,phi_i,theta_o,phi_o,R,G,B\n0,0,0,0,1,1,1\n0,x,0,0,1,1,1\n")
     made["empty_json"].write_text("{}")
     made["folder"].mkdir()
+    made["low_index"] = root / "low_index.toml"
+    preset = (REPO / "precompute" / "presets" / "red_cotton.toml").read_text()
+    made["low_index"].write_text(preset.replace("refractive_index = 1.557", "refractive_index = 0.5", 1))
     return made
 
 
@@ -179,6 +191,8 @@ BAD_INPUTS = [
     ("precompute", ["optics", "--preset", ""], ["preset = ''", "red_cotton"]),
     ("precompute", ["bake", "--config", "{binary}"], ["preset", "binary.toml", "UTF-8"]),
     ("precompute", ["optics", "--config", "{folder}"], ["preset", "folder"]),
+    ("precompute", ["optics", "--config", "{low_index}"], ["host.refractive_index.n = 0.5", "[1, 10]"]),
+    ("precompute", ["bake", "--config", "{low_index}"], ["host.refractive_index.n = 0.5", "[1, 10]"]),
     ("precompute", ["bake", "--cache-dir", "{a_file}"], ["--cache-dir", "a-file"]),
     ("precompute", ["bake", "--cache-dir", "{a_file}/cache"], ["--cache-dir", "is a file"]),
     ("precompute", ["bake", "--out", "{a_file}"], ["--out", "a-file"]),
@@ -212,17 +226,61 @@ BAD_INPUTS = [
     ("report", ["{binary}"], ["RESULTS_JSON", "binary.toml"]),
     ("report", ["{empty_json}"], ["RESULTS_JSON", "materials"]),
     ("report", [], ["usage"]),
+    # output folders and files in a place that refuses to be written, whatever the permission bits say
+    ("precompute", ["bake", "--out", f"{UNWRITABLE}/bake"], ["--out", "not writable"]),
+    ("precompute", ["bake", "--cache-dir", f"{UNWRITABLE}/cache"], ["--cache-dir", "not writable"]),
+    ("precompute", ["plot", str(YARN_BAKE), "--out", f"{UNWRITABLE}/plots"], ["--out", "not writable"]),
+    ("precompute", ["optics", "--plot", f"{UNWRITABLE}/optics.png"], ["--plot", "not writable"]),
+    ("validate", ["--out", f"{UNWRITABLE}/validation"], ["--out", "not writable"]),
+    ("garment", ["bake", "--tables", str(YARN_BAKE), "--out", f"{UNWRITABLE}/cloth"], ["--out", "not writable"]),
+    ("garment", ["bake", "--tables", str(YARN_BAKE), "--out", "{root}/c", "--cache-dir", f"{UNWRITABLE}/cache"],
+     ["--cache-dir", "not writable"]),
+    ("fit", ["--measured", str(MEASURED), "--free", "dye_weight_percent", "--out", f"{UNWRITABLE}/fit"],
+     ["--out", "not writable"]),
+    ("fit", ["--measured", str(MEASURED), "--free", "dye_weight_percent", "--out", "{root}/fit", "--cache-dir",
+             f"{UNWRITABLE}/cache"], ["--cache-dir", "not writable"]),
+    ("fit", ["--measured", "{bad_csv}", "--free", "dye_weight_percent", "--out", "{root}/fit"],
+     ["measured.csv", "row 3"]),
+    ("fit", ["--measured", str(MEASURED), "--free", "sheen", "--out", "{root}/fit"], ["--free", "sheen"]),
+    # values that begin with "-": refused by their option's own check, not taken for options
+    ("precompute", ["bake", "--dye-series", "-1,5"], ["--dye-series", "'-1,5'", "0 ≤ LOW < HIGH < 100"]),
+    ("precompute", ["bake", "--dye-series", "5"], ["--dye-series", "LOW,HIGH"]),
+    ("precompute", ["bake", "--seed", "-3"], ["--seed", "-3", "[0, "]),
+    ("precompute", ["slab", "--albedo", "-0.5", "--g", "0", "--tau", "1"], ["--albedo", "[0, 1]"]),
+    ("validate", ["--out", "{root}/v", "--seed", "-1"], ["--seed", "2147483647"]),
+    ("fit", ["--measured", str(MEASURED), "--free", "dye_weight_percent", "--out", "{root}/fit",
+             "--budget-evaluations", "1e15"], ["--budget-evaluations", "[2, 100000]"]),
+    ("fit", ["--measured", str(MEASURED), "--free", "dye_weight_percent", "--out", "{root}/fit",
+             "--budget-evaluations", "-5"], ["--budget-evaluations", "[2, 100000]"]),
 ]
 
 
 @pytest.mark.parametrize("cli, argv, words", BAD_INPUTS, ids=[f"{c}:{' '.join(a)[:60]}" for c, a, _ in BAD_INPUTS])
 def test_bad_input_exits_2_naming_it_before_any_work(cli, argv, words, files, no_work, capsys):
+    if any(UNWRITABLE in arg for arg in argv) and not pathlib.Path(UNWRITABLE).parent.is_dir():
+        pytest.skip("no /sys on this system")
     names = {key: str(value) for key, value in files.items()}
     code, err = run(cli, [arg.format(**names) for arg in argv], capsys)
     assert code == 2, err
     assert "Traceback" not in err
     for word in words:
         assert word in err, (word, err)
+
+
+def test_a_dash_led_value_goes_to_its_option_and_an_option_stays_an_option():
+    import argparse
+
+    from precompute.cli.arguments import values_attached
+
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--seed")
+    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--set", action="append")
+    assert values_attached(parser, ["--seed", "-3", "--json"]) == ["--seed=-3", "--json"]
+    assert values_attached(parser, ["--seed", "--json"]) == ["--seed", "--json"]  # a missing value stays missing
+    assert values_attached(parser, ["--set", "-a=1", "--seed", "4"]) == ["--set=-a=1", "--seed", "4"]
+    assert values_attached(parser, ["--json", "-3"]) == ["--json", "-3"]  # a flag takes no value
+    assert values_attached(parser, ["--seed", "--"]) == ["--seed", "--"]
 
 
 @pytest.mark.slow

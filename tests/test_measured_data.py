@@ -12,6 +12,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from precompute.fit.measured_data import (
+    MAX_BRDF_PER_SR,
     RGB_HEADER,
     MeasurementFormatError,
     parse_measurement,
@@ -81,6 +82,8 @@ def test_a_flat_spectrum_is_white_and_a_red_one_is_red():
         (f"{HEADER}\n0,0,0,0,1,1,1\n0,0,10,360,1,1,1\n", 3, "phi_o"),
         (f"{HEADER}\n0,-1,0,0,1,1,1\n", 2, "phi_i"),
         (f"{HEADER}\n0,0,0,0,1,-0.5,1\n", 2, "negative"),
+        (f"{HEADER}\n0,0,0,0,1e300,1,1\n", 2, "R = 1e\\+300 1/sr: .* at most 10000 1/sr"),
+        ("theta_i,phi_i,theta_o,phi_o,wavelength_nm,value\n0,0,0,0,500,2e4\n", 2, "value = 20000 1/sr"),
         (f"{HEADER}\n0,0,0,0,1,1\n", 2, "6 fields"),
         (f"{HEADER}\n0,x,0,0,1,1,1\n", 2, "phi_i"),
         (f"{HEADER}\n0,0,0,0,1,nan,1\n", 2, "finite"),
@@ -163,7 +166,7 @@ def valid_rows(draw):
 @st.composite
 def corrupted_row(draw, good_rows):
     fields = draw(st.sampled_from(good_rows)).split(",")
-    kind = draw(st.sampled_from(["token", "zenith", "azimuth", "negative", "count", "nonfinite", "duplicate"]))
+    kind = draw(st.sampled_from(["token", "zenith", "azimuth", "negative", "huge", "count", "nonfinite", "duplicate"]))
     if kind == "duplicate":
         return ",".join(fields)
     if kind == "token":
@@ -174,6 +177,8 @@ def corrupted_row(draw, good_rows):
         fields[draw(st.sampled_from([1, 3]))] = repr(draw(st.one_of(st.floats(360.0, 1e6), st.floats(-1e6, -0.001))))
     elif kind == "negative":
         fields[draw(st.integers(4, 6))] = repr(draw(st.floats(-1e6, -1e-9)))
+    elif kind == "huge":
+        fields[draw(st.integers(4, 6))] = repr(draw(st.floats(MAX_BRDF_PER_SR * (1 + 1e-9), 1e308)))
     elif kind == "count":
         fields = fields[: draw(st.integers(1, 6))] if draw(st.booleans()) else fields + ["1"] * draw(st.integers(1, 3))
     else:

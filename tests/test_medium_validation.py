@@ -240,6 +240,8 @@ def test_transport_and_bake_tables_belong_to_the_bake():
     [
         (["yarn", "radius_mm"], 0.0, "yarn.radius_mm", "[0.001, 10] mm"),
         (["yarn", "radius_mm"], 11.0, "yarn.radius_mm", "[0.001, 10] mm"),
+        (["host", "refractive_index"], 0.5, "host.refractive_index.n", "[1, 10]"),
+        (["host", "refractive_index"], 12.0, "host.refractive_index.n", "[1, 10]"),
         (["wavelengths", "step_nm"], 1e-6, "wavelengths.step_nm", "at most 1001 wavelengths"),
         (["particles", 0, "diameter_nm"], 2e5, "particles[scatterers].diameter_nm", "[1, 100000] nm"),
         (["yarn", "cross_section"], "square", "yarn.cross_section", "'circle' or 'ellipse'"),

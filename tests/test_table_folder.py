@@ -563,6 +563,23 @@ def test_without_an_atomic_swap_the_folder_is_replaced_by_two_renames(bakes, tmp
     assert key_of(out) == "02" * 32 and leftovers(tmp_path) == []  # the earlier folder renamed back
 
 
+def test_the_next_run_clears_the_staging_folders_of_killed_runs_and_keeps_those_of_live_ones(bakes, tmp_path):
+    out = copy_of(bakes["A", True], tmp_path)
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                              text=True, check=True)
+    dead, alive = int(finished.stdout), os.getppid()  # a process that has ended, and one that runs
+    killed = tmp_path / f".{out.name}.{dead}.0123abcd.partial"
+    killed_aside = tmp_path / f".{out.name}.{dead}.4567ef01.previous.partial"
+    running = tmp_path / f".{out.name}.{alive}.89abcdef.partial"
+    for staging in (killed, killed_aside, running):
+        staging.mkdir()
+        (staging / "brdf.exr").write_bytes(b"half written")
+    replace_folder(out, copier(bakes["B", True]), YARN_FOLDER_FILES)
+    assert key_of(out) == "02" * 32
+    assert not killed.exists() and not killed_aside.exists()
+    assert running.is_dir()  # another run into the same place, still writing
+
+
 def test_out_must_be_new_empty_or_an_earlier_bakes_folder(bakes, tmp_path):
     (tmp_path / "a file").write_text("x")
     with pytest.raises(ParameterError, match="--out.*this is a file"):

@@ -15,6 +15,7 @@ import pathlib
 import sys
 
 from precompute import bounds
+from precompute.cli.arguments import parse_arguments
 from precompute.distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
 from precompute.exit_codes import INTERRUPTED, run_cli
 from precompute.fit.parameters import PARAMETERS
@@ -45,8 +46,9 @@ def build_parser() -> argparse.ArgumentParser:
                              "front, at normal view (real cloth is darker from behind: e.g. 0.5)")
     parser.add_argument("--seed", type=bounds.SEED.argument("--seed"), default=0,
                         help="seed of the optimiser and of every forward evaluation (default 0)")
-    parser.add_argument("--budget-evaluations", type=int, default=150,
-                        help="forward-model evaluations at most, the final accurate one included (default 150)")
+    parser.add_argument("--budget-evaluations", type=bounds.FIT_EVALUATIONS.argument("--budget-evaluations"),
+                        default=150, help="forward-model evaluations at most, the final accurate one included: "
+                        f"{bounds.FIT_EVALUATIONS.allowed()} (default 150)")
     parser.add_argument("--budget-seconds", type=float,
                         help="wall seconds at most for the search (default: no limit)")
     parser.add_argument("--out", type=pathlib.Path, required=True,
@@ -68,7 +70,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the fit; its exit code (module docstring)."""
-    return run_cli(lambda: run(build_parser().parse_args(sys.argv[1:] if argv is None else argv)))
+    return run_cli(lambda: run(parse_arguments(build_parser(), sys.argv[1:] if argv is None else argv)))
 
 
 def run(args) -> int:

@@ -113,7 +113,9 @@ def main(argv=None) -> int:
 def _main(argv) -> int:
     from precompute import distributed
     from precompute import exit_codes
-    args = build_parser().parse_args(argv)
+    from precompute.cli.arguments import parse_arguments
+
+    args = parse_arguments(build_parser(), sys.argv[1:] if argv is None else argv)
     from precompute.errors import ParameterError
     from precompute.tables import folder as table_folder
     from precompute import outputs

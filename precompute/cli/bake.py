@@ -13,6 +13,7 @@ import sys
 from precompute import bounds
 from precompute.bake import bake, export_bake
 from precompute.distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
+from precompute.errors import ParameterError
 from precompute.optics.medium import DEFAULT_PRESET, preset_names
 from precompute.outputs import check_writable_folder
 from precompute.tables.folder import YARN_FOLDER_FILES, check_output_folder
@@ -115,10 +116,9 @@ def _dye_range(text: str) -> tuple[float, float]:
     import argparse
 
     try:
-        low, high = (float(part) for part in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: two dye amounts LOW,HIGH, e.g. 0.5,5") from None
-    return low, high
+        return bounds.check_dye_range(text, "--dye-series")
+    except ParameterError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _ratio(value) -> str:

@@ -11,10 +11,11 @@ is the header, exactly one of
 
 followed by at least one data line.  Angles are degrees: zeniths ``theta_i`` (toward the light)
 and ``theta_o`` (toward the detector) in [0, 90], azimuths ``phi_i``, ``phi_o`` in [0, 360).  A BRDF
-is finite and ≥ 0.  Wavelengths are in nm within [360, 830] (the CIE 1931 observer's range); in a
-spectral file every direction pair lists the same wavelengths, covering at least 400–700 nm, and
-is converted to RGB with the bake's convention (``precompute.tables.color``: D65, CIE 1931 2°, linear
-Rec.709, negative channels clipped), so a measurement and a baked model meet in the same space.
+is finite, ≥ 0 and at most :data:`MAX_BRDF_PER_SR`.  Wavelengths are in nm within [360, 830] (the
+CIE 1931 observer's range); in a spectral file every direction pair lists the same wavelengths,
+covering at least 400–700 nm, and is converted to RGB with the bake's convention
+(``precompute.tables.color``: D65, CIE 1931 2°, linear Rec.709, negative channels clipped), so a
+measurement and a baked model meet in the same space.
 No direction pair (and wavelength) may appear twice.
 
 Rows are numbered like the file's lines, comments and blank lines included, so an editor's line
@@ -45,6 +46,10 @@ SPECTRAL_HEADER = ("theta_i", "phi_i", "theta_o", "phi_o", "wavelength_nm", "val
 WAVELENGTH_RANGE_NM = (360.0, 830.0)
 #: Spectral files must cover at least this band to be converted to RGB, nm.
 REQUIRED_BAND_NM = (400.0, 700.0)
+#: The largest BRDF a measurement may hold, 1/sr: a gonioreflectometer's detector of 0.5° half-angle
+#: (2.4·10⁻⁴ sr) sees at most about 4·10³ sr⁻¹ from a perfect mirror at normal view, and cloth far less;
+#: a larger value is a unit or format error, which would otherwise outweigh every other view of a fit.
+MAX_BRDF_PER_SR = 1.0e4
 #: Angles closer than this are the same direction when matching a measurement to a sweep, degrees.
 ANGLE_TOLERANCE_DEG = 0.5
 
@@ -189,6 +194,10 @@ def _parse_row(row: int, line: str, width: int, is_spectral: bool) -> list[float
     for name, value in zip(("value",) if is_spectral else ("R", "G", "B"), values[5:] if is_spectral else values[4:]):
         if value < 0.0:
             raise MeasurementFormatError(row, f"{name} = {value:g}: a BRDF cannot be negative")
+        if value > MAX_BRDF_PER_SR:
+            raise MeasurementFormatError(row, f"{name} = {value:g} 1/sr: a measured BRDF is at most "
+                                              f"{MAX_BRDF_PER_SR:g} 1/sr (a perfect mirror seen by a 0.5° detector "
+                                              "gives about 4000)")
     return values
 
 

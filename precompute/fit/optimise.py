@@ -54,6 +54,7 @@ from typing import Protocol
 
 import numpy as np
 
+from precompute import bounds
 from precompute.distributed import ClusterExecutor, open_executor
 from precompute.errors import InputError, ParameterError
 from precompute.optics.medium import MAX_VOLUME_FRACTION, medium_from_dict
@@ -275,6 +276,7 @@ def check_budget(budget: Budget, n_free: int, popsize: int | None = None) -> int
     """The population size; ParameterError naming ``--budget-evaluations`` when the budget does not
     hold one generation and the final evaluation."""
     population = popsize or population_size(n_free)
+    bounds.FIT_EVALUATIONS.check(budget.evaluations)
     if budget.evaluations < population + 1:
         raise ParameterError("--budget-evaluations", budget.evaluations,
                              f"at least {population + 1} for {n_free} free parameters (one generation of "

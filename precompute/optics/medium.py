@@ -339,6 +339,8 @@ class Host:
             raise ParameterError(
                 "host.refractive_index.k", self.refractive_index.k, "0: give the host's absorption as absorption_per_mm"
             )
+        for n in np.atleast_1d(np.asarray(self.refractive_index.n, float)):
+            bounds.HOST_REFRACTIVE_INDEX.check(n)
         value = _finite("host.absorption_per_mm", self.absorption_per_mm, "a finite number ≥ 0")
         if value < 0:
             raise ParameterError("host.absorption_per_mm", self.absorption_per_mm, "a finite number ≥ 0")

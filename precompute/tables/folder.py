@@ -43,6 +43,7 @@ from collections.abc import Callable, Iterable, Mapping
 import numpy as np
 
 from precompute.errors import ParameterError
+from precompute.outputs import can_create_in, existing_place
 from precompute.tables.exr import SCHEMA, Table, TableError, table_from_bytes
 
 SUMMARY_FILE = "summary.json"
@@ -69,8 +70,8 @@ YARN_FOLDER_FILES = (*YARN_TABLE_FILES.values(), SPECTRAL_FILE, SUMMARY_FILE)
 SPECULAR_KEY = "specular"
 #: ``source`` of a specular term taken from a preset's ``[fit]`` table (``python -m clothlight.fit``).
 SPECULAR_FROM_PRESET = "preset [fit]"
-#: Staging folders of :func:`replace_folder` older than this belong to processes that died; a later one
-#: removes them.
+#: Staging folders of :func:`replace_folder` whose process has died, or older than this (written by
+#: another machine, which this one cannot ask), are left by a run that was killed; a later one removes them.
 STALE_STAGING_SECONDS = 24 * 3600
 _STAGING_SUFFIX = ".partial"
 
@@ -314,10 +315,8 @@ def check_output_folder(out: str | pathlib.Path, names: Iterable[str], option: s
             raise ParameterError(option, str(out), f"a new or empty folder, or one that holds an earlier {job} "
                                                    f"only (this one also holds {shown}, which a new {job} would "
                                                    "remove)")
-    place = out.parent
-    while not place.exists() and place != place.parent:
-        place = place.parent
-    if not place.is_dir() or not os.access(place, os.W_OK | os.X_OK):
+    place = existing_place(out.parent)
+    if not place.is_dir() or not can_create_in(place):
         raise ParameterError(option, str(out), f"a folder in a writable place ({place} is not writable)")
     return out
 
@@ -386,13 +385,30 @@ def _is_staging(name: str) -> bool:
     return name.startswith(".") and name.endswith(_STAGING_SUFFIX)
 
 
+def _process_is_gone(pid: int) -> bool:
+    """Whether no process ``pid`` runs on this machine."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except (PermissionError, OverflowError, ValueError):
+        return False  # another user's process: alive
+    return False
+
+
 def _remove_stale_staging(out: pathlib.Path) -> None:
+    """Remove the staging folders beside ``out`` that runs killed before their end left: their process
+    is gone (the process id is in the name: ``.<out>.<pid>.<random>[.previous].partial``), or they are
+    older than :data:`STALE_STAGING_SECONDS`."""
     now = time.time()
+    prefix = f".{out.name}."
     for entry in out.parent.iterdir():
-        if not (entry.name.startswith(f".{out.name}.") and entry.name.endswith(_STAGING_SUFFIX)):
+        if not (entry.name.startswith(prefix) and entry.name.endswith(_STAGING_SUFFIX)):
             continue
+        pid = entry.name[len(prefix):].partition(".")[0]
         try:
-            if now - entry.stat().st_mtime > STALE_STAGING_SECONDS:
+            if (pid.isdigit() and int(pid) != os.getpid() and _process_is_gone(int(pid))) \
+                    or now - entry.stat().st_mtime > STALE_STAGING_SECONDS:
                 shutil.rmtree(entry, ignore_errors=True)
         except OSError:
             continue  # removed by another process meanwhile

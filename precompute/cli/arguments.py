@@ -1,0 +1,42 @@
+"""Command-line arguments as a user types them, for every ClothLight command.
+
+argparse takes a value that begins with ``-`` (``--dye-series -1,5``, ``--seed -3``) for an option
+and refuses it with "expected one argument", which names neither the range nor what was wrong.
+:func:`parse_arguments` hands such a value to its option, so that the option's own check refuses
+it, naming the parameter and what is allowed, as it refuses every other bad value.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+
+
+def values_attached(parser: argparse.ArgumentParser, argv: Sequence[str]) -> list[str]:
+    """``argv`` with each value that begins with ``-`` and follows an option taking one value written
+    as ``--option=value``; a following word that is itself an option of ``parser`` is left alone."""
+    takes_one = {string for action in parser._actions if action.nargs is None and action.option_strings
+                 for string in action.option_strings}
+    for subparsers in (a for a in parser._actions if isinstance(a, argparse._SubParsersAction)):
+        for sub in subparsers.choices.values():
+            takes_one |= {string for action in sub._actions if action.nargs is None and action.option_strings
+                          for string in action.option_strings}
+    options = {string for action in parser._actions for string in action.option_strings}
+    attached, words = [], list(argv)
+    index = 0
+    while index < len(words):
+        word = words[index]
+        following = words[index + 1] if index + 1 < len(words) else None
+        if (word in takes_one and following is not None and following.startswith("-") and following != "--"
+                and following.partition("=")[0] not in options | takes_one):
+            attached.append(f"{word}={following}")
+            index += 2
+        else:
+            attached.append(word)
+            index += 1
+    return attached
+
+
+def parse_arguments(parser: argparse.ArgumentParser, argv: Sequence[str]) -> argparse.Namespace:
+    """``parser.parse_args`` of ``argv`` with its dash-led values attached (:func:`values_attached`)."""
+    return parser.parse_args(values_attached(parser, argv))

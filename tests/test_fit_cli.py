@@ -5,7 +5,10 @@ standing in for ``clothlight.fit.forward`` (put in sys.modules, where the comman
 from __future__ import annotations
 
 import json
+import os
+import signal
 import sys
+import time
 import types
 
 import pytest
@@ -160,6 +163,27 @@ def test_interrupt_exits_130_and_writes_nothing(inputs, tmp_path, fake_forward, 
 
     original = SyntheticForward.__call__
     monkeypatch.setattr(SyntheticForward, "__call__", interrupting)
+    assert fit(inputs, out) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_ctrl_c_that_blender_would_swallow_during_the_renders_still_stops_the_fit(inputs, tmp_path, fake_forward,
+                                                                                   monkeypatch, capsys):
+    """Blender prints and swallows an exception raised in a render callback: a Ctrl-C while the cloth
+    response renders must still end the fit with 130 and write nothing."""
+    out = tmp_path / "fit"
+    build = fake_forward.build_forward_model
+
+    def rendering(measured_views, preset_config, base_dir, *, progress=None, **kwargs):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)  # during a render …
+            time.sleep(0.01)
+        except KeyboardInterrupt:
+            pass  # … where Blender would print it and render on
+        return build(measured_views, preset_config, base_dir, progress=progress, **kwargs)
+
+    monkeypatch.setattr(fake_forward, "build_forward_model", rendering)
     assert fit(inputs, out) == 130
     assert "interrupted" in capsys.readouterr().err
     assert not out.exists()

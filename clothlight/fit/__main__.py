@@ -17,7 +17,7 @@ import sys
 from precompute import bounds
 from precompute.cli.arguments import parse_arguments
 from precompute.distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
-from precompute.exit_codes import INTERRUPTED, run_cli
+from precompute.exit_codes import INTERRUPTED, DeferredInterrupt, run_cli
 from precompute.fit.parameters import PARAMETERS
 from precompute.optics.medium import DEFAULT_PRESET, preset_names
 
@@ -93,7 +93,12 @@ def run(args) -> int:
             bars[name] = tqdm(total=total, desc=name, unit=unit, file=sys.stderr, dynamic_ncols=True)
         return bars[name]
 
+    # Blender prints and swallows an exception raised in its callbacks (Cycles' render engine): a
+    # Ctrl-C while the cloth response renders is held and raised between renders instead.
+    held = DeferredInterrupt("interrupting after the current render…")
+
     def building(done: int, total: int) -> None:
+        held.check()
         b = bar("cloth response", total, "render")
         b.update(max(0, done - b.n))
 
@@ -103,7 +108,8 @@ def run(args) -> int:
         b.update(max(0, state.evaluations - b.n))
 
     try:
-        result = run_fit(inputs, seed=args.seed, scheduler=scheduler, building=building, searching=searching)
+        result = run_fit(inputs, seed=args.seed, scheduler=scheduler, building=building, searching=searching,
+                         while_building=lambda: held)
     finally:
         for b in bars.values():
             b.close()

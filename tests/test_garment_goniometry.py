@@ -17,7 +17,8 @@ from clothlight.garment.goniometry import (
     side_to_world,
     view_of,
 )
-from clothlight.garment.tables import energy_balance
+from clothlight.garment.tables import check_energy, energy_balance
+from precompute.tables.exr import TableError
 from precompute.tables.grids import AngularGrid
 
 VIEWS = [(0.0, 0.0, 1.0), (0.6, 0.3, 0.74), (-0.9, 0.1, 0.2), (0.0, 0.3, -0.95), (0.5, -0.5, -0.3)]
@@ -130,3 +131,16 @@ def test_energy_balance_of_a_lambertian_reflector_and_an_open_weave():
     assert np.allclose(balance["transmitted"][front_lit], 0.0)
     assert np.allclose(balance["open"], 0.3)
     assert np.all(balance["total"][front_lit] <= 0.9 * 1.05)
+    check_energy(balance, n_i)  # a cloth that conserves energy passes
+
+
+def test_a_cloth_that_sends_away_more_light_than_it_receives_is_refused():
+    """The same reflector with its ρ scaled ×2 (an albedo of 1.2): its yarn tables are refused."""
+    n_i, n_o = 9, 8
+    incidence = AngularGrid("sphere", n_i).cell_centers()
+    rho_front = np.zeros((n_i**2, n_o**2, 3))
+    rho_front[incidence[:, 2] > 0] = (1.2 / math.pi * incidence[incidence[:, 2] > 0, 2])[:, None, None]
+    rho = {"front": rho_front, "back": np.zeros_like(rho_front)}
+    coverage = {"front": np.full(n_o**2, 1.0), "back": np.full(n_o**2, 1.0)}
+    with pytest.raises(TableError, match="break energy conservation.*at most 1 \\+ 0.05"):
+        check_energy(energy_balance(rho, coverage, n_i), n_i)

@@ -60,6 +60,9 @@ GARMENT_LOBES = ("diffuse", "translucent", "fibre_transmission", "gloss")
 #: straight behind 1.03 of the sample's red glow (1.38).
 FIT_WEIGHTING = "absolute"
 SUMMARY_FILE = "summary.json"
+#: How far above 1 a cloth's reflected + transmitted + open share of the incident light may come before
+#: it is refused: the yarn tables' Monte-Carlo error (a few % a cell) and the measurement's pixel sums.
+ENERGY_TOLERANCE = 0.05
 #: Tiles of ``lobes.exr``, left to right: the fitted lobes, then the open weave.
 LOBE_TILES = (*GARMENT_LOBES, "open_weave")
 #: Views per side of the lobe image's projected-hemisphere grid.
@@ -152,6 +155,22 @@ def energy_balance(rho: dict, coverage: dict, incidence_resolution: int) -> dict
     return {name: np.asarray(value) for name, value in result.items()}
 
 
+def check_energy(energy: dict, incidence_resolution: int) -> None:
+    """Refuse a cloth that sends more light away than it receives: ``energy`` (:func:`energy_balance`)
+    whose total exceeds 1 + :data:`ENERGY_TOLERANCE` in any channel, from any incidence cell.  The
+    cloth inherits its energy from the yarn tables it was measured with, so the fault is theirs:
+    :class:`~precompute.tables.exr.TableError` (bad input, exit code 2)."""
+    total = np.asarray(energy["total"], float)
+    if np.all(total <= 1.0 + ENERGY_TOLERANCE):
+        return
+    worst = np.unravel_index(int(np.argmax(total)), total.shape)
+    direction = side_to_world(AngularGrid("sphere", incidence_resolution).cell_centers(), "front")[worst[0]]
+    raise precompute_tables.TableError(
+        f"the yarn tables break energy conservation: the cloth measured with them reflects, transmits and lets "
+        f"through {total[worst]:.4g} of the light arriving from {np.round(direction, 3).tolist()} (channel "
+        f"{'RGB'[worst[1]]}), at most 1 + {ENERGY_TOLERANCE:g} allowed; were the tables' values scaled?")
+
+
 def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key: str, code_digest: str) -> dict:
     """Write the tables of a :class:`.measure.ClothMeasurement` into ``folder`` (created) and its
     summary; returns the summary."""
@@ -196,6 +215,7 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
          "layout": {"incidence_resolution": n_i, "exit_resolution": LOBE_GRID_RESOLUTION,
                     "lobe_count": len(LOBE_TILES), "views": "projected hemisphere, front rows on top"}})
     energy = energy_balance(measurement.rho, measurement.coverage, n_i)
+    check_energy(energy, n_i)
     total = energy["total"]
     worst = np.unravel_index(int(np.argmax(total)), total.shape)
     summary = {

@@ -118,6 +118,12 @@ def test_a_file_that_is_not_utf8_names_the_row(tmp_path):
     assert error.value.path == str(path) and error.value.row == 3
 
 
+def test_a_missing_file_or_a_folder_is_bad_input_naming_it(tmp_path):
+    for path, reason in ((tmp_path / "missing.csv", "No such file"), (tmp_path, "Is a directory")):
+        with pytest.raises(ParameterError, match=f"measurement file = '{re.escape(str(path))}'.*{reason}"):
+            read_measurement(path)
+
+
 def test_a_file_with_a_bad_row_names_the_file_and_the_row(tmp_path):
     path = tmp_path / "measured.csv"
     path.write_text(f"{HEADER}\n0,0,0,0,1,1,1\n0,x,0,0,1,1,1\n")

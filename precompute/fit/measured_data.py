@@ -121,9 +121,14 @@ class Measurement:
 def read_measurement(path: str | pathlib.Path) -> Measurement:
     """Read and validate a measurement file (module docstring).
 
-    Raises MeasurementFormatError naming the file and the bad row, FileNotFoundError for a missing file.
+    Raises MeasurementFormatError naming the file and the bad row; ParameterError naming ``path`` for
+    a file that is missing, a folder or unreadable (both bad input).
     """
-    data = pathlib.Path(path).read_bytes()
+    try:
+        data = pathlib.Path(path).read_bytes()
+    except OSError as error:
+        raise ParameterError("measurement file", str(path),
+                             f"a measured-data CSV file this user can read ({error.strerror})") from None
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as error:

@@ -246,7 +246,7 @@ def test_a_fit_in_its_child_shows_progress_and_writes_the_fit_folder(fitted):
 def test_the_childs_fit_is_the_command_lines(fitted, measured, response_cache, tmp_path, capsys):
     """``python -m clothlight.fit`` on the same medium (written as a preset TOML), measurement, seed
     and budget writes the same preset."""
-    import precompute.__main__ as precompute_cli
+    import clothlight.fit.__main__ as fit_cli
     from precompute.bake import apply_overrides
     from precompute.fit.report import to_toml
     from precompute.optics.medium import load_preset_config
@@ -256,10 +256,9 @@ def test_the_childs_fit_is_the_command_lines(fitted, measured, response_cache, t
     config = apply_overrides(config, job.request.medium.bake_arguments()["overrides"])
     preset = tmp_path / "start.toml"  # its dye spectrum resolves in precompute/data
     preset.write_text(to_toml(config))
-    code = precompute_cli.main(["fit", "--measured", str(measured), "--config", str(preset), "--free",
-                                "dye_weight_percent,specular_weight", "--dye-series", "--budget-evaluations", "8",
-                                "--seed", "0", "--cache-dir", str(response_cache), "--out", str(tmp_path / "cli"),
-                                "--json"])
+    code = fit_cli.main(["--measured", str(measured), "--config", str(preset), "--free",
+                         "dye_weight_percent,specular_weight", "--dye-series", "--budget-evaluations", "8",
+                         "--seed", "0", "--cache-dir", str(response_cache), "--out", str(tmp_path / "cli"), "--json"])
     assert code == 0, capsys.readouterr().err[-2000:]
     mine, theirs = (json.loads((folder / "fit.json").read_text()) for folder in (job.outcome.folder, tmp_path / "cli"))
     assert mine["parameters"] == theirs["parameters"] and mine["objective"] == theirs["objective"]

@@ -113,8 +113,7 @@ def preset_request(name: str) -> BakeRequest:
     config = load_preset_config(name)[0]
     given = config.get("transport", {})
     defaults = BakeRequest(preset=name)
-    fields = {key: given.get(key, getattr(defaults, key))
-              for key in ("seed", *GRID_SETTINGS)}
+    fields = {key: given.get(key, getattr(defaults, key)) for key in ("seed", *GRID_SETTINGS)}
     if given.get("paths_per_cell") is not None and "target_rel_stderr" not in given:
         fields.update(paths_per_cell=int(given["paths_per_cell"]), target_rel_stderr=None)
     else:
@@ -202,10 +201,10 @@ def request_overrides(config: dict, values: Mapping[str, float],
 
 
 def fitted_overrides(result) -> tuple[tuple[str, float], ...]:
-    """The fitted values of a fit's free parameters (``precompute.fit.FitResult``) as the bake's
-    overrides (:attr:`clothlight.medium_settings.BakeRequest.overrides`: dotted keys of the preset's TOML, a
-    particle species by its index; the sheen in the ``[fit]`` table, which the bake's tables carry),
-    so that the panel can show and bake the fitted medium."""
+    """The fitted values of a fit's free parameters (:class:`precompute.fit.optimise.FitResult`) as the
+    bake's overrides (:attr:`BakeRequest.overrides`: dotted keys of the preset's TOML, a particle
+    species by its index; the sheen in the ``[fit]`` table, which the bake's tables carry), so that
+    the panel can show and bake the fitted medium."""
     overrides = []
     for parameter in result.free:
         if parameter.is_specular:

@@ -281,6 +281,12 @@ def test_a_dash_led_value_goes_to_its_option_and_an_option_stays_an_option():
     assert values_attached(parser, ["--set", "-a=1", "--seed", "4"]) == ["--set=-a=1", "--seed", "4"]
     assert values_attached(parser, ["--json", "-3"]) == ["--json", "-3"]  # a flag takes no value
     assert values_attached(parser, ["--seed", "--"]) == ["--seed", "--"]
+    commands = parser.add_subparsers()
+    bake = commands.add_parser("bake")
+    bake.add_argument("--cache-dir")
+    bake.add_argument("--dry", action="store_true")
+    assert values_attached(parser, ["bake", "--cache-dir", "-x"]) == ["bake", "--cache-dir=-x"]
+    assert values_attached(parser, ["bake", "--cache-dir", "--dry"]) == ["bake", "--cache-dir", "--dry"]
 
 
 @pytest.mark.slow

@@ -116,16 +116,22 @@ def test_views_in_the_cloth_plane_are_refused(layout):
         plan_regions(9, patch_mm=0.0, half_thickness_mm=0.2, view_tilt=1.0, margin_mm=0.1)
 
 
-def test_energy_balance_of_a_lambertian_reflector_and_an_open_weave():
-    """Front: a Lambertian reflector of albedo 0.6 (ρ = 0.6/π cos θ_i for light on its side),
-    covering 70 % of the cloth; the back: nothing.  Reflected ≈ 0.6, transmitted 0, open 0.3."""
-    n_i, n_o = 9, 8
+def lambertian_front(albedo: float, coverage: float, n_i: int = 9, n_o: int = 8) -> tuple[dict, dict]:
+    """(ρ, coverage) of a cloth whose front is a Lambertian reflector of ``albedo`` (ρ = albedo/π cos θ_i
+    for light on its side), covering ``coverage`` of the cloth; the back reflects nothing."""
     incidence = AngularGrid("sphere", n_i).cell_centers()
     rho_front = np.zeros((n_i**2, n_o**2, 3))
-    rho_front[incidence[:, 2] > 0] = (0.6 / math.pi * incidence[incidence[:, 2] > 0, 2])[:, None, None]
-    rho = {"front": rho_front, "back": np.zeros_like(rho_front)}
-    coverage = {"front": np.full(n_o**2, 0.7), "back": np.full(n_o**2, 0.7)}
-    balance = energy_balance(rho, coverage, n_i)
+    rho_front[incidence[:, 2] > 0] = (albedo / math.pi * incidence[incidence[:, 2] > 0, 2])[:, None, None]
+    return ({"front": rho_front, "back": np.zeros_like(rho_front)},
+            {"front": np.full(n_o**2, coverage), "back": np.full(n_o**2, coverage)})
+
+
+def test_energy_balance_of_a_lambertian_reflector_and_an_open_weave():
+    """Front: a Lambertian reflector of albedo 0.6 covering 70 % of the cloth; the back: nothing.
+    Reflected ≈ 0.6, transmitted 0, open 0.3."""
+    n_i = 9
+    incidence = AngularGrid("sphere", n_i).cell_centers()
+    balance = energy_balance(*lambertian_front(0.6, 0.7, n_i), n_i)
     front_lit = incidence[:, 2] > 0.3
     assert np.allclose(balance["reflected"][front_lit], 0.6, rtol=0.05)
     assert np.allclose(balance["transmitted"][front_lit], 0.0)
@@ -135,12 +141,6 @@ def test_energy_balance_of_a_lambertian_reflector_and_an_open_weave():
 
 
 def test_a_cloth_that_sends_away_more_light_than_it_receives_is_refused():
-    """The same reflector with its ρ scaled ×2 (an albedo of 1.2): its yarn tables are refused."""
-    n_i, n_o = 9, 8
-    incidence = AngularGrid("sphere", n_i).cell_centers()
-    rho_front = np.zeros((n_i**2, n_o**2, 3))
-    rho_front[incidence[:, 2] > 0] = (1.2 / math.pi * incidence[incidence[:, 2] > 0, 2])[:, None, None]
-    rho = {"front": rho_front, "back": np.zeros_like(rho_front)}
-    coverage = {"front": np.full(n_o**2, 1.0), "back": np.full(n_o**2, 1.0)}
+    """A reflector of albedo 1.2 (ρ scaled ×2) covering the whole cloth: its yarn tables are refused."""
     with pytest.raises(TableError, match="break energy conservation.*at most 1 \\+ 0.05"):
-        check_energy(energy_balance(rho, coverage, n_i), n_i)
+        check_energy(energy_balance(*lambertian_front(1.2, 1.0), 9), 9)

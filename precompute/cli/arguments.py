@@ -12,23 +12,25 @@ import argparse
 from collections.abc import Sequence
 
 
+def _parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """``parser`` and its sub-commands' parsers (argparse keeps them, and its options, private)."""
+    subcommands = [action for action in parser._actions if isinstance(action, argparse._SubParsersAction)]
+    return [parser, *(sub for action in subcommands for sub in action.choices.values())]
+
+
 def values_attached(parser: argparse.ArgumentParser, argv: Sequence[str]) -> list[str]:
     """``argv`` with each value that begins with ``-`` and follows an option taking one value written
     as ``--option=value``; a following word that is itself an option of ``parser`` is left alone."""
-    takes_one = {string for action in parser._actions if action.nargs is None and action.option_strings
-                 for string in action.option_strings}
-    for subparsers in (a for a in parser._actions if isinstance(a, argparse._SubParsersAction)):
-        for sub in subparsers.choices.values():
-            takes_one |= {string for action in sub._actions if action.nargs is None and action.option_strings
-                          for string in action.option_strings}
-    options = {string for action in parser._actions for string in action.option_strings}
+    actions = [action for each in _parsers(parser) for action in each._actions if action.option_strings]
+    takes_one = {string for action in actions if action.nargs is None for string in action.option_strings}
+    options = {string for action in actions for string in action.option_strings}
     attached, words = [], list(argv)
     index = 0
     while index < len(words):
         word = words[index]
         following = words[index + 1] if index + 1 < len(words) else None
         if (word in takes_one and following is not None and following.startswith("-") and following != "--"
-                and following.partition("=")[0] not in options | takes_one):
+                and following.partition("=")[0] not in options):
             attached.append(f"{word}={following}")
             index += 2
         else:

@@ -183,6 +183,11 @@ TRANSPORT_DEFAULTS = MappingProxyType({
 #: and at 100 µm it is already ~1200 terms in the blue.
 PARTICLE_DIAMETER_NM = Bound("particles[*].diameter_nm", 1.0, 100_000.0, unit="nm")
 YARN_RADIUS_MM = Bound("yarn.radius_mm", 0.001, 10.0, unit="mm")
+#: Plies twisted into one yarn: sewing threads and shirting go up to 6; one is a single yarn.
+YARN_PLY_COUNT = Bound("yarn.ply_count", 1, 6, integer=True)
+#: Surface twist angle of the yarn (the helix angle of its plies and fibres to its axis): 0 is
+#: untwisted; ring-spun cotton is 20–35°, and past 60° a yarn snarls.
+YARN_TWIST_ANGLE_DEG = Bound("yarn.twist_angle_deg", 0.0, 60.0, unit="°", high_open=True)
 #: The host's refractive index at every wavelength: the yarn sits in air (n = 1) and the transport's
 #: boundary refracts from air into a denser host; no fibre comes near the upper end.
 HOST_REFRACTIVE_INDEX = Bound("host.refractive_index.n", 1.0, 10.0)
@@ -269,5 +274,5 @@ def decayed_tally_bytes(n_around: int, angular_resolution: int, wavelengths: int
 __all__ = ["ANGULAR_RESOLUTION", "HOST_REFRACTIVE_INDEX", "INCIDENCE_RESOLUTION", "MEMORY_FRACTION", "N_ALONG",
            "N_AROUND", "PARTICLE_DIAMETER_NM", "PATHS_PER_CELL", "SEED", "SLAB_ALBEDO", "SLAB_G", "SLAB_INDEX",
            "SLAB_PATHS", "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "TRANSPORT_DEFAULTS", "WAVELENGTH_COUNT",
-           "YARN_RADIUS_MM", "Bound", "check_memory", "decayed_tally_bytes", "gib", "memory_limit_bytes",
+           "YARN_RADIUS_MM", "YARN_PLY_COUNT", "YARN_TWIST_ANGLE_DEG", "Bound", "check_memory", "decayed_tally_bytes", "gib", "memory_limit_bytes",
            "physical_memory_bytes", "transport_memory_bytes"]

@@ -240,6 +240,12 @@ def test_transport_and_bake_tables_belong_to_the_bake():
     [
         (["yarn", "radius_mm"], 0.0, "yarn.radius_mm", "[0.001, 10] mm"),
         (["yarn", "radius_mm"], 11.0, "yarn.radius_mm", "[0.001, 10] mm"),
+        (["yarn", "ply_count"], 0, "yarn.ply_count", "[1, 6]"),
+        (["yarn", "ply_count"], 2.5, "yarn.ply_count", "an integer"),
+        (["yarn", "ply_count"], True, "yarn.ply_count", "an integer"),
+        (["yarn", "twist_angle_deg"], 60.0, "yarn.twist_angle_deg", "[0, 60) °"),
+        (["yarn", "twist_angle_deg"], -1.0, "yarn.twist_angle_deg", "[0, 60) °"),
+        (["yarn", "twist_angle_deg"], float("nan"), "yarn.twist_angle_deg", "[0, 60) °"),
         (["host", "refractive_index"], 0.5, "host.refractive_index.n", "[1, 10]"),
         (["host", "refractive_index"], 12.0, "host.refractive_index.n", "[1, 10]"),
         (["wavelengths", "step_nm"], 1e-6, "wavelengths.step_nm", "at most 1001 wavelengths"),

@@ -42,7 +42,7 @@ MAX_VOLUME_FRACTION = 0.74
 DEPENDENT_SCATTERING_MODELS = ("none", "percus-yevick")
 #: ``medium.phase_samples`` value that lets the optics choose the cos θ grid (the default).
 AUTO_PHASE_SAMPLES = "auto"
-_FOREIGN_TABLES = ("transport", "bake", "fit")
+_FOREIGN_TABLES = ("transport", "bake", "fit", "closeup")
 
 
 def _finite(name: str, value, allowed: str = "a finite number") -> float:
@@ -298,14 +298,21 @@ class Yarn:
     ``radius_mm`` is the radius of the circular cross-section the transport
     uses (paper §3.2).  ``cross_section = "ellipse"`` with ``semi_axes_mm``
     (two lengths, mm) records an elliptical cross-section for later use (§7).
+    ``ply_count`` plies are twisted about the yarn's axis at ``twist_angle_deg``, the surface
+    helix angle (degrees from the axis); the paper's yarn is one untwisted rod (1, 0°).  One
+    angle per yarn: the close-up geometry's ply grooves and the fibres' orientation both use it.
     """
 
     radius_mm: float = 0.1
     cross_section: str = "circle"
     semi_axes_mm: tuple[float, float] | None = None
+    ply_count: int = 1
+    twist_angle_deg: float = 0.0
 
     def __post_init__(self):
         bounds.YARN_RADIUS_MM.check(self.radius_mm)
+        bounds.YARN_PLY_COUNT.check(self.ply_count)
+        bounds.YARN_TWIST_ANGLE_DEG.check(self.twist_angle_deg)
         if self.cross_section not in ("circle", "ellipse"):
             raise ParameterError("yarn.cross_section", self.cross_section, "'circle' or 'ellipse'")
         if self.cross_section == "circle":
@@ -583,7 +590,7 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
             source=path.name,
         )
     yarn = _table(config, "yarn", "")
-    _check_keys(yarn, {"radius_mm", "cross_section", "semi_axes_mm"}, "yarn")
+    _check_keys(yarn, {"radius_mm", "cross_section", "semi_axes_mm", "ply_count", "twist_angle_deg"}, "yarn")
     medium = _table(config, "medium", "")
     _check_keys(medium, {"dependent_scattering", "phase_samples"}, "medium")
     return MediumParameters(
@@ -602,6 +609,8 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
             semi_axes_mm=(
                 tuple(yarn["semi_axes_mm"]) if isinstance(yarn.get("semi_axes_mm"), list) else yarn.get("semi_axes_mm")
             ),
+            ply_count=yarn.get("ply_count", 1),
+            twist_angle_deg=yarn.get("twist_angle_deg", 0.0),
         ),
         dependent_scattering=medium.get("dependent_scattering", "none"),
         phase_samples=medium.get("phase_samples", AUTO_PHASE_SAMPLES),

@@ -139,7 +139,7 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
         baked = table_paths(sample.active_material)
         out = pathlib.Path({str(tmp_path / "validation")!r})
         assert bpy.ops.clothlight.validate("INVOKE_DEFAULT", out_dir=str(out), materials={{"YARN"}}, incidences="0",
-                                           views="0", resolution=8, samples=1, swatches=False) == {{"FINISHED"}}
+                                           views="0", resolution=16, samples=1, swatches=False) == {{"FINISHED"}}
         # A garment or validation job in Blender's process: precompute's cache=True kernels, compiled here.
         grids = importlib.import_module("precompute.tables.grids")
         grids.AngularGrid("sphere", 4).direction_to_square([[0.0, 0.0, 1.0]])

@@ -9,6 +9,7 @@ import pytest
 
 from clothlight.validation.framing import pixel_cross_section_mm2
 from clothlight.validation.measure import measure_view
+from precompute.errors import ParameterError
 
 
 def test_the_mask_sums_cloth_pixels_only_and_the_calibration_formula():
@@ -28,3 +29,10 @@ def test_the_mask_sums_cloth_pixels_only_and_the_calibration_formula():
         a_p = pixel_cross_section_mm2(2.0, n, theta_v)
         assert a_p == pytest.approx((2.0 / n) ** 2 * math.cos(math.radians(theta_v)))
         np.testing.assert_allclose(view.brdf_rgb, cloth_sum / n**2 / (2.0 * math.cos(math.radians(theta_i))))
+
+
+def test_a_view_without_a_cloth_pixel_is_refused_not_measured_as_zero():
+    pixels = np.zeros((4, 4, 4))
+    pixels[..., :3] = 0.3  # a background, alpha 0 everywhere
+    with pytest.raises(ParameterError, match=r"resolution = 4 .*θi = 60°, θv = -40° none of the 4² pixels"):
+        measure_view(pixels, theta_i_deg=60.0, theta_v_deg=-40.0, patch_mm=2.0, sun_irradiance=2.0)

@@ -75,13 +75,18 @@ def calibrated_brdf(sum_over_cos_rgb, theta_i_deg: float, sun_irradiance: float,
 
 def measure_view(pixels: np.ndarray, *, theta_i_deg: float, theta_v_deg: float, patch_mm: float,
                  sun_irradiance: float) -> ViewMeasurement:
-    """Sum the cloth pixels of one view (N, N, 4) and calibrate them (module docstring)."""
+    """Sum the cloth pixels of one view (N, N, 4) and calibrate them (module docstring).  A view in
+    which no pixel shows cloth measures nothing: ParameterError naming the resolution."""
     pixels = np.asarray(pixels)
     if pixels.ndim != 3 or pixels.shape[2] != 4 or pixels.shape[0] != pixels.shape[1]:
         raise ParameterError("pixels", pixels.shape, "an (N, N, 4) RGBA image of the square patch")
     resolution = pixels.shape[0]
     alpha = pixels[..., 3].astype(np.float64)
     cloth = alpha > 0.0
+    if not cloth.any():
+        raise ParameterError("resolution", resolution, f"a resolution at which the cloth covers pixels in every "
+                             f"view (at θi = {theta_i_deg:g}°, θv = {theta_v_deg:g}° none of the {resolution}² "
+                             "pixels shows cloth: the view would measure nothing)")
     rgb_sum = pixels[..., :3][cloth].astype(np.float64).sum(axis=0)
     cross_section = pixel_cross_section_mm2(patch_mm, resolution, theta_v_deg)
     sum_over_cos = rgb_sum * cross_section / math.cos(math.radians(theta_v_deg))

@@ -96,8 +96,9 @@ def check_arguments(args) -> None:
     from .validation.framing import ParameterError, check_angles
     from precompute.fit.measured_data import read_measurement
 
-    from precompute import outputs
-    outputs.check_writable_folder(args.out, "--out", what="an output folder for the report and renders")
+    from precompute.tables.folder import check_output_folder
+    from .validation.report import VALIDATION_FOLDER_NAMES
+    check_output_folder(args.out, VALIDATION_FOLDER_NAMES, "--out", job="validation")
     from precompute import distributed
     if args.scheduler is None:
         args.scheduler = None if (args.blend or args.object) else distributed.default_scheduler()

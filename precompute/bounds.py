@@ -274,5 +274,6 @@ def decayed_tally_bytes(n_around: int, angular_resolution: int, wavelengths: int
 __all__ = ["ANGULAR_RESOLUTION", "HOST_REFRACTIVE_INDEX", "INCIDENCE_RESOLUTION", "MEMORY_FRACTION", "N_ALONG",
            "N_AROUND", "PARTICLE_DIAMETER_NM", "PATHS_PER_CELL", "SEED", "SLAB_ALBEDO", "SLAB_G", "SLAB_INDEX",
            "SLAB_PATHS", "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "TRANSPORT_DEFAULTS", "WAVELENGTH_COUNT",
-           "YARN_RADIUS_MM", "YARN_PLY_COUNT", "YARN_TWIST_ANGLE_DEG", "Bound", "check_memory", "decayed_tally_bytes", "gib", "memory_limit_bytes",
+           "YARN_RADIUS_MM", "YARN_PLY_COUNT", "YARN_TWIST_ANGLE_DEG",
+           "Bound", "check_memory", "decayed_tally_bytes", "gib", "memory_limit_bytes",
            "physical_memory_bytes", "transport_memory_bytes"]

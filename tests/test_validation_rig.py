@@ -20,6 +20,7 @@ import pytest
 from clothlight.validation.framing import SampleBounds, frame_size_mm, largest_patch_mm
 from clothlight.validation.measure import measure_view
 from clothlight.weave import WeaveParameters
+from precompute.errors import ParameterError
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.optics.ballistic import ATTENUATION_SAMPLES
 from precompute.tables.closure_fit import LOBES
@@ -301,13 +302,30 @@ def test_cancel_stops_before_the_next_render_and_removes_the_rig(tmp_path):
     fresh_file()
     settings = RigSettings(incidences_deg=(0.0, 30.0), views_deg=(0.0, 30.0), resolution=8, samples=1)
     done = []
-    with pytest.raises(ValidationCancelled):
-        run_validation(None, tmp_path, settings=settings, progress=lambda d, t, w: done.append(d),
+    with pytest.raises(ValidationCancelled, match="nothing was written"):
+        run_validation(None, tmp_path / "validation", settings=settings, progress=lambda d, t, w: done.append(d),
                        cancel=lambda: len(done) >= 2)
     assert done == [1, 2]
-    assert len(list((tmp_path / "renders" / "baseline").glob("*.exr"))) == 2
-    assert not (tmp_path / "results.json").exists()
+    assert list(tmp_path.iterdir()) == []  # the folder is written as a whole: no renders, no staging left
     assert [s.name for s in bpy.data.scenes] == ["Scene"] and len(bpy.data.objects) == 0
+
+
+@pytest.mark.blender
+def test_a_sweep_replaces_an_earlier_one_as_a_whole_and_never_a_folder_of_other_files(tmp_path):
+    fresh_file()
+    settings = RigSettings(incidences_deg=(0.0,), views_deg=(0.0,), resolution=8, samples=1)
+    out = tmp_path / "validation"
+    run_validation(None, out, settings=settings, swatches=False)
+    earlier = sorted(p.relative_to(out) for p in out.rglob("*"))
+    assert pathlib.Path("results.json") in earlier and pathlib.Path("renders/baseline/i+00.0_v+00.0.exr") in earlier
+    done = []
+    with pytest.raises(ValidationCancelled):
+        run_validation(None, out, settings=settings, progress=lambda d, t, w: done.append(d),
+                       cancel=lambda: len(done) >= 1)
+    assert sorted(p.relative_to(out) for p in out.rglob("*")) == earlier and sorted(tmp_path.iterdir()) == [out]
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(ParameterError, match=r"out_dir = .*notes\.txt"):
+        ValidationRun(None, out, settings=settings)
 
 
 @pytest.mark.blender

@@ -241,6 +241,12 @@ def markdown_report(results: dict, plots: list[str], plot_note: str | None) -> s
     return "\n".join(lines) + "\n"
 
 
+#: What a validation folder holds (a name ending in ``/`` is a folder): a new sweep may replace a
+#: folder holding only these (precompute.tables.folder.check_output_folder).
+VALIDATION_FOLDER_NAMES = ("results.json", "report.md", "sweeps.png", "sweeps_paper_normalised.png",
+                           "renders/", "swatches/")
+
+
 def write_report(results: dict, out_dir) -> dict:
     """Write plots, ``report.md`` and ``results.json`` into ``out_dir``; return their paths
     (relative to ``out_dir``), which are also stored in the JSON under ``files``."""

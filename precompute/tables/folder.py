@@ -25,6 +25,7 @@ complete previous folder or the complete new one.  Imports neither numba nor bpy
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import dataclasses
 import errno
@@ -38,7 +39,7 @@ import secrets
 import shutil
 import sys
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 
 import numpy as np
 
@@ -301,15 +302,21 @@ def check_yarn_table_folder(folder: str | pathlib.Path) -> CheckedFolder:
 def check_output_folder(out: str | pathlib.Path, names: Iterable[str], option: str = "--out", *,
                         job: str = "bake") -> pathlib.Path:
     """``out`` (its real path) if :func:`replace_folder` may write it: absent, or a folder holding only
-    files of ``names`` (an earlier ``job``'s, which it replaces), in a writable folder.  Otherwise
-    :class:`~precompute.errors.ParameterError` naming ``option``: called before any work starts."""
+    entries of ``names`` (an earlier ``job``'s, which it replaces; a name ending in ``/`` is a folder,
+    any other a file), in a writable folder.  Otherwise :class:`~precompute.errors.ParameterError`
+    naming ``option``: called before any work starts."""
     out = pathlib.Path(os.path.realpath(out))
     names = set(names)
     if out.exists():
         if not out.is_dir():
             raise ParameterError(option, str(out), f"a folder to write the {job} into (this is a file)")
-        foreign = sorted(entry.name for entry in out.iterdir()
-                         if not (entry.name in names and entry.is_file()) and not _is_staging(entry.name))
+
+        def earlier(entry: os.DirEntry) -> bool:
+            return (entry.name in names and entry.is_file(follow_symlinks=False)) or (
+                f"{entry.name}/" in names and entry.is_dir(follow_symlinks=False))
+
+        with os.scandir(out) as entries:
+            foreign = sorted(entry.name for entry in entries if not earlier(entry) and not _is_staging(entry.name))
         if foreign:
             shown = ", ".join(foreign[:5]) + (", …" if len(foreign) > 5 else "")
             raise ParameterError(option, str(out), f"a new or empty folder, or one that holds an earlier {job} "
@@ -327,22 +334,32 @@ def replace_folder(
     names: Iterable[str],
     option: str = "--out",
 ) -> pathlib.Path:
-    """Make ``out`` the folder ``write(folder)`` fills, as a whole; returns its real path.
+    """Make ``out`` the folder ``write(folder)`` fills, as a whole; returns its real path
+    (:func:`staged_folder`)."""
+    with staged_folder(out, names, option) as staging:
+        write(staging)
+    return pathlib.Path(os.path.realpath(out))
 
-    ``write`` fills a staging folder beside ``out``; then the two are swapped in one step (Linux:
-    ``renameat2(RENAME_EXCHANGE)``) and the previous folder is removed.  So ``out`` always holds either
-    the complete previous folder or the complete new one, whenever the process stops; a failure in
-    ``write`` leaves the previous one untouched.  Where the file system cannot swap folders, the
-    previous one is renamed away first: for the moment between the two renames ``out`` is missing
-    (never incomplete).  ``out`` must pass :func:`check_output_folder` (checked again here).
+
+@contextlib.contextmanager
+def staged_folder(out: str | pathlib.Path, names: Iterable[str], option: str = "--out", *,
+                  job: str = "bake") -> Iterator[pathlib.Path]:
+    """A staging folder beside ``out`` to fill in the ``with`` block, which then becomes ``out`` as a whole.
+
+    When the block ends normally the two are swapped in one step (Linux: ``renameat2(RENAME_EXCHANGE)``)
+    and the previous folder is removed.  So ``out`` always holds either the complete previous folder or
+    the complete new one, whenever the process stops; an exception (a generator closed early included)
+    leaves the previous one untouched and removes the staging folder.  Where the file system cannot swap
+    folders, the previous one is renamed away first: for the moment between the two renames ``out`` is
+    missing (never incomplete).  ``out`` must pass :func:`check_output_folder` (checked again here).
     """
-    out = check_output_folder(out, names, option)
+    out = check_output_folder(out, names, option, job=job)
     out.parent.mkdir(parents=True, exist_ok=True)
     _remove_stale_staging(out)
     staging = out.parent / f".{out.name}.{os.getpid()}.{secrets.token_hex(4)}{_STAGING_SUFFIX}"
     staging.mkdir()
     try:
-        write(staging)
+        yield staging
         if not out.exists():
             os.rename(staging, out)
         elif not _exchange(staging, out):
@@ -358,7 +375,6 @@ def replace_folder(
     finally:
         if staging.exists():
             shutil.rmtree(staging, ignore_errors=True)
-    return out
 
 
 def _exchange(first: pathlib.Path, second: pathlib.Path) -> bool:

@@ -40,7 +40,8 @@ from ...validation.framing import (
 )
 from ...validation.measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
 from precompute.fit.measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
-from ...validation.report import swatch_exposure, write_report, write_swatch_png
+from precompute.tables.folder import check_output_folder, staged_folder
+from ...validation.report import VALIDATION_FOLDER_NAMES, swatch_exposure, write_report, write_swatch_png
 from ..measurement_render import worker_threads
 from ...weave import WeaveParameters
 from .rig import RigSettings, build_rig, calibration_plane
@@ -152,7 +153,8 @@ class ValidationRun:
             raise ParameterError("measured_csv", str(measured_csv), "an existing measurement file")
         self.measurement = read_measurement(self.measured_csv) if self.measured_csv is not None else None
         self.sample = sample
-        self.out_dir = pathlib.Path(out_dir)
+        self.out_dir = check_output_folder(out_dir, VALIDATION_FOLDER_NAMES, "out_dir", job="validation")
+        self._folder = self.out_dir  # the staging folder while a sweep writes
         self.settings = settings
         self.swatches = bool(swatches)
         per_material = (len(settings.incidences_deg) * len(settings.views_deg)
@@ -170,34 +172,11 @@ class ValidationRun:
             if set(YARN_MATERIALS) & set(self.materials) and YARN_TANGENT not in rig.sample.data.attributes:
                 raise ParameterError("sample", getattr(self.sample, "name", self.sample),
                                      f"a mesh with the '{YARN_TANGENT}' attribute for the yarn material")
-            self.out_dir.mkdir(parents=True, exist_ok=True)
-            curves, swatches, seconds = {}, {}, {}
-            done = 0
-            for kind in self.materials:
-                material_start = time.perf_counter()
-                created.append(self._dress(rig, kind))
-                views = []
-                for theta_i in self.settings.incidences_deg:
-                    rig.set_incidence(theta_i)
-                    for theta_v in self.settings.views_deg:
-                        rig.set_view(theta_v)
-                        views.append(rig.measure(self._render_path(kind, theta_i, theta_v)))
-                        done += 1
-                        yield Progress(done, self.total, f"{kind}: θi = {theta_i:g}°, θv = {theta_v:g}°")
-                curves[kind] = views
-                if self.swatches:
-                    images = {}
-                    rig.set_view(0.0)
-                    for side, theta_i in SWATCH_INCIDENCES_DEG.items():
-                        rig.set_incidence(theta_i)
-                        images[side] = rig.render(self._render_path(kind, swatch=side))
-                        done += 1
-                        yield Progress(done, self.total, f"{kind}: swatch lit from the {side}")
-                    swatches[kind] = self._swatch_entries(kind, images)
-                seconds[kind] = time.perf_counter() - material_start
-            self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
-            self.results["files"] = write_report(self.results, self.out_dir)
+            with staged_folder(self.out_dir, VALIDATION_FOLDER_NAMES, "out_dir", job="validation") as folder:
+                self._folder = folder
+                yield from self._sweep(rig, created, start)
         finally:
+            self._folder = self.out_dir
             rig.remove()
             for material in created:
                 try:
@@ -205,9 +184,38 @@ class ValidationRun:
                 except ReferenceError:  # already removed, e.g. by the user while the sweep ran
                     pass
 
+    def _sweep(self, rig, created: list, start: float) -> Iterator[Progress]:
+        """The renders of :meth:`steps` into :attr:`_folder`, then the results and the report."""
+        curves, swatches, seconds = {}, {}, {}
+        done = 0
+        for kind in self.materials:
+            material_start = time.perf_counter()
+            created.append(self._dress(rig, kind))
+            views = []
+            for theta_i in self.settings.incidences_deg:
+                rig.set_incidence(theta_i)
+                for theta_v in self.settings.views_deg:
+                    rig.set_view(theta_v)
+                    views.append(rig.measure(self._render_path(kind, theta_i, theta_v)))
+                    done += 1
+                    yield Progress(done, self.total, f"{kind}: θi = {theta_i:g}°, θv = {theta_v:g}°")
+            curves[kind] = views
+            if self.swatches:
+                images = {}
+                rig.set_view(0.0)
+                for side, theta_i in SWATCH_INCIDENCES_DEG.items():
+                    rig.set_incidence(theta_i)
+                    images[side] = rig.render(self._render_path(kind, swatch=side))
+                    done += 1
+                    yield Progress(done, self.total, f"{kind}: swatch lit from the {side}")
+                swatches[kind] = self._swatch_entries(kind, images)
+            seconds[kind] = time.perf_counter() - material_start
+        self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
+        self.results["files"] = write_report(self.results, self._folder)
+
     def _render_path(self, kind: str, theta_i: float = 0.0, theta_v: float = 0.0, swatch: str | None = None):
         name = f"swatch_{swatch}.exr" if swatch else f"i{theta_i:+05.1f}_v{theta_v:+05.1f}.exr"
-        return self.out_dir / "renders" / kind / name
+        return self._folder / "renders" / kind / name
 
     def _swatch_entries(self, kind: str, images: dict) -> dict:
         """The §6.1 swatches of ``kind`` from their renders ({side: pixels}): mean colour, ratios, PNG."""
@@ -215,9 +223,9 @@ class ValidationRun:
         exposure = swatch_exposure(*images.values())
         for side, pixels in images.items():
             mean = pixels[..., :3].astype(np.float64).mean(axis=(0, 1)) / self.settings.sun_irradiance
-            png = write_swatch_png(pixels, self.out_dir / "swatches" / f"{kind}_{side}.png", exposure)
+            png = write_swatch_png(pixels, self._folder / "swatches" / f"{kind}_{side}.png", exposure)
             entries[side] = {"theta_i_deg": SWATCH_INCIDENCES_DEG[side], "mean_rgb_per_irradiance": mean.tolist(),
-                             "ratios": channel_ratios(mean), "png": str(png.relative_to(self.out_dir))}
+                             "ratios": channel_ratios(mean), "png": str(png.relative_to(self._folder))}
         return entries
 
     def _dress(self, rig, kind: str, material=None):
@@ -279,23 +287,26 @@ class ValidationRun:
                     if cancel is not None and cancel():
                         raise ValidationCancelled("validation cancelled; nothing was written") from None
                     raise
-            curves = {kind: [] for kind in self.materials}
-            images = {kind: {} for kind in self.materials}
-            seconds = dict.fromkeys(self.materials, 0.0)
-            for (kind, theta_i, views, side), (measured, files, task_seconds) in zip(tasks, results):
-                seconds[kind] += task_seconds
-                for theta_v, exr in zip(views, files):
-                    path = self._render_path(kind, theta_i, theta_v, swatch=side)
-                    path.parent.mkdir(parents=True, exist_ok=True)
-                    path.write_bytes(exr.tobytes())
-                if side:
-                    images[kind][side] = measured
-                else:
-                    curves[kind] += measured
-            swatches = {kind: self._swatch_entries(kind, images[kind]) for kind in self.materials if images[kind]}
-            self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
-            self.results["files"] = write_report(self.results, self.out_dir)
+            with staged_folder(self.out_dir, VALIDATION_FOLDER_NAMES, "out_dir", job="validation") as folder:
+                self._folder = folder
+                curves = {kind: [] for kind in self.materials}
+                images = {kind: {} for kind in self.materials}
+                seconds = dict.fromkeys(self.materials, 0.0)
+                for (kind, theta_i, views, side), (measured, files, task_seconds) in zip(tasks, results):
+                    seconds[kind] += task_seconds
+                    for theta_v, exr in zip(views, files):
+                        path = self._render_path(kind, theta_i, theta_v, swatch=side)
+                        path.parent.mkdir(parents=True, exist_ok=True)
+                        path.write_bytes(exr.tobytes())
+                    if side:
+                        images[kind][side] = measured
+                    else:
+                        curves[kind] += measured
+                swatches = {kind: self._swatch_entries(kind, images[kind]) for kind in self.materials if images[kind]}
+                self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
+                self.results["files"] = write_report(self.results, self._folder)
         finally:
+            self._folder = self.out_dir
             rig.remove()
         return self.results
 
@@ -597,7 +608,7 @@ def run_validation(sample=None, out_dir="clothlight_validation", *,
     try:
         while True:
             if cancel is not None and cancel():
-                raise ValidationCancelled(f"validation cancelled; partial renders are in {run.out_dir / 'renders'}")
+                raise ValidationCancelled("validation cancelled; nothing was written")
             try:
                 step = next(steps)
             except StopIteration:

@@ -242,7 +242,12 @@ def apply_overrides(config: dict, overrides: Sequence[str] | Mapping[str, object
         if isinstance(overrides, Mapping)
         else [parse_override(text) for text in overrides]
     )
+    seen = {}
     for path, value in items:
+        key = ".".join(path)
+        if key in seen:  # the later value would hide the earlier one, which may be wrong
+            raise ParameterError(key, value, f"one value per key (it is also set to {seen[key]!r})")
+        seen[key] = value
         node = config
         for depth, part in enumerate(path[:-1]):
             name = ".".join(path[: depth + 1])
@@ -295,8 +300,14 @@ def transport_settings(config: dict, *, seed=None, paths_per_cell=None, target_r
     """The ``[transport]`` settings: defaults ← the preset's table ← explicit arguments, validated.
 
     An explicit ``paths_per_cell`` or ``target_rel_stderr`` replaces the preset's budget of either kind.
+    A preset value an argument replaces is checked all the same: a wrong one is refused, not hidden.
     """
     settings = _settings(config, "transport", TRANSPORT_DEFAULTS)
+    given = config.get("transport", {})
+    for bound in (bounds.SEED, bounds.PATHS_PER_CELL, bounds.TARGET_REL_STDERR):
+        key = bound.name.split(".")[-1]
+        if given.get(key) is not None:
+            bound.check(given[key])
     if seed is not None:
         settings["seed"] = seed
     if paths_per_cell is not None and target_rel_stderr is not None:

@@ -141,6 +141,10 @@ def test_a_preset_file_with_transport_and_bake_tables(tmp_path):
         (["--target-error", "1.5"], "transport.target_rel_stderr"),
         (["--threads", "0"], "threads"),
         (["--seed", "-1"], "transport.seed"),
+        # a wrong value hidden by a later one is refused all the same
+        (["--set", "dye.weight_percent=-3", "--set", "dye.weight_percent=2"], "dye.weight_percent"),
+        (["--set", "transport.seed=-1", "--seed", "3"], "transport.seed"),
+        (["--set", "transport.paths_per_cell=0", "--target-error", "0.05"], "transport.paths_per_cell"),
     ],
 )
 def test_bad_input_exits_2_naming_the_parameter(tmp_path, args, parameter):

@@ -34,6 +34,7 @@ from precompute.tables.folder import (
     check_output_folder,
     check_yarn_table_folder,
     replace_folder,
+    staged_folder,
 )
 from precompute.tables.exr import (
     CACHE_KEY_KEY,
@@ -683,3 +684,47 @@ def test_bake_out_killed_at_any_step_leaves_one_bakes_whole_folder(tmp_path):
                                out, earlier, earlier_key, new_key)
     assert found[0] == earlier_key and found[-1] == new_key
 
+
+
+#: A validation-like folder: files and sub-folders (names ending in "/") a new run may replace.
+RUN_NAMES = ("results.json", "report.md", "renders/", "swatches/")
+#: Entries of an existing folder: name → a folder (True) or a file (False).
+ENTRIES = st.dictionaries(st.sampled_from(["results.json", "report.md", "renders", "swatches", "notes.txt"]),
+                          st.booleans(), max_size=5)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(entries=ENTRIES, fail_after=st.one_of(st.none(), st.integers(0, 2)))
+def test_a_staged_folder_replaces_only_an_earlier_runs_folder_and_only_as_a_whole(tmp_path, entries, fail_after):
+    """Whatever the folder holds and wherever the writing stops: a folder holding anything but an
+    earlier run's entries (a file where a folder is named, too) is refused before any work; else
+    ``out`` ends as the earlier folder, untouched, or the complete new one, and nothing is left beside it."""
+    root = pathlib.Path(tempfile.mkdtemp(dir=tmp_path))
+    out = root / "out"
+    out.mkdir()
+    for name, is_folder in entries.items():
+        (out / name).mkdir() if is_folder else (out / name).write_text("earlier")
+    earlier = sorted(p.relative_to(out) for p in out.rglob("*"))
+    foreign = {name for name, is_folder in entries.items() if name + "/" * is_folder not in RUN_NAMES}
+    written = ["renders/a.exr", "renders/b.exr", "results.json"]
+
+    def write_run():
+        with staged_folder(out, RUN_NAMES, "out_dir", job="run") as staging:
+            for done, name in enumerate(written):
+                if done == fail_after:
+                    raise KeyboardInterrupt
+                (staging / name).parent.mkdir(exist_ok=True)
+                (staging / name).write_text("new")
+
+    if foreign:
+        with pytest.raises(ParameterError, match="out_dir = .*an earlier run only"):
+            write_run()
+    elif fail_after is not None:
+        with pytest.raises(KeyboardInterrupt):
+            write_run()
+    else:
+        write_run()
+    after = sorted(p.relative_to(out) for p in out.rglob("*"))
+    complete = foreign == set() and fail_after is None
+    assert after == (sorted(map(pathlib.Path, ["renders", *written])) if complete else earlier)
+    assert [p.name for p in root.iterdir()] == ["out"]

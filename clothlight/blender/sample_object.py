@@ -41,7 +41,7 @@ def woven_mesh_data(params: WeaveParameters, name: str = DEFAULT_NAME) -> bpy.ty
     attributes[".corner_edge"].data.foreach_set("value", corner_edges.astype(np.int32).ravel())
     mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * n_faces, 3, dtype=np.int32))
     caps = np.zeros(n_faces, dtype=bool)
-    for start, stop in woven.yarn_faces:
+    for start, stop in woven.tube_faces:
         caps[stop - 2 * woven.segments_around:stop] = True
     attributes.new("sharp_face", "BOOLEAN", "FACE").data.foreach_set("value", caps)
     for attribute_name, values in ((YARN_TANGENT, woven.tangent), (CLOTH_NORMAL, woven.cloth_normal)):
@@ -56,7 +56,10 @@ def woven_mesh_data(params: WeaveParameters, name: str = DEFAULT_NAME) -> bpy.ty
 
 
 def weave_record(params: WeaveParameters) -> dict:
-    return {
+    """What a sample was built from, as JSON-ready values.  The plies, twist and irregularity are
+    recorded only where they change the geometry, so that a plain regular sample records what it
+    always did (the garment's measurement cache is keyed by this record)."""
+    record = {
         "units": "mm",
         "spacing_mm": params.spacing_mm,
         "semi_axes_mm": list(params.cross_section_mm),
@@ -67,6 +70,11 @@ def weave_record(params: WeaveParameters) -> dict:
         "segments_per_crossing": params.segments_per_crossing,
         "segments_around": params.segments_around,
     }
+    if params.ply_count > 1 or params.is_irregular or params.ply_radius_jitter > 0:
+        record.update(ply_count=params.ply_count, twist_angle_deg=params.twist_angle_deg,
+                      spacing_jitter=params.spacing_jitter, height_jitter=params.height_jitter,
+                      ply_radius_jitter=params.ply_radius_jitter, seed=params.seed)
+    return record
 
 
 def build_sample_object(params: WeaveParameters = WeaveParameters(), name: str = DEFAULT_NAME,

@@ -26,20 +26,52 @@ def over_grid(interlacing: np.ndarray, warp_count: int, weft_count: int) -> np.n
     return interlacing[np.arange(weft_count)[:, None] % rows, np.arange(warp_count)[None, :] % cols]
 
 
-def ring_positions(crossings: int, spacing_mm: float, segments: int) -> np.ndarray:
-    """Axial coordinates (mm) of the rings swept along a yarn over ``crossings`` crossings.
+def ring_positions(knots: np.ndarray, spacing_mm: float, segments: int) -> np.ndarray:
+    """Axial coordinates (mm) of the rings swept along a yarn whose crossings lie at ``knots``.
 
-    The yarn runs from −crossings·spacing/2 to +crossings·spacing/2; crossing ``k`` sits at
-    (k + ½)·spacing − crossings·spacing/2.  Every crossing gets a ring (that is where crossing
-    yarns come closest), ``segments`` segments span each spacing between crossings and
-    ⌈segments/2⌉ each half-spacing end piece.
+    ``knots`` (K,): increasing axial coordinates of the yarn's crossings, mm (evenly spaced by
+    ``spacing_mm`` in a regular weave, jittered in an irregular one).  Every crossing gets a ring
+    (that is where crossing yarns come closest), ``segments`` segments span each interval between
+    neighbouring crossings, and ⌈segments/2⌉ each end piece of half a spacing beyond the first and
+    last crossing.
     """
     half = -(-segments // 2)
-    first = (0.5 - crossings / 2.0) * spacing_mm
-    start = np.linspace(first - spacing_mm / 2.0, first, half + 1)[:-1]
-    middle = first + spacing_mm * np.linspace(0.0, crossings - 1, (crossings - 1) * segments + 1)
-    end = np.linspace(middle[-1], middle[-1] + spacing_mm / 2.0, half + 1)[1:]
+    start = np.linspace(knots[0] - spacing_mm / 2.0, knots[0], half + 1)[:-1]
+    steps = np.linspace(0.0, 1.0, segments + 1)[:-1]
+    middle = np.concatenate([(knots[:-1, None] + np.diff(knots)[:, None] * steps).ravel(), knots[-1:]])
+    end = np.linspace(knots[-1], knots[-1] + spacing_mm / 2.0, half + 1)[1:]
     return np.concatenate([start, middle, end])
+
+
+def regular_knots(crossings: int, spacing_mm: float) -> np.ndarray:
+    """Axial coordinates (mm) of ``crossings`` evenly spaced crossings centred on 0: crossing ``k``
+    at (k + ½)·spacing − crossings·spacing/2."""
+    return (np.arange(crossings) + 0.5 - crossings / 2.0) * spacing_mm
+
+
+def knot_height(knots: np.ndarray, heights: np.ndarray, s: np.ndarray):
+    """Centreline height z and its slope dz/ds at axial coordinates ``s``, blending the heights at
+    the crossings by half cosines (module docstring) between knots that need not be evenly spaced.
+
+    ``knots`` (K,): increasing axial coordinates of a yarn's crossings; ``heights`` (..., K): the
+    centreline's height at each; ``s`` (n,) or (..., n): where to evaluate (outside the first and
+    last knot the yarn runs flat).  Returns arrays (..., n) in the units of ``heights`` and
+    ``heights`` per unit of ``s``.
+    """
+    count = heights.shape[-1]
+    if count == 1:
+        flat = np.broadcast_to(heights[..., :1], np.broadcast_shapes(heights.shape[:-1] + (1,), s.shape)).astype(float)
+        return flat, np.zeros_like(flat)
+    k = np.clip(np.searchsorted(knots, s, side="right") - 1, 0, count - 2)
+    gap = knots[k + 1] - knots[k]
+    t = np.clip((s - knots[k]) / gap, 0.0, 1.0)
+    if k.ndim < heights.ndim:
+        k = np.broadcast_to(k, heights.shape[:-1] + k.shape)
+    a, b = np.take_along_axis(heights, k, -1), np.take_along_axis(heights, k + 1, -1)
+    height = 0.5 * (a + b) + 0.5 * (a - b) * np.cos(np.pi * t)
+    slope = -0.5 * (a - b) * np.pi * np.sin(np.pi * t) / gap
+    slope = np.where((s <= knots[0]) | (s >= knots[-1]), 0.0, slope)
+    return height, slope
 
 
 def unit_height(signs: np.ndarray, crossing: np.ndarray):
@@ -49,17 +81,7 @@ def unit_height(signs: np.ndarray, crossing: np.ndarray):
     (n,): where to evaluate, in units of the spacing from crossing 0 (values outside [0, K−1]
     lie on the flat end pieces).  Returns arrays (..., n); divide dH/dc by the spacing for dH/ds.
     """
-    count = signs.shape[-1]
-    if count == 1:
-        flat = np.broadcast_to(signs[..., :1], signs.shape[:-1] + crossing.shape).astype(float)
-        return flat, np.zeros_like(flat)
-    k = np.clip(np.floor(crossing).astype(int), 0, count - 2)
-    t = np.clip(crossing - k, 0.0, 1.0)
-    a, b = signs[..., k], signs[..., k + 1]
-    height = 0.5 * (a + b) + 0.5 * (a - b) * np.cos(np.pi * t)
-    slope = -0.5 * (a - b) * np.pi * np.sin(np.pi * t)
-    slope = np.where((crossing <= 0.0) | (crossing >= count - 1), 0.0, slope)
-    return height, slope
+    return knot_height(np.arange(signs.shape[-1], dtype=float), signs.astype(float), crossing)
 
 
 def max_curvature(amplitude_mm: float, spacing_mm: float) -> float:

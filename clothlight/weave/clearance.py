@@ -26,13 +26,19 @@ never reaches further than a + b < 3/2 spacing along the yarn), so every crossin
 is evaluated once with its neighbourhood taken periodically.  A sample cut from the cloth only
 loses neighbours, and a yarn running flat at its end stays further from the crossing yarn than
 one changing sides, so the repeat's gaps bound the sample's.
+
+Plies (:mod:`.plies`) lie inside their yarn's tube, so the tubes' gaps bound theirs; their mesh's
+chords add only the twist's part to the envelope's, and the chord of a helix lies inside its
+cylinder (towards the yarn's axis), so the mesh check of the tubes holds for the ply meshes too.
+An irregular sample (:mod:`.irregularity`) has no repeat: :func:`sample_gaps` evaluates every
+crossing of it, with the same band edges along its uneven centrelines.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .centerline import unit_height
+from .centerline import knot_height, ring_positions, unit_height
 
 #: Crossings either side of a crossing that shape the yarns near it (see the module docstring).
 NEIGHBOURHOOD = 2
@@ -127,3 +133,79 @@ def minimum_gap(interlacing: np.ndarray, spacing_mm: float, semi_axes_mm: tuple[
     """Smallest vertical gap (mm) between crossing yarns anywhere in the weave (see
     :func:`crossing_gaps`); negative when yarns intersect."""
     return float(crossing_gaps(interlacing, spacing_mm, semi_axes_mm, amplitudes_mm, segments_per_crossing).min())
+
+
+def _interpolate_rows(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """np.interp row by row: ``x`` (M, Q) at the increasing abscissae ``xp`` (M, n) of ``fp``
+    (M, n), in one call, each row shifted clear of the others."""
+    low, high = min(x.min(), xp.min()), max(x.max(), xp.max())
+    shift = (high - low + 1.0) * np.arange(len(x))[:, None]
+    return np.interp((x + shift).ravel(), (xp + shift).ravel(), fp.ravel()).reshape(x.shape)
+
+
+def _crossing_band_edges(knots: np.ndarray, heights: np.ndarray, crossing: np.ndarray, s: np.ndarray,
+                         semi_axes_mm: tuple[float, float], q: np.ndarray):
+    """Lower and upper band edges (N, Q, Q) of N yarns near one crossing each, as
+    :func:`_band_edges` but along irregular centrelines: ``heights`` (N, K) at the shared
+    ``knots`` (K,), the crossing at axial ``crossing`` (N,), the edges taken at the axial
+    samples ``s`` (N, n) (dense: the exact tube; the rings: the mesh) and read at axial and
+    lateral offsets ``q`` from the crossing (indices [n, axial, lateral])."""
+    width, thickness = semi_axes_mm
+    z, dz = knot_height(knots, heights, s)
+    length = np.sqrt(1.0 + dz**2)
+    half = thickness * np.sqrt(np.clip(1.0 - (q / width) ** 2, 0.0, None))     # (Q,) lateral
+    along = (s - crossing[:, None])[:, None, :]                                   # (N, 1, n)
+    tilt, rise = (dz / length)[:, None, :], (1.0 / length)[:, None, :]
+    axial = np.broadcast_to(q, (len(s) * len(q), len(q)))
+    edges = []
+    for sign in (-1.0, 1.0):    # lower, upper
+        xp = (along - sign * half[None, :, None] * tilt).reshape(-1, s.shape[1])
+        fp = (z[:, None, :] + sign * half[None, :, None] * rise).reshape(-1, s.shape[1])
+        edges.append(_interpolate_rows(axial, xp, fp).reshape(len(s), len(q), len(q)).transpose(0, 2, 1))
+    return edges
+
+
+def sample_gaps(layout, semi_axes_mm: tuple[float, float], spacing_mm: float,
+                segments_per_crossing: int | None = None, resolution: int = 49, batch: int = 16) -> np.ndarray:
+    """Smallest vertical gap (mm) between the warp and the weft at every crossing of a sample whose
+    yarns lie irregularly (a :class:`.layout.SampleLayout`): every crossing is its own, so each is
+    evaluated, ``batch`` at a time.  As :func:`crossing_gaps` otherwise: the exact tubes when
+    ``segments_per_crossing`` is None, else their meshes, whose rings :func:`.centerline.ring_positions`
+    places.  Returns (weft_count, warp_count), negative where the tubes intersect."""
+    width, thickness = semi_axes_mm
+    reach = width + thickness
+    q = np.linspace(-width, width, resolution)
+    picks, ends = layout.weft_heights.shape
+    pick, end = (index.ravel() for index in np.indices((picks, ends)))
+    families = []
+    for knots, heights, yarn, crossing in ((layout.weft_x, layout.warp_heights, end, pick),
+                                           (layout.weft_knots, layout.weft_heights, pick, end)):
+        if segments_per_crossing is None:
+            local = np.linspace(-reach, reach, 16 * resolution + 1)
+            s = knots[crossing][:, None] + local
+        else:
+            rings = ring_positions(knots, spacing_mm, segments_per_crossing)
+            first = -(-segments_per_crossing // 2)       # the ring on the first knot
+            span = (NEIGHBOURHOOD + 1) * segments_per_crossing
+            index = first + crossing[:, None] * segments_per_crossing + np.arange(-span, span + 1)
+            s = rings[np.clip(index, 0, len(rings) - 1)]
+        families.append((knots, heights[yarn], knots[crossing], s))
+    gaps = np.empty(len(pick))
+    for start in range(0, len(pick), batch):
+        part = slice(start, start + batch)
+        (warp_low, warp_high), (weft_low, weft_high) = (
+            _crossing_band_edges(knots, heights[part], at[part], s[part], semi_axes_mm, q)
+            for knots, heights, at, s in families)
+        swapped_low, swapped_high = weft_low.transpose(0, 2, 1), weft_high.transpose(0, 2, 1)
+        gaps[part] = np.maximum(warp_low - swapped_high, swapped_low - warp_high).min(axis=(1, 2))
+    return gaps.reshape(picks, ends)
+
+
+def sample_curvature(layout, spacing_mm: float) -> float:
+    """Largest curvature (1/mm) of any centreline of an irregular sample: between crossings at
+    distance Δ with heights z₀, z₁ it is |z₀ − z₁|/2 · π²/Δ² where the slope is zero."""
+    largest = 0.0
+    for knots, heights in ((layout.weft_x, layout.warp_heights), (layout.weft_knots, layout.weft_heights)):
+        if len(knots) > 1:
+            largest = max(largest, float((np.abs(np.diff(heights, axis=1)) / 2 * np.pi**2 / np.diff(knots)**2).max()))
+    return largest

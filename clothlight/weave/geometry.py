@@ -1,16 +1,19 @@
-"""Woven yarn geometry: crimped centrelines swept into closed, watertight tubes.
+"""Woven yarn geometry: crimped centrelines swept into closed, watertight tubes, one per ply.
 
 Layout (mm): the cloth lies in the x-y plane around the origin, its macroscopic normal is +z.
 Warp ends run along +x; end ``j`` lies at y = (warp_count/2 − j − ½)·spacing, so seen from +z
 with the warp pointing up the ends are numbered left to right.  Weft picks run along −y; pick
 ``i`` lies at x = (i + ½ − weft_count/2)·spacing, numbered from the bottom up.  A face-side
-(+z) view therefore shows the drawdown as :mod:`.patterns` defines it.
+(+z) view therefore shows the drawdown as :mod:`.patterns` defines it.  An irregular sample
+moves these places and the crossings' heights by its seeded jitters (:mod:`.layout`).
 
 Each centreline is planar (see :mod:`.centerline`), so the sweep frame is exact and fixed: the
 tangent T, a binormal B in the cloth plane that never changes (+y for warps, +x for wefts) and
 the normal N = T × B, which tilts with the crimp but never rotates about the yarn axis.  A ring
 vertex at angle φ sits at  centre + a·cos φ·B + b·sin φ·N  (semi-axes a, b), so corresponding
-vertices of neighbouring rings stay on the same side of the yarn: no twist, no seam.
+vertices of neighbouring rings stay on the same side of the yarn: no twist, no seam.  A plied
+yarn is one such tube per ply, its rings swept about the ply's helical centre in the same frame
+(:mod:`.plies`); a single-ply yarn is the tube above.
 """
 
 from __future__ import annotations
@@ -19,8 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .centerline import over_grid, ring_positions, unit_height
+from .centerline import knot_height, ring_positions
+from .irregularity import ply_radius_factors
+from .layout import SampleLayout, sample_layout
 from .params import WeaveParameters
+from .plies import ply_rings
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,15 +46,20 @@ class WovenMesh:
         0.25 on top (towards the cloth normal), 0.5 on the −B side, 0.75 underneath.  Cap
         centres carry v = 0.  Per face corner, with the seam closed, see :meth:`corner_uv`.
     tangent
-        (V, 3) float64: unit yarn axis at the vertex's ring (the centreline tangent).
+        (V, 3) float64: unit axis of the vertex's tube at its ring: the yarn's centreline tangent,
+        or, for a plied yarn, the ply's own helical axis (the cylinder the yarn shader sees).
     cloth_normal
         (V, 3) float64: the cloth's macroscopic normal, +z.
     yarn_id
         (V,) int32: warp ends 0 … warp_count − 1, then picks warp_count … warp_count + weft_count − 1.
     is_warp
         (V,) bool.
+    ply_index
+        (V,) int32: which ply of its yarn the vertex belongs to, 0 … ply_count − 1.
     yarn_faces
-        (start, stop) face range of every yarn, in yarn_id order.
+        (start, stop) face range of every yarn (all its plies), in yarn_id order.
+    tube_faces
+        (start, stop) face range of every closed tube: yarn by yarn, ply by ply within a yarn.
     centerlines
         Every yarn's centreline at its rings, (n, 3) mm, in yarn_id order.
     segments_around
@@ -62,7 +73,9 @@ class WovenMesh:
     cloth_normal: np.ndarray
     yarn_id: np.ndarray
     is_warp: np.ndarray
+    ply_index: np.ndarray
     yarn_faces: tuple[tuple[int, int], ...]
+    tube_faces: tuple[tuple[int, int], ...]
     centerlines: tuple[np.ndarray, ...]
     segments_around: int
 
@@ -80,7 +93,7 @@ class WovenMesh:
         corner k's edge joining it to corner k + 1: what Blender stores, without a search."""
         edges, corner_edges, templates = [], [], {}
         edge_offset = 0
-        for start, stop in self.yarn_faces:
+        for start, stop in self.tube_faces:
             rings = (stop - start) // (2 * self.segments_around)
             if rings not in templates:
                 templates[rings] = _tube_edges(rings, self.segments_around)
@@ -143,18 +156,15 @@ def _tube_edges(rings: int, around: int):
     return edges, np.concatenate([first, second, start, end])
 
 
-def _family(params: WeaveParameters, warp: bool):
-    """Vertices (Y, n·around + 2, 3), centrelines (Y, n, 3), tangents (Y, n, 3) of all warps or
-    all wefts."""
-    p = params.spacing_mm
-    over = over_grid(params.interlacing, params.warp_count, params.weft_count)
-    signs = np.where(over.T if warp else ~over, 1.0, -1.0)          # (yarns, crossings)
-    yarns, crossings = signs.shape
-    s = ring_positions(crossings, p, params.segments_per_crossing)
-    height, slope = unit_height(signs, (s - (0.5 - crossings / 2.0) * p) / p)
-    amplitude = params.crimp_amplitudes_mm[0 if warp else 1]
-    z, dz = amplitude * height, amplitude * slope / p
-    across = (yarns / 2.0 - np.arange(yarns) - 0.5) * p if warp else (np.arange(yarns) + 0.5 - yarns / 2.0) * p
+def _family(params: WeaveParameters, layout: SampleLayout, warp: bool):
+    """The tubes of all warps or all wefts: vertices (Y, P, n·around + 2, 3) of every ply of
+    every yarn, centrelines (Y, n, 3), ply axes (Y, P, n, 3) and arc lengths (Y, n)."""
+    knots = layout.weft_x if warp else layout.weft_knots
+    heights = layout.warp_heights if warp else layout.weft_heights
+    across = layout.warp_y if warp else layout.weft_x
+    yarns = len(heights)
+    s = ring_positions(knots, params.spacing_mm, params.segments_per_crossing)
+    z, dz = knot_height(knots, heights, s)
     shape = z.shape
     if warp:
         center = np.stack([np.broadcast_to(s, shape), np.broadcast_to(across[:, None], shape), z], -1)
@@ -166,42 +176,57 @@ def _family(params: WeaveParameters, warp: bool):
         binormal = np.array([1.0, 0.0, 0.0])
     tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
     normal = np.cross(tangent, binormal)
-    width, thickness = params.cross_section_mm
-    phi = 2.0 * np.pi * np.arange(params.segments_around) / params.segments_around
-    ring = (center[:, :, None, :] + (width * np.cos(phi))[:, None] * binormal
-            + (thickness * np.sin(phi))[None, None, :, None] * normal[:, :, None, :])
-    vertices = np.concatenate([ring.reshape(yarns, -1, 3), center[:, :1], center[:, -1:]], axis=1)
-    return vertices, center, tangent
+    arc = np.concatenate([np.zeros((yarns, 1)),
+                          np.cumsum(np.linalg.norm(np.diff(center, axis=1), axis=-1), axis=1)], axis=1)
+    factors = ply_radius_factors(params.seed, params.warp_count, params.weft_count, params.ply_count,
+                                 params.ply_radius_jitter)[0 if warp else 1]
+    # a ply's radius blends between its crossings as the centreline's height does
+    radius = knot_height(knots, factors, s)[0]
+    rings, centres = ply_rings(center, binormal, normal, arc, params.cross_section_mm, params.ply_count,
+                               params.twist_angle_deg, radius, params.segments_around)
+    if params.ply_count == 1:
+        axis = np.broadcast_to(tangent[:, None], centres.shape)
+    else:
+        axis = np.gradient(centres, axis=2)
+        axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    plies = params.ply_count
+    vertices = np.concatenate([rings.reshape(yarns, plies, -1, 3), centres[:, :, :1], centres[:, :, -1:]], axis=2)
+    return vertices, center, axis, arc
 
 
 def build_woven_mesh(params: WeaveParameters = WeaveParameters()) -> WovenMesh:
-    """Sweep every warp and weft yarn of ``params`` into one mesh (layout: module docstring)."""
-    around = params.segments_around
-    parts = [_family(params, warp) for warp in (True, False)]
-    per_yarn = [part[0].shape[1] for part in parts]
-    total = sum(part[0].shape[0] * count for part, count in zip(parts, per_yarn))
+    """Sweep every ply of every warp and weft yarn of ``params`` into one mesh (layout: module
+    docstring; plies: :mod:`.plies`; irregularity: :mod:`.irregularity`)."""
+    around, plies = params.segments_around, params.ply_count
+    layout = sample_layout(params)
+    parts = [_family(params, layout, warp) for warp in (True, False)]
+    per_tube = [part[0].shape[2] for part in parts]
+    total = sum(part[0].shape[0] * plies * count for part, count in zip(parts, per_tube))
     index_type = np.int32 if total < 2**31 else np.int64
-    vertices, faces, uv, tangent, yarn_faces, centerlines = [], [], [], [], [], []
+    vertices, faces, uv, tangent, ply_index, tube_faces, centerlines = [], [], [], [], [], [], []
     offset = face_offset = 0
-    for (vertex, center, axis), count in zip(parts, per_yarn):
+    for (vertex, center, axis, arc), count in zip(parts, per_tube):
         yarns, rings = center.shape[:2]
+        tubes = yarns * plies
         template = _tube_faces(rings, around).astype(index_type)
-        starts = offset + count * np.arange(yarns, dtype=index_type)
+        starts = offset + count * np.arange(tubes, dtype=index_type)
         faces.append((template[None] + starts[:, None, None]).reshape(-1, 3))
-        yarn_faces += [(face_offset + n * len(template), face_offset + (n + 1) * len(template)) for n in range(yarns)]
+        tube_faces += [(face_offset + n * len(template), face_offset + (n + 1) * len(template)) for n in range(tubes)]
         vertices.append(vertex.reshape(-1, 3))
-        arc = np.concatenate([np.zeros((yarns, 1)),
-                              np.cumsum(np.linalg.norm(np.diff(center, axis=1), axis=-1), axis=1)], axis=1)
         u = np.concatenate([np.repeat(arc, around, axis=1), arc[:, :1], arc[:, -1:]], axis=1)
+        u = np.broadcast_to(u[:, None], (yarns, plies, count))
         v = np.concatenate([np.tile(np.arange(around) / around, rings), [0.0, 0.0]])
         uv.append(np.stack([u, np.broadcast_to(v, u.shape)], -1).reshape(-1, 2))
-        ring_tangent = np.repeat(axis, around, axis=1)
-        tangent.append(np.concatenate([ring_tangent, axis[:, :1], axis[:, -1:]], axis=1).reshape(-1, 3))
+        ring_tangent = np.repeat(axis, around, axis=2)
+        tangent.append(np.concatenate([ring_tangent, axis[:, :, :1], axis[:, :, -1:]], axis=2).reshape(-1, 3))
+        ply = np.arange(plies, dtype=np.int32)[None, :, None]
+        ply_index.append(np.broadcast_to(ply, (yarns, plies, count)).ravel())
         centerlines += list(center)
-        offset += yarns * count
-        face_offset += yarns * len(template)
+        offset += tubes * count
+        face_offset += tubes * len(template)
     vertex_count = offset
     yarn_sizes = [part[0].shape[0] for part in parts]
+    per_yarn = [plies * count for count in per_tube]
     return WovenMesh(
         vertices=np.concatenate(vertices),
         faces=np.concatenate(faces),
@@ -211,7 +236,10 @@ def build_woven_mesh(params: WeaveParameters = WeaveParameters()) -> WovenMesh:
         yarn_id=np.repeat(np.arange(sum(yarn_sizes), dtype=np.int32),
                           np.repeat(per_yarn, yarn_sizes)),
         is_warp=np.repeat([True, False], [yarn_sizes[0] * per_yarn[0], yarn_sizes[1] * per_yarn[1]]),
-        yarn_faces=tuple(yarn_faces),
+        ply_index=np.concatenate(ply_index),
+        yarn_faces=tuple((tube_faces[n * plies][0], tube_faces[n * plies + plies - 1][1])
+                         for n in range(sum(yarn_sizes))),
+        tube_faces=tuple(tube_faces),
         centerlines=tuple(centerlines),
         segments_around=around,
     )

@@ -10,7 +10,10 @@ change sides: round yarns of 0.1 mm cannot pass over and under each other closer
 0.40 mm, and a flat elliptical yarn (``semi_axes_mm``, §7) must bend down within the width of
 the yarn it crosses, which limits how wide it can be (e.g. 0.17 mm × 0.047 mm at 0.5 mm).  Every
 set of parameters is checked against the exact tubes (:mod:`.clearance`), and a refusal names
-the largest cross-section of the same shape that fits.
+the largest cross-section of the same shape that fits.  A yarn of several plies twisted at the
+medium's twist angle (:mod:`.plies`) fills the same tube, so the same checks hold for its plies;
+an irregular sample (:mod:`.irregularity`) is checked crossing by crossing, and a refusal names
+the largest jitters that fit for its seed.
 """
 
 from __future__ import annotations
@@ -21,12 +24,14 @@ from numbers import Integral, Real
 
 import numpy as np
 
+from precompute.bounds import YARN_PLY_COUNT, YARN_TWIST_ANGLE_DEG
 from precompute.bounds import Bound as _Bound
 from precompute.errors import ParameterError
 
 from .centerline import crimp_percent, max_curvature
-from .clearance import crossing_gaps
+from .clearance import crossing_gaps, sample_curvature, sample_gaps
 from .errors import WeaveParameterError
+from .layout import sample_layout
 from .patterns import plain, validate_interlacing, weave_pattern
 
 #: Radius of a round yarn when neither ``yarn_radius_mm`` nor ``semi_axes_mm`` is given, mm.
@@ -41,6 +46,19 @@ COUNT_BOUNDS = {
     "weft_count": _Bound("weft_count", 1, 1000, integer=True),
     "segments_per_crossing": _Bound("segments_per_crossing", 2, 256, integer=True),
     "segments_around": _Bound("segments_around", 3, 256, integer=True),
+}
+#: The plies and their twist: the medium's own bounds (one parameter per preset, ``[yarn]``).
+PLY_BOUNDS = {
+    "ply_count": YARN_PLY_COUNT,
+    "twist_angle_deg": YARN_TWIST_ANGLE_DEG,
+}
+#: The irregularity's ranges (fractions, see :mod:`.irregularity`) and its seed; a jitter that the
+#: clearance checks refuse for a given weave is refused naming the largest that fits.
+IRREGULARITY_BOUNDS = {
+    "spacing_jitter": _Bound("spacing_jitter", 0.0, 0.5, high_open=True),
+    "height_jitter": _Bound("height_jitter", 0.0, 1.0, high_open=True),
+    "ply_radius_jitter": _Bound("ply_radius_jitter", 0.0, 1.0, high_open=True),
+    "seed": _Bound("seed", 0, 2**32 - 1, integer=True),
 }
 #: Vertices a sample may have: 2·10⁷ is a mesh of ~2 GB in Blender (and what Cycles builds from it).
 MAX_VERTICES = 20_000_000
@@ -79,9 +97,17 @@ class WeaveParameters:
         both; the interlacing then decides where each yarn is up or down, hence its crimp
         percentage (:attr:`crimp_percent`).
     segments_per_crossing, segments_around
-        Tessellation: segments along a yarn per spacing (≥ 2), and around its cross-section (≥ 3).
-        Near the clearance limit more segments along may be needed, so that the mesh's chords
-        do not cut into the crossing yarns; a refusal says how many.
+        Tessellation: segments along a yarn per spacing (≥ 2), and around its cross-section (≥ 3)
+        or each ply's.  Near the clearance limit more segments along may be needed, so that the
+        mesh's chords do not cut into the crossing yarns; a refusal says how many.
+    ply_count, twist_angle_deg
+        Plies per yarn, twisted about its axis at this helix angle at the yarn's surface, degrees
+        (:mod:`.plies`): the medium preset's ``yarn.ply_count`` and ``yarn.twist_angle_deg``.
+        1 ply: the plain tube, whatever the angle.
+    spacing_jitter, height_jitter, ply_radius_jitter, seed
+        Seeded irregularity (:mod:`.irregularity`): fractions of the spacing, of the yarn's
+        half-thickness and of the ply radius by which yarn positions, crossing heights and ply
+        radii vary.  All 0: the regular weave, every repeat alike.
     """
 
     interlacing: np.ndarray = field(default_factory=plain)
@@ -93,13 +119,19 @@ class WeaveParameters:
     crimp_amplitude_mm: float | tuple[float, float] | None = None
     segments_per_crossing: int = 8
     segments_around: int = 12
+    ply_count: int = 1
+    twist_angle_deg: float = 0.0
+    spacing_jitter: float = 0.0
+    height_jitter: float = 0.0
+    ply_radius_jitter: float = 0.0
+    seed: int = 0
 
     def __post_init__(self):
         matrix = weave_pattern(self.interlacing) if isinstance(self.interlacing, str) else self.interlacing
         matrix = validate_interlacing(matrix)
         matrix.flags.writeable = False
         object.__setattr__(self, "interlacing", matrix)
-        for name, bound in COUNT_BOUNDS.items():
+        for name, bound in (COUNT_BOUNDS | PLY_BOUNDS | IRREGULARITY_BOUNDS).items():
             value = getattr(self, name)
             try:
                 bound.check(value)
@@ -107,23 +139,30 @@ class WeaveParameters:
                 raise WeaveParameterError(name, value, bound.allowed()) from None
         if self.vertex_estimate > MAX_VERTICES:
             raise WeaveParameterError(
-                "warp_count, weft_count, segments_per_crossing, segments_around",
-                (self.warp_count, self.weft_count, self.segments_per_crossing, self.segments_around),
+                "warp_count, weft_count, segments_per_crossing, segments_around, ply_count",
+                (self.warp_count, self.weft_count, self.segments_per_crossing, self.segments_around, self.ply_count),
                 f"a mesh of at most {MAX_VERTICES:.0e} vertices (these make ~{self.vertex_estimate:.2g})")
         if not _is_length(self.spacing_mm):
             raise WeaveParameterError("spacing_mm", self.spacing_mm, "a finite length > 0 (mm)")
         self._check_cross_section()
         self._check_crimp()
         self._check_clearance()
+        self._check_irregular_clearance()
 
     # -- derived quantities ---------------------------------------------------------------
 
     @property
     def vertex_estimate(self) -> int:
-        """Vertices of the sample's mesh, at most: every yarn's rings of ``segments_around``, one
+        """Vertices of the sample's mesh, at most: every ply's rings of ``segments_around``, one
         run of ``segments_per_crossing`` per crossing and one more."""
         crossings = self.warp_count * (self.weft_count + 1) + self.weft_count * (self.warp_count + 1)
-        return crossings * self.segments_per_crossing * self.segments_around
+        return crossings * self.segments_per_crossing * self.segments_around * self.ply_count
+
+    @property
+    def is_irregular(self) -> bool:
+        """Whether yarns or crossings move off their regular places (the ply radius alone keeps
+        every yarn's envelope, hence its clearance, as it is)."""
+        return self.spacing_jitter > 0.0 or self.height_jitter > 0.0
 
     @property
     def cross_section_mm(self) -> tuple[float, float]:
@@ -151,7 +190,11 @@ class WeaveParameters:
     @property
     def minimum_gap_mm(self) -> float:
         """Smallest vertical gap between the exact tubes of crossing yarns anywhere in the weave,
-        mm (> 0; the mesh's gap at this tessellation, also checked, can be a little smaller)."""
+        mm (> 0; the mesh's gap at this tessellation, also checked, can be a little smaller).
+        Plies lie inside their yarn's tube (:mod:`.plies`), so theirs is at least as large.  An
+        irregular sample's: over every crossing of the sample."""
+        if self.is_irregular:
+            return float(sample_gaps(sample_layout(self), self.cross_section_mm, self.spacing_mm).min())
         return float(crossing_gaps(self.interlacing, self.spacing_mm, self.cross_section_mm,
                                    self.crimp_amplitudes_mm).min())
 
@@ -268,6 +311,43 @@ class WeaveParameters:
                    else f"({axes[0] * scale:.4g}, {axes[1] * scale:.4g}) mm or another shape that clears")
         raise WeaveParameterError(self._cross_section_name, self._cross_section_value,
                                   f"at most {largest} with the derived crimp: {explanation}")
+
+    def _irregular_problem(self, jitter_scale: float) -> str | None:
+        """Why this sample's yarns, moved by ``jitter_scale`` × its spacing and height jitters,
+        would intersect, or None if they clear, as exact tubes and as meshes."""
+        layout = sample_layout(self, jitter_scale)
+        width, thickness = self.cross_section_mm
+        closest = min(np.abs(np.diff(positions)).min(initial=np.inf) for positions in (layout.warp_y, layout.weft_x))
+        if closest <= 2.0 * width:
+            return (f"neighbouring parallel yarns {closest:.4g} mm apart, closer than their width "
+                    f"2·{width:g} mm")
+        curvature = sample_curvature(layout, self.spacing_mm)
+        if thickness * curvature >= 1.0:
+            return (f"a centreline bent to a radius of {1 / curvature:.4g} mm, below the half-thickness "
+                    f"{thickness:.4g} mm: the tube would fold onto itself")
+        for tessellation, what in ((None, "the yarns"), (self.segments_per_crossing, "their triangle meshes")):
+            gap = float(sample_gaps(layout, self.cross_section_mm, self.spacing_mm, tessellation).min())
+            if gap <= 0.0:
+                return f"{what} would cut into the yarns they cross (vertical gap {gap:.3g} mm)"
+        return None
+
+    def _check_irregular_clearance(self):
+        """Every crossing of an irregular sample clears; else a refusal naming the spacing and
+        height jitters with the largest of the same proportion that clears for this weave and
+        seed (found by bisection)."""
+        if not self.is_irregular:
+            return
+        problem = self._irregular_problem(1.0)
+        if problem is None:
+            return
+        low, high = 0.0, 1.0
+        for _ in range(10):
+            scale = 0.5 * (low + high)
+            low, high = (scale, high) if self._irregular_problem(scale) is None else (low, scale)
+        raise WeaveParameterError(
+            "spacing_jitter, height_jitter", (self.spacing_jitter, self.height_jitter),
+            f"at most ({self.spacing_jitter * low:.3g}, {self.height_jitter * low:.3g}) for this weave "
+            f"and seed {self.seed}: {problem}")
 
     def _finest_needed(self, semi_axes, amplitudes, most: int = 128) -> int | None:
         """Fewest segments per spacing (up to ``most``) whose mesh clears, by bisection (chords

@@ -38,7 +38,7 @@ COMMANDS = {
                 "--incidence-resolution", "3", "--exit-resolution", "2", "--pixels-per-patch", "8", "--samples", "2",
                 "--scheduler", "none"],
     "fit": ["clothlight.fit", "--measured", str(MEASURED), "--preset", "paper_2008", "--free", "dye_weight_percent",
-            "--budget-evaluations", "4", "--scheduler", "none", "--cache-dir", "{cache}", "--out", "{out}"],
+            "--budget-evaluations", "8", "--scheduler", "none", "--cache-dir", "{cache}", "--out", "{out}"],
 }
 
 

@@ -339,6 +339,7 @@ INTERRUPTING_IMPORT = textwrap.dedent("""
     ("clothlight.validate", ["--out", "{tmp}/v", "--resolution", "8", "--samples", "1"], "bpy"),
     ("clothlight.garment", ["bake", "--tables", str(YARN_BAKE), "--out", "{tmp}/c"], "bpy"),
     ("clothlight.validation.report", ["{tmp}/results.json"], "numpy"),
+    ("clothlight.fit", ["--measured", "{tmp}/m.csv", "--free", "dye_weight_percent", "--out", "{tmp}/f"], "numpy"),
     ("clothlight.bake_worker", ["--request", "{{}}", "--cache-dir", "{tmp}/cache"], "precompute.bake"),
 ])
 def test_ctrl_c_during_the_start_up_imports_exits_130_without_a_traceback(tmp_path, module, argv, interrupted_import):

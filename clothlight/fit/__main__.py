@@ -9,17 +9,23 @@ Exit codes: precompute/exit_codes.py (0 done, 2 bad input, 130 interrupted: noth
 
 from __future__ import annotations
 
-import argparse
-import json
-import pathlib
-import sys
+try:  # a Ctrl-C before the handler in main() is in place still exits with 130, without a traceback
+    import argparse
+    import json
+    import pathlib
+    import sys
 
-from precompute import bounds
-from precompute.cli.arguments import parse_arguments
-from precompute.distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
-from precompute.exit_codes import INTERRUPTED, DeferredInterrupt, run_cli
-from precompute.fit.parameters import PARAMETERS
-from precompute.optics.medium import DEFAULT_PRESET, preset_names
+    from precompute import bounds
+    from precompute.cli.arguments import parse_arguments
+    from precompute.distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
+    from precompute.exit_codes import INTERRUPTED, DeferredInterrupt, run_cli
+    from precompute.fit.parameters import PARAMETERS
+    from precompute.optics.medium import DEFAULT_PRESET, preset_names
+except KeyboardInterrupt:
+    if __name__ != "__main__":
+        raise
+    print("interrupted", file=__import__("sys").stderr)
+    raise SystemExit(130) from None
 
 
 def build_parser() -> argparse.ArgumentParser:

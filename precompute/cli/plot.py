@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import json
 import pathlib
+import shutil
 import sys
+import tempfile
 
 from precompute.tables import plots
 from precompute.bake import SPECTRAL_FILE, TABLE_FILES, load_spectral
 from precompute.errors import ParameterError
-from precompute.outputs import check_writable_folder
+from precompute.outputs import check_writable_folder, existing_place
 from precompute.tables.folder import check_yarn_table_folder
 from precompute.tables.exr import TableError, read_table
 
@@ -43,25 +45,38 @@ def run(args) -> int:
     except TableError as exc:
         raise ParameterError("TABLE", str(args.table), f"a ClothLight brdf table or bake folder: {exc}") from None
     n_i = int(metadata["layout"]["incidence_resolution"])
-    args.out.mkdir(parents=True, exist_ok=True)
+    # Drawn beside --out and moved in at the end: an interrupted run writes nothing there.
+    with tempfile.TemporaryDirectory(prefix=".clothlight-plot-", dir=existing_place(args.out.parent)) as folder:
+        drawn = _draw(pathlib.Path(folder), atlas, n_i, stderr, args.table, metadata)
+        args.out.mkdir(parents=True, exist_ok=True)
+        written = []
+        for png in drawn:
+            shutil.move(png, args.out / png.name)  # a rename on one file system
+            written.append(args.out / png.name)
+    print(json.dumps([str(p) for p in written]))
+    return 0
+
+
+def _draw(staging: pathlib.Path, atlas, n_i: int, stderr, table: pathlib.Path, metadata: dict) -> list[pathlib.Path]:
+    """The PNG files of the yarn table ``table`` (a brdf.exr or its bake folder) drawn into ``staging``."""
+    path = table / TABLE_FILES["brdf"] if table.is_dir() else table
     written = [
-        plots.plot_in_plane(atlas, n_i, args.out / "rho_in_plane.png", stderr),
-        plots.plot_polar(atlas, n_i, args.out / "rho_polar.png"),
+        plots.plot_in_plane(atlas, n_i, staging / "rho_in_plane.png", stderr),
+        plots.plot_polar(atlas, n_i, staging / "rho_polar.png"),
     ]
     spectral_path = path.with_name(SPECTRAL_FILE)
     if spectral_path.is_file():
         spectral, spectral_metadata = load_spectral(spectral_path)
         if spectral_metadata.get("key") != metadata["spectral_key"]:
             raise ParameterError(
-                "TABLE", str(args.table), f"a table whose {SPECTRAL_FILE} is its own (their spectral keys differ)"
+                "TABLE", str(table), f"a table whose {SPECTRAL_FILE} is its own (their spectral keys differ)"
             )
         colour = metadata["colour"]
         written += [
-            plots.plot_albedo_spectra(spectral, n_i, args.out / "albedo_spectra.png"),
-            plots.plot_swatches(spectral, n_i, args.out / "swatches_front_back.png",
+            plots.plot_albedo_spectra(spectral, n_i, staging / "albedo_spectra.png"),
+            plots.plot_swatches(spectral, n_i, staging / "swatches_front_back.png",
                                 colour["illuminant"], colour["observer"]),
         ]
     else:
         print(f"note: no {SPECTRAL_FILE} beside {path}: albedo spectra and swatches skipped", file=sys.stderr)
-    print(json.dumps([str(p) for p in written]))
-    return 0
+    return written

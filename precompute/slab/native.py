@@ -17,6 +17,7 @@ from __future__ import annotations
 import ctypes
 import os
 import pathlib
+import sys
 import threading
 
 from precompute.errors import ParameterError
@@ -93,19 +94,30 @@ def simulate_hg_slab_native(library: ctypes.CDLL, albedo: float, g: float, tau: 
     sums = (ctypes.c_double * (SLAB_TASKS * SLAB_TALLY_ROWS))()
     events = (ctypes.c_int64 * SLAB_TASKS)()
     statuses = []
+    stop = threading.Event()
 
     def run_tasks(first: int, count: int) -> None:
+        # One task a call: between calls the main thread takes a Ctrl-C and the others see `stop`.
         work, state, alias = (ctypes.c_double * WORK_DOUBLES)(), (ctypes.c_uint64 * 2)(), (ctypes.c_int32 * 1)()
-        statuses.append(_call(library, TASKS_FUNCTION, first, count, counts, seed, float(tau), float(index),
-                              float(albedo), float(g), sums, events, work, state, alias))
+        status = 0
+        for task in range(first, first + count):
+            if stop.is_set() or status:
+                break
+            status = _call(library, TASKS_FUNCTION, task, 1, counts, seed, float(tau), float(index),
+                           float(albedo), float(g), sums, events, work, state, alias)
+        statuses.append(status)
 
     shares = [(SLAB_TASKS * t // threads, SLAB_TASKS * (t + 1) // threads) for t in range(threads)]
     workers = [threading.Thread(target=run_tasks, args=(first, end - first)) for first, end in shares[1:]]
     for worker in workers:
         worker.start()
-    run_tasks(shares[0][0], shares[0][1] - shares[0][0])
-    for worker in workers:
-        worker.join()
+    try:
+        run_tasks(shares[0][0], shares[0][1] - shares[0][0])
+    finally:
+        if sys.exc_info()[0] is not None:
+            stop.set()
+        for worker in workers:
+            worker.join()
     if len(statuses) != threads:  # a thread that raised reported no status: its tasks' tallies are missing
         raise RuntimeError(f"{threads - len(statuses)} of {threads} threads of the native slab library failed")
     results = (ctypes.c_double * len(SLAB_RESULTS))()

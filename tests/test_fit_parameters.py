@@ -23,7 +23,13 @@ from precompute.fit.parameters import (
     parse_free,
 )
 from precompute.fit.report import to_toml
-from precompute.optics.medium import MAX_VOLUME_FRACTION, load_preset_config, medium_from_dict
+from precompute.optics.medium import (
+    FIBRE_DIAMETER_UM,
+    MAX_FIBRE_VOLUME_FRACTION,
+    MAX_VOLUME_FRACTION,
+    load_preset_config,
+    medium_from_dict,
+)
 from tests.test_fit_optimise import preset_with_voids, real_fabric_views, synthetic_brdf
 
 
@@ -43,8 +49,13 @@ def test_unit_mapping_round_trips_and_spans_the_range(name):
 def test_fit_ranges_lie_within_what_the_medium_accepts(name):
     p = PARAMETERS[name]
     assert p.low < p.high
-    if p.path.endswith("volume_fraction"):
+    if p.path == "fibres.volume_fraction":
+        assert 0 < p.low and p.high < MAX_FIBRE_VOLUME_FRACTION
+    elif p.path.endswith("volume_fraction"):
         assert 0 < p.low and p.high < MAX_VOLUME_FRACTION
+    if p.path == "fibres.diameter_um":
+        FIBRE_DIAMETER_UM.check(p.low)
+        FIBRE_DIAMETER_UM.check(p.high)
     if p.path.endswith("diameter_nm"):
         bounds.PARTICLE_DIAMETER_NM.check(p.low * p.scale)
         bounds.PARTICLE_DIAMETER_NM.check(p.high * p.scale)
@@ -54,14 +65,14 @@ def test_fit_ranges_lie_within_what_the_medium_accepts(name):
     if p.path == "dye.weight_percent":
         assert 0 <= p.low and p.high < 100
     # either end, written into a preset, loads (the sum of fractions aside)
-    config, base_dir = preset_with_voids()
+    config, base_dir = load_preset_config("fibre_cotton") if p.path.startswith("fibres.") else preset_with_voids()
     for value in (p.low, p.high):
         new, keywords = apply(config, None, {name: value})
         if p.is_specular:
             assert keywords[p.path] == value
         else:
             assert p.get(new) == pytest.approx(value)
-            if sum(t["volume_fraction"] for t in new["particles"]) < MAX_VOLUME_FRACTION:
+            if sum(t["volume_fraction"] for t in new.get("particles", [])) < MAX_VOLUME_FRACTION:
                 medium_from_dict(new, base_dir)
 
 

@@ -10,7 +10,10 @@ instrument that measures cloth as an isotropic BRDF sees the warp and the weft a
 (``../shared/data/real_fabrics/README.md``: MERL's samples were wrapped round a cylinder).
 
 Views are the measured-data CSV's ``(θi, φi, θo, φo)`` (``Measurement.angles_deg``): light at
-φi = 180°, φo = 180° on the light's side, 0° beyond the normal, 90° the perpendicular plane.
+φi = 180°, φo = 180° on the light's side, 0° beyond the normal, 90° the perpendicular plane, and any
+azimuth between (the raw-data curves' 45° and 135°).  Each view is rendered with the camera square to
+the sample's weave (the sample turned so that the camera's azimuth on it is 0° or 90°), so that every
+view frames whole weave repeats: :func:`sample_azimuths`.
 """
 
 from __future__ import annotations
@@ -31,6 +34,8 @@ from precompute.optics.coefficients import medium_optics
 from precompute.cache.sources import stage_digest
 from precompute.tables.layout import brdf_atlas
 
+from ..weave import WeaveParameters
+
 PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[2]
 #: Incidence grid of a candidate's eq. (5): the shipped tables' (an odd N_i puts the planes across
 #: and along the yarn through cell centres), fixed so that one linear map serves every candidate.
@@ -40,13 +45,20 @@ PATHS_AT_FIVE_PERCENT = 1000
 #: The §6.1 colour swatches the model also gives, after the measured views: normal view, lit from the
 #: front and from straight behind, (θi, θv, φv) in degrees (clothlight.blender.validation.run's swatches).
 SWATCH_VIEWS = ((0.0, 0.0, 0.0), (180.0, 0.0, 0.0))
-#: Sample azimuths the response averages over, degrees (module docstring).
+#: Sample azimuths the response averages over, degrees (module docstring), for a view in the plane
+#: of incidence or across it; a view at another azimuth turns them (:func:`sample_azimuths`).
 SAMPLE_AZIMUTHS_DEG = (0.0, 90.0)
 #: The response's sweep resolution (pixels along the patch side) and camera samples per pixel
 #: along each axis: 16 samples per pixel, as a default validation sweep.
 RESPONSE_RESOLUTION = 64
 RESPONSE_SUPERSAMPLING = 4
 RESPONSE_FILE = "response.npz"
+#: The validation weave (12 × 12 yarns, 6 mm) frames a patch with its edges out of view for views to
+#: 70° and light to 60° (the ABC curves); beyond that (the raw-data curves: views to 80°, light to
+#: 75°) the response renders this wider sample, 10 mm, which frames two repeats there.
+WIDE_VIEW_WEAVE = WeaveParameters(warp_count=20, weft_count=20)
+VALIDATION_WEAVE_MAX_VIEW_DEG = 70.0
+VALIDATION_WEAVE_MAX_INCIDENCE_DEG = 60.0
 
 
 def paths_per_cell(relative_error: float) -> int:
@@ -58,21 +70,31 @@ def paths_per_cell(relative_error: float) -> int:
 
 def rig_views(measured_views: Sequence[tuple[float, float, float, float]]) -> list[tuple[float, float, float]]:
     """The rig's (θi, θv, φv) of measured-data views (θi, φi, θo, φo): θv signed in the plane of
-    incidence (negative on the light's side), φv = 90° for the perpendicular plane."""
+    incidence (negative on the light's side, φv = 0), else θv = θo at the view's azimuth φv from the
+    plane, folded into (0°, 180°) (an isotropic cloth reflects alike on both sides of the plane):
+    90° for the perpendicular plane, 45° and 135° for the raw-data curves' diagonals."""
     views = []
     for theta_i, phi_i, theta_o, phi_o in measured_views:
         if theta_i != 0.0 and not math.isclose(float(phi_i) % 360.0, 180.0):
             raise ParameterError("view φi", phi_i, "180°: the rig's sun lies on the −x side")
         phi = float(phi_o) % 360.0
-        if theta_o == 0.0 or math.isclose(phi, 0.0):
+        folded = min(phi, 360.0 - phi)
+        if theta_o == 0.0 or math.isclose(folded, 0.0, abs_tol=1e-9):
             views.append((float(theta_i), float(theta_o), 0.0))
-        elif math.isclose(phi, 180.0):
+        elif math.isclose(folded, 180.0):
             views.append((float(theta_i), -float(theta_o), 0.0))
-        elif math.isclose(phi, 90.0) or math.isclose(phi, 270.0):
-            views.append((float(theta_i), float(theta_o), 90.0))
         else:
-            raise ParameterError("view φo", phi_o, "0, 90, 180 or 270°: the plane of incidence or across it")
+            views.append((float(theta_i), float(theta_o), folded))
     return views
+
+
+def sample_azimuths(phi_v_deg: float) -> tuple[float, ...]:
+    """The sample azimuths α (degrees) a view at azimuth ``phi_v_deg`` is rendered and averaged at:
+    :data:`SAMPLE_AZIMUTHS_DEG` less the view's azimuth modulo 90°, which put the camera at 0° or 90°
+    on the sample (the response's renders turn sun and camera by α), where the framed patch holds
+    whole weave repeats; the weave then lies at the same two angles to the camera in every view."""
+    turn = float(phi_v_deg) % 90.0
+    return tuple(azimuth - turn for azimuth in SAMPLE_AZIMUTHS_DEG)
 
 
 def lookup_tables_folder(root: pathlib.Path = PROJECT_ROOT) -> pathlib.Path:
@@ -94,7 +116,7 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
     from ..validation.response import ClothResponse
 
     views = [(*view, azimuth) for view in (*rig_views(measured_views), *SWATCH_VIEWS)
-             for azimuth in SAMPLE_AZIMUTHS_DEG]
+             for azimuth in sample_azimuths(view[2])]
     inputs = {
         "schema": "clothlight-response-entry/1",
         "views": views,
@@ -103,6 +125,11 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
         "seed": int(seed),
         "code_digest": stage_digest(PROJECT_ROOT, ["clothlight.blender.validation.response_render"]),
     }
+    wide = (max(abs(v[1]) for v in views) > VALIDATION_WEAVE_MAX_VIEW_DEG
+            or max(min(v[0], 180.0 - v[0]) for v in views) > VALIDATION_WEAVE_MAX_INCIDENCE_DEG)
+    sample = WIDE_VIEW_WEAVE if wide else None
+    if wide:  # (responses of the validation weave keep the keys they had)
+        inputs["sample_yarns"] = [WIDE_VIEW_WEAVE.warp_count, WIDE_VIEW_WEAVE.weft_count]
     cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
     key = cache_key(inputs)
     folder = lookup(cache_dir, "responses", key)
@@ -114,8 +141,9 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
 
             # Any tables: the lookup directions do not depend on the medium.
             tables = yarn_tables_from_bake(lookup_tables_folder())
-            measure_response(tables, views, resolution=RESPONSE_RESOLUTION, supersampling=RESPONSE_SUPERSAMPLING,
-                             seed=seed, progress=progress).save(staging / RESPONSE_FILE)
+            measure_response(tables, views, sample, resolution=RESPONSE_RESOLUTION,
+                             supersampling=RESPONSE_SUPERSAMPLING, seed=seed,
+                             progress=progress).save(staging / RESPONSE_FILE)
 
         folder, _ = store(cache_dir, "responses", key, inputs, write)
     return ClothResponse.load(folder / RESPONSE_FILE)

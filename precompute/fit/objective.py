@@ -6,9 +6,9 @@ A measurement (``precompute/fit/measured_data.py``: the project's CSV, read with
 ``read_measurement``) is split by the view's azimuth relative to the light's, Δφ = φo − φi:
 
 * **fit views**: the plane of incidence (Δφ = 0° or 180°, and the normal view), the paper's graphs;
-* **held-out views**: the perpendicular plane (Δφ = ±90°), never seen by the optimiser, reported
-  as an honest check of the fitted medium;
-* any other azimuth counts as a fit view.
+* **held-out views**: every other azimuth (the perpendicular plane, Δφ = ±90°, and the raw-data
+  curves' diagonals, ±45° and ±135°), never seen by the optimiser, reported as an honest check of
+  the fitted medium.
 
 The forward model is asked for every view at once, as (θi, φi, θo, φo) in the light-at-φi = 180°
 frame of the shipped measurements (``shared/data/real_fabrics``) and of the validation rig: a file
@@ -81,8 +81,7 @@ class Views:
     angles_deg
         (M, 4) θi, φi, θo, φo of each measured view, degrees, in the file's order.
     fit, held_out
-        (M,) masks of the fit views (plane of incidence and others) and the held-out views
-        (perpendicular plane).
+        (M,) masks of the fit views (plane of incidence) and the held-out views (every other azimuth).
     signed_view_deg
         (M,) the view angle for plots: in the plane of incidence −θo on the light's side, +θo beyond
         the normal (the paper's graphs); elsewhere θo.
@@ -125,16 +124,16 @@ def split_views(measurement) -> Views:
     normal = a[:, 2] <= TOLERANCE_DEG
     light_side = folded <= TOLERANCE_DEG
     mirror_side = np.abs(folded - 180.0) <= TOLERANCE_DEG
-    perpendicular = (np.abs(folded - 90.0) <= TOLERANCE_DEG) & ~normal
-    fit = ~perpendicular
+    held_out = ~(normal | light_side | mirror_side)
+    fit = ~held_out
     if not fit.any():
-        raise ParameterError("--measured", f"{len(a)} views, all in the perpendicular plane",
+        raise ParameterError("--measured", f"{len(a)} views, none in the plane of incidence",
                              "views in the plane of incidence (φo = φi or φi + 180°) to fit")
     signed = np.where(light_side & ~normal & ~mirror_side, -a[:, 2], a[:, 2])
     phi_o = (delta + FORWARD_PHI_I_DEG) % 360.0
     forward = [(float(t_i), FORWARD_PHI_I_DEG, float(t_o), float(p_o))
                for t_i, t_o, p_o in zip(a[:, 0], a[:, 2], phi_o)]
-    return Views(a, fit, perpendicular, signed, forward)
+    return Views(a, fit, held_out, signed, forward)
 
 
 def parse_target_ratios(text: str | Mapping[str, float] | None) -> dict[str, float]:

@@ -202,6 +202,14 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
                  note="grey absorption of the fibre itself (impurities, lignin, a shade of dark in the dyeing), "
                       "beside the dye's spectrum: 0.01 /mm is nothing across a 0.2 mm yarn, 30 /mm absorbs within "
                       "a fibre's 15 µm twice over"),
+    FitParameter("fibre_fraction", "fibres.volume_fraction", "", 0.2, 0.8, log=False,
+                 note="the share of a yarn's volume its fibres fill: 0.4–0.6 in spun yarns, less in a loose "
+                      "or brushed one, more in a compacted one; the medium allows (0, 0.9)"),
+    FitParameter("fibre_diameter_um", "fibres.diameter_um", "µm", 5.0, 40.0, log=True,
+                 note="fine microfibres to coarse wool; cotton 12–20 µm"),
+    FitParameter("fibre_absorption_per_mm", "fibres.absorption_per_mm", "1/mm", 0.01, 100.0, log=True,
+                 note="grey absorption of the fibre material beside its dye: 100 /mm takes 1/e within 10 µm, a "
+                      "fibre's width"),
     FitParameter("yarn_radius_mm", "yarn.radius_mm", "mm", 0.03, 0.5, log=True,
                  note="fine (Ne 100) to coarse (Ne 2) yarns after Peirce's d = 1/(28 √Ne) inch; the medium "
                       f"allows {bounds.YARN_RADIUS_MM.low:g}–{bounds.YARN_RADIUS_MM.high:g} mm"),

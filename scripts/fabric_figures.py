@@ -1,0 +1,90 @@
+"""Issue 43's figures of a cloth against a measured fabric: a bake folder's tables, or a preset.
+
+The cloth BRDF at every measured view comes from the fit's forward model (the cloth response,
+rendered once per view set and cached, docs/fitting.md): for ``--tables`` the bake's own atlas,
+unscattered table and specular term; for ``--preset`` a candidate's tables simulated at
+``--relative-error`` with the preset's ``[fit]`` sheen.  Beside it, the paper's Lambert +
+Cook–Torrance baseline fitted to the plane of incidence.  Printed (and with ``--json`` written):
+relative RMS pooled and per channel on the plane of incidence and on the held-out azimuths,
+backscatter model / measured at θi 60°, θv −60° and −40° (and θi 45°, θv −60°), off-specular B/R and
+G/R against the measurement (``precompute/fit/figures.py``), and lit from behind / from the front.
+
+    python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --tables bake
+    python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --preset red_cotton
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+
+
+def bake_folder_brdf(model, folder: pathlib.Path):
+    """The cloth BRDF (n_views + 2, 3) of a bake folder's tables through ``model``'s response, with
+    the specular term its summary records."""
+    from clothlight.validation.response import TableLayout
+    from precompute.optics import ballistic
+    from precompute.tables import folder as table_folder
+
+    checked = table_folder.check_yarn_table_folder(folder.resolve())
+    files, summary = table_folder.YARN_TABLE_FILES, checked.summary
+    specular = table_folder.summary_specular(summary, checked.folder)
+    layout = TableLayout(summary["incidence_resolution"], summary["exit_resolution"], summary["unscattered_samples"],
+                         float(summary["host_index"]), ballistic.SUN_MODE_SPREAD_RAD)
+    atlas = checked.tables[files["brdf"]].pixels[..., :3]
+    attenuation = checked.tables[files["unscattered"]].pixels[..., :3]
+    return model.cloth_brdf(atlas, attenuation, layout, specular_weight=float(specular["weight"]),
+                            specular_slope=float(specular["slope"]))
+
+
+def main() -> int:
+    from clothlight.fit.forward import build_forward_model
+    from precompute.fit.baseline import baseline_brdf, fit_baseline
+    from precompute.fit.figures import fabric_figures, figures_text
+    from precompute.fit.objective import Objective, load_measurement, split_views
+    from precompute.optics.cook_torrance import specular_from_config
+    from precompute.optics.medium import load_preset_config
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--measured", type=pathlib.Path, required=True, help="a measured-data CSV")
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--tables", type=pathlib.Path, help="a bake folder (python -m precompute bake --out)")
+    source.add_argument("--preset", help="a shipped preset name or a preset TOML, simulated at --relative-error")
+    parser.add_argument("--relative-error", type=float, default=0.03, help="a --preset's forward model's (0.03)")
+    parser.add_argument("--seed", type=int, default=1, help="a --preset's transport seed (1)")
+    parser.add_argument("--json", type=pathlib.Path, help="also write the figures here")
+    args = parser.parse_args()
+
+    measurement = load_measurement(args.measured)
+    views = split_views(measurement)
+    objective = Objective(measurement, views)
+    config, base_dir = load_preset_config(args.preset or "red_cotton")
+    model = build_forward_model(views.forward_views, config, base_dir, seed=0)
+    count = len(views.forward_views)
+    if args.tables is not None:
+        cloth = bake_folder_brdf(model, args.tables)
+        label = f"tables {args.tables}"
+    else:
+        sheen = specular_from_config(config)
+        cloth = model(config, specular_weight=sheen["specular_weight"], specular_slope=sheen["specular_slope"],
+                      relative_error=args.relative_error, seed=args.seed)
+        label = f"preset {args.preset} at relative error {args.relative_error:g}"
+    baseline = fit_baseline(objective)
+    fitted = baseline_brdf(views.angles_deg, baseline.albedo, baseline.weight, baseline.slope)
+    results = {"measured": str(args.measured),
+               "model": fabric_figures(cloth[:count], objective.measured, views, swatches=cloth[count:]),
+               "baseline": fabric_figures(fitted, objective.measured, views)}
+    print("\n".join(figures_text(results["model"], label)))
+    print("\n".join(figures_text(results["baseline"], "the paper's Lambert + Cook–Torrance fitted to the plane "
+                                                      "of incidence")))
+    if args.json is not None:
+        args.json.write_text(json.dumps({**results, "source": label}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

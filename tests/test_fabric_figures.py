@@ -1,0 +1,83 @@
+"""Issue 43's figures of a cloth against a fabric (precompute/fit/figures.py), the raw-data curves'
+views in the fit (held-out diagonals) and in the forward model's renders (clothlight/fit/forward.py)."""
+
+import numpy as np
+import pytest
+
+from clothlight.fit.forward import SAMPLE_AZIMUTHS_DEG, rig_views, sample_azimuths
+from precompute.fit.figures import fabric_figures, off_specular_views, view_index
+from precompute.fit.objective import split_views
+
+pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
+
+
+class RawCurves:
+    """The raw-data curves' views (θi 0…60° × θo 0…80° × φo 0/45/90/135/180°, light at φi 180°) with a
+    red cloth's BRDF: diffuse (B/R 0.08, G/R 0.12) plus a white lobe about the mirror direction."""
+
+    angles_deg = np.array([(ti, 180.0, to, po) for ti in (0, 15, 30, 45, 60) for to in range(0, 81, 10)
+                           for po in ((0.0,) if to == 0 else (0.0, 45.0, 90.0, 135.0, 180.0))], float)
+    rgb = None
+
+
+def red_cloth(angles_deg, backscatter=1.0):
+    a = np.radians(angles_deg)
+    wi = np.stack([np.sin(a[:, 0]) * np.cos(a[:, 1]), np.sin(a[:, 0]) * np.sin(a[:, 1]), np.cos(a[:, 0])], -1)
+    wo = np.stack([np.sin(a[:, 2]) * np.cos(a[:, 3]), np.sin(a[:, 2]) * np.sin(a[:, 3]), np.cos(a[:, 2])], -1)
+    mirror = wi * np.array([-1.0, -1.0, 1.0])
+    lobe = 0.02 * np.exp(-(1.0 - np.sum(mirror * wo, -1)) / 0.01)
+    toward_light = np.sum(wi * wo, -1)
+    diffuse = 0.05 * (1.0 + (backscatter - 1.0) * np.clip(toward_light, 0.0, 1.0) ** 8)
+    return diffuse[:, None] * np.array([1.0, 0.12, 0.08]) + lobe[:, None]
+
+
+RawCurves.rgb = red_cloth(RawCurves.angles_deg)
+
+
+def test_the_plane_of_incidence_is_fitted_and_every_other_azimuth_held_out():
+    views = split_views(RawCurves)
+    azimuth = RawCurves.angles_deg[:, 3]
+    in_plane = (azimuth == 0.0) | (azimuth == 180.0)
+    np.testing.assert_array_equal(views.fit, in_plane)
+    np.testing.assert_array_equal(views.held_out, ~in_plane)
+    assert set(azimuth[views.held_out]) == {45.0, 90.0, 135.0}
+
+
+def test_the_figures_of_a_cloth_against_itself_and_against_a_changed_one():
+    views = split_views(RawCurves)
+    same = fabric_figures(RawCurves.rgb, RawCurves.rgb, views)
+    assert same["plane_of_incidence"]["pooled"] == 0.0 and same["held_out"]["per_channel"] == 0.0
+    assert [b["model_over_measured"] for b in same["backscatter"]] == [[1.0, 1.0, 1.0]] * 3
+    assert same["off_specular"]["B/R"]["model_over_measured"] == pytest.approx([1.0, 1.0, 1.0])
+    # a cloth with backscatter toward the light and half the blue
+    other = red_cloth(RawCurves.angles_deg, backscatter=2.0) * np.array([1.0, 1.0, 0.5])
+    figures = fabric_figures(other, RawCurves.rgb, views, swatches=np.array([[1.0, 1.0, 1.0], [0.3, 0.3, 0.3]]))
+    at_60_60 = figures["backscatter"][0]
+    assert (at_60_60["theta_i_deg"], at_60_60["theta_v_deg"]) == (60.0, -60.0)
+    assert at_60_60["model_over_measured"][0] > 1.5
+    assert figures["off_specular"]["B/R"]["model_over_measured"][2] == pytest.approx(0.5)
+    assert figures["off_specular"]["G/R"]["model_over_measured"][0] == pytest.approx(1.0, abs=0.01)
+    assert figures["back_over_front"] == pytest.approx(0.3)
+    # blue's error counts as much as red's when each channel is normalised on its own, not when pooled
+    assert figures["plane_of_incidence"]["per_channel"] > figures["plane_of_incidence"]["pooled"]
+
+
+def test_off_specular_views_keep_away_from_the_mirror_and_the_normal():
+    views = split_views(RawCurves)
+    off = off_specular_views(views)
+    theta_i, signed = views.angles_deg[off, 0], views.signed_view_deg[off]
+    assert np.all(theta_i <= 45.0) and np.all(np.abs(signed) >= 20.0) and np.all(np.abs(signed - theta_i) >= 20.0)
+    assert view_index(views, 30.0, 50.0) is not None and not off[view_index(views, 30.0, 40.0)]
+    assert view_index(views, 75.0, -60.0) is None
+
+
+def test_views_at_any_azimuth_reach_the_rig_square_to_the_weave():
+    views = rig_views([(45.0, 180.0, 30.0, 180.0), (45.0, 180.0, 30.0, 0.0), (45.0, 180.0, 30.0, 45.0),
+                       (45.0, 180.0, 30.0, 315.0), (45.0, 180.0, 30.0, 135.0), (45.0, 180.0, 30.0, 270.0)])
+    assert views == [(45.0, -30.0, 0.0), (45.0, 30.0, 0.0), (45.0, 30.0, 45.0), (45.0, 30.0, 45.0),
+                     (45.0, 30.0, 135.0), (45.0, 30.0, 90.0)]
+    for _, _, phi_v in views:
+        camera_on_sample = sorted((phi_v + alpha) % 180.0 for alpha in sample_azimuths(phi_v))
+        assert camera_on_sample == [0.0, 90.0]
+    # views in the plane or across it are rendered as before
+    assert sample_azimuths(0.0) == SAMPLE_AZIMUTHS_DEG == sample_azimuths(90.0)

@@ -551,6 +551,36 @@ def test_the_bake_api_refuses_out_of_range_transport_settings_by_name(bound, dat
     assert error.value.name == bound.name and bound.allowed() in error.value.allowed
 
 
+@settings(max_examples=60, deadline=None)
+@given(st.sampled_from([bounds.PATHS_PER_CELL, bounds.TARGET_REL_STDERR, bounds.SEED]), st.data())
+def test_a_wrong_value_an_option_replaces_is_refused_all_the_same(bound, data):
+    from precompute.bake import bake_configuration
+
+    wrong = data.draw(_outside(bound))
+    given = {"seed": 3} if bound is bounds.SEED else data.draw(st.sampled_from([{"paths_per_cell": 64},
+                                                                                 {"target_rel_stderr": 0.05}]))
+    with pytest.raises(ParameterError) as error:
+        bake_configuration("paper_2008", {bound.name: wrong}, **given)
+    assert error.value.name == bound.name and bound.allowed() in error.value.allowed
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.sampled_from(["dye.weight_percent", "transport.seed", "host.absorption_per_mm"]), min_size=1,
+                max_size=4), st.lists(st.integers(0, 5), min_size=4, max_size=4))
+def test_a_key_set_twice_is_refused_naming_it(keys, values):
+    from precompute.bake import apply_overrides
+
+    texts = [f"{key}={value}" for key, value in zip(keys, values)]
+    repeated = next((key for i, key in enumerate(keys) if key in keys[:i]), None)
+    if repeated is None:
+        config = apply_overrides({}, texts)
+        assert all(config[k.split(".")[0]][k.split(".")[1]] == v for k, v in zip(keys, values))
+        return
+    with pytest.raises(ParameterError) as error:
+        apply_overrides({}, texts)
+    assert error.value.name == repeated and "one value per key" in error.value.allowed
+
+
 def test_the_bake_refuses_grids_beyond_memory_with_the_estimate(monkeypatch):
     from precompute.bake import bake_configuration
 

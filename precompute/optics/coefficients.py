@@ -7,7 +7,10 @@ asymmetry g and a tabulated phase function with its sampling table (paper §3.3:
 theory").  Species combine by adding their coefficients, and their phase
 functions are weighted by their scattering coefficients:
 ``p = Σ μs_i p_i / Σ μs_i``.  Absorption adds the host's own, the particles'
-(Mie ``Q_abs``) and the dye's (:mod:`precompute.optics.dye`).
+(Mie ``Q_abs``) and the dye's (:mod:`precompute.optics.dye`).  A medium with
+fibres (:class:`precompute.optics.medium.Fibres`) adds them as one more species
+(:mod:`precompute.optics.fibre`), and its dye is absorbed inside them, not by
+the yarn's whole volume.
 
 The cos θ grid of the phase tables: with ``medium.phase_samples = "auto"`` (the
 default) it is :func:`precompute.optics.mie.auto_phase_grid` — the default grid
@@ -26,7 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from precompute.optics.dye import dye_absorption_coefficient
-from precompute.optics.medium import AUTO_PHASE_SAMPLES, MediumParameters, load_preset
+from precompute.optics.fibre import fibre_scattering, proxy_diameter_nm
+from precompute.optics.medium import AUTO_PHASE_SAMPLES, MediumParameters, ParticleSpecies, RefractiveIndex, load_preset
 from precompute.optics.mie import (
     MAX_AUTO_PHASE_SAMPLES,
     PhaseGridTooCoarse,
@@ -97,7 +101,16 @@ def planned_phase_grid(params: MediumParameters) -> tuple[str, int]:
     if params.phase_samples != AUTO_PHASE_SAMPLES:
         return "uniform-cos", int(params.phase_samples)
     wavelengths = params.wavelengths.values
-    return auto_phase_grid(params.particles, wavelengths, params.host.refractive_index.at(wavelengths).real)
+    return auto_phase_grid(_sized_scatterers(params), wavelengths, params.host.refractive_index.at(wavelengths).real)
+
+
+def _sized_scatterers(params: MediumParameters) -> tuple[ParticleSpecies, ...]:
+    """The particles, and the fibres' proxy sphere as one more, for choosing the cos θ grid."""
+    if params.fibres is None:
+        return params.particles
+    proxy = ParticleSpecies("fibres", RefractiveIndex(n=1.5), params.fibres.volume_fraction,
+                            diameter_nm=proxy_diameter_nm(params.fibres))
+    return (*params.particles, proxy)
 
 
 def medium_optics(params: MediumParameters, *, icdf_size: int = DEFAULT_ICDF_SIZE) -> MediumOptics:
@@ -120,7 +133,7 @@ def medium_optics(params: MediumParameters, *, icdf_size: int = DEFAULT_ICDF_SIZ
                 raise
             kind, samples = "uniform-angle", min(MAX_AUTO_PHASE_SAMPLES,
                                                  refined_phase_grid(samples, error.relative_error))
-    if params.dye is not None:
+    if params.dye is not None and params.fibres is None:
         mu_a += dye_absorption_coefficient(params.dye, wavelengths)
     scattering = mu_s > 0
     # Where nothing scatters the phase function is never used; an isotropic one keeps the tables valid.
@@ -152,6 +165,11 @@ def _scattering(params: MediumParameters, wavelengths: np.ndarray, host_index: n
     weighted_phase = np.zeros((len(wavelengths), len(cos_theta)))
     for species in params.particles:
         contribution = species_scattering(species, wavelengths, host_index, cos_theta, structure_fraction)
+        mu_s += contribution.mu_s
+        mu_a += contribution.mu_a
+        weighted_phase += contribution.mu_s[:, None] * contribution.phase
+    if params.fibres is not None:
+        contribution = fibre_scattering(params.fibres, params.dye, wavelengths, host_index, cos_theta)
         mu_s += contribution.mu_s
         mu_a += contribution.mu_a
         weighted_phase += contribution.mu_s[:, None] * contribution.phase

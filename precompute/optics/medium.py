@@ -13,11 +13,15 @@ what is allowed; nothing is clamped.
 
 Presets are TOML files in ``precompute/presets``.  The top-level keys ``name``
 and ``description`` and the tables ``[wavelengths]``, ``[host]``,
-``[[particles]]``, ``[dye]``, ``[yarn]`` and ``[medium]`` belong to this
+``[[particles]]``, ``[fibres]``, ``[dye]``, ``[yarn]`` and ``[medium]`` belong to this
 module, which rejects unknown keys in them; ``[transport]`` and ``[bake]``
 belong to the bake and ``[fit]`` (a fitted preset's specular term) to
 :mod:`precompute.fit`, and are ignored here.  Relative file paths in a preset
 resolve next to the TOML file, then in ``precompute/data``.
+
+Issue 43's yarn of fibres: a ``[fibres]`` table (:class:`Fibres`) puts the dye in the fibres and the
+fibres in the host, which for a spun yarn is air (``host.refractive_index = 1``: no refracting yarn
+surface); their optics are :mod:`precompute.optics.fibre`'s.
 """
 
 from __future__ import annotations
@@ -39,6 +43,10 @@ DATA_DIR = pathlib.Path(__file__).resolve().parents[1] / "data"
 DEFAULT_PRESET = "red_cotton"
 #: Densest packing of equal spheres (Kepler, π/√18 ≈ 0.7405): no dispersion of spheres fills more.
 MAX_VOLUME_FRACTION = 0.74
+#: Densest packing of parallel equal cylinders (hexagonal, π/(2√3) ≈ 0.9069): no bundle of fibres fills more.
+MAX_FIBRE_VOLUME_FRACTION = 0.90
+#: Fibre diameters, µm: from fine microfibres to coarse wool and bast fibres.
+FIBRE_DIAMETER_UM = bounds.Bound("fibres.diameter_um", 1.0, 100.0, unit="µm")
 DEPENDENT_SCATTERING_MODELS = ("none", "percus-yevick")
 #: ``medium.phase_samples`` value that lets the optics choose the cos θ grid (the default).
 AUTO_PHASE_SAMPLES = "auto"
@@ -257,6 +265,45 @@ class ParticleSpecies:
 
 
 @dataclass(frozen=True)
+class Fibres:
+    """The fibres a yarn is spun from, in the host (air for a spun yarn: ``host.refractive_index = 1``).
+
+    Attributes
+    ----------
+    refractive_index
+        Absolute index of the fibre material (cellulose ≈ 1.557, §3.2); the dye, when the medium has
+        one, is absorbed inside the fibres (:mod:`precompute.optics.fibre`).
+    diameter_um
+        Fibre diameter, µm (cotton 12–20 µm).
+    volume_fraction
+        Fraction of the yarn volume the fibres fill, in (0, 0.90) (a spun yarn packs 0.4–0.6).
+    cross_section
+        ``"circle"``: the only one modelled so far.
+    absorption_per_mm
+        Grey absorption of the fibre material itself beside the dye, 1/mm.
+    """
+
+    refractive_index: RefractiveIndex
+    diameter_um: float
+    volume_fraction: float
+    cross_section: str = "circle"
+    absorption_per_mm: float = 0.0
+
+    def __post_init__(self):
+        if not isinstance(self.refractive_index, RefractiveIndex):
+            raise ParameterError("fibres.refractive_index", self.refractive_index, "a RefractiveIndex")
+        FIBRE_DIAMETER_UM.check(self.diameter_um)
+        fraction = _finite("fibres.volume_fraction", self.volume_fraction, f"(0, {MAX_FIBRE_VOLUME_FRACTION})")
+        if not 0.0 < fraction < MAX_FIBRE_VOLUME_FRACTION:
+            raise ParameterError("fibres.volume_fraction", self.volume_fraction, f"(0, {MAX_FIBRE_VOLUME_FRACTION})")
+        if self.cross_section != "circle":
+            raise ParameterError("fibres.cross_section", self.cross_section, "'circle'")
+        value = _finite("fibres.absorption_per_mm", self.absorption_per_mm, "a finite number ≥ 0")
+        if value < 0:
+            raise ParameterError("fibres.absorption_per_mm", self.absorption_per_mm, "a finite number ≥ 0")
+
+
+@dataclass(frozen=True)
 class Dye:
     """Dye dissolved in the fiber (§6.2: 1–5 % by weight).
 
@@ -357,6 +404,8 @@ class Host:
 class MediumParameters:
     """Everything that defines a yarn medium; see the module docstring.
 
+    ``fibres``: the yarn's fibres (:class:`Fibres`), or None for the paper's
+    yarn of one host; with fibres the dye is in them, not in the host.
     ``dependent_scattering`` is ``"none"`` (independent scattering, as in the
     paper) or ``"percus-yevick"`` (hard-sphere structure-factor correction, see
     :mod:`precompute.optics.mie`); ``phase_samples`` is ``"auto"`` (the default: the
@@ -369,6 +418,7 @@ class MediumParameters:
     host: Host
     particles: tuple[ParticleSpecies, ...]
     dye: Dye | None = None
+    fibres: Fibres | None = None
     yarn: Yarn = field(default_factory=Yarn)
     wavelengths: WavelengthGrid = field(default_factory=WavelengthGrid)
     dependent_scattering: str = "none"
@@ -388,6 +438,8 @@ class MediumParameters:
             raise ParameterError(
                 "medium.phase_samples", self.phase_samples, f"{AUTO_PHASE_SAMPLES!r} or an integer in [201, 200001]"
             )
+        if self.fibres is not None and not isinstance(self.fibres, Fibres):
+            raise ParameterError("fibres", self.fibres, "a Fibres")
         if not all(isinstance(p, ParticleSpecies) for p in self.particles):
             raise ParameterError("particles", self.particles, "a sequence of ParticleSpecies")
         total = self.total_volume_fraction
@@ -535,7 +587,8 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
     """Build :class:`MediumParameters` from a preset's TOML content; relative file paths resolve in ``base_dir``."""
     _check_keys(
         config,
-        {"name", "description", "wavelengths", "host", "particles", "dye", "yarn", "medium", *_FOREIGN_TABLES},
+        {"name", "description", "wavelengths", "host", "particles", "fibres", "dye", "yarn", "medium",
+         *_FOREIGN_TABLES},
         "preset",
     )
     wavelengths = _table(config, "wavelengths", "")
@@ -589,6 +642,21 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
             mass_absorption_cm2_per_g=epsilon,
             source=path.name,
         )
+    fibres = None
+    if "fibres" in config:
+        spec = _table(config, "fibres", "")
+        _check_keys(spec, {"refractive_index", "diameter_um", "volume_fraction", "cross_section", "absorption_per_mm"},
+                    "fibres")
+        for key in ("refractive_index", "diameter_um", "volume_fraction"):
+            if key not in spec:
+                raise ParameterError(f"fibres.{key}", None, "a value")
+        fibres = Fibres(
+            refractive_index=_index(spec["refractive_index"], "fibres.refractive_index", base_dir),
+            diameter_um=spec["diameter_um"],
+            volume_fraction=spec["volume_fraction"],
+            cross_section=spec.get("cross_section", "circle"),
+            absorption_per_mm=spec.get("absorption_per_mm", 0.0),
+        )
     yarn = _table(config, "yarn", "")
     _check_keys(yarn, {"radius_mm", "cross_section", "semi_axes_mm", "ply_count", "twist_angle_deg"}, "yarn")
     medium = _table(config, "medium", "")
@@ -603,6 +671,7 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
         ),
         particles=tuple(particles),
         dye=dye,
+        fibres=fibres,
         yarn=Yarn(
             radius_mm=yarn.get("radius_mm", 0.1),
             cross_section=yarn.get("cross_section", "circle"),

@@ -1,0 +1,132 @@
+"""Scattering by the fibres of a yarn: absorbing dielectric fibres, the dye inside them (issue 43).
+
+A spun yarn is a bundle of fibres in air (cotton: cellulose, n ≈ 1.53–1.59, 12–20 µm across, 40–60 %
+of the yarn's volume).  Light meets fibre surfaces, each reflecting a few percent *undyed*, and is
+absorbed by the dye only inside a fibre, so the dye is the fibre material's absorption index
+``k(λ) = μ_a(λ) λ / 4π`` (:func:`fibre_index`: the dye's ``μ_a = ε w ρ_f`` of
+:mod:`precompute.optics.dye`, plus the fibre's own grey absorption), not an absorption of the whole
+yarn volume.
+
+Per-fibre scattering, a first physical model, randomly oriented:
+
+* **An equal volume-to-surface sphere as the fibre's proxy**.  A collection of independent spheres
+  with the same volume-to-surface ratio as a non-spherical particle reproduces its extinction,
+  absorption and, closely, its asymmetry parameter (Grenfell & Warren, "Representation of a
+  nonspherical ice particle by a collection of independent spheres for scattering and absorption of
+  radiation", J. Geophys. Res. 104 (D24), 31697 (1999); Neshyba, Grenfell & Warren, JGR 108 (D15),
+  4448 (2003) for hexagonal columns).  For a long circular fibre of diameter ``d``, V/S = d/4, so the
+  proxy's diameter is ``1.5 d`` (:func:`proxy_diameter_nm`), at the fibres' volume fraction: the
+  extinction per volume is then the fibres' mean projected area per volume, ``φ/d`` (Cauchy: S/4V
+  for any convex body), and the mean chord through the proxy, ``4V/S``, the fibre's.
+* **Exact Mie theory of the absorbing proxy** (miepython, complex index), in the host.
+* **The diffraction peak removed**.  For particles much larger than the wavelength, half the Mie
+  extinction is Fraunhofer diffraction into a peak of width ~λ/d about the forward direction (the
+  extinction paradox, van de Hulst 1957, §8.22).  In a densely packed medium the particles lie in
+  each other's near field and that peak does not form: the diffraction is no scattering and is left
+  out (Mishchenko, "Asymmetry parameters of the phase function for densely packed scattering grains",
+  JQSRT 52, 95 (1994); the same in snow's geometric-optics model, Kokhanovsky & Zege, "Scattering
+  optics of snow", Appl. Opt. 43, 1589 (2004)).  Here the Fraunhofer pattern of the proxy's
+  projected disc, ``dC/dΩ = a² x²/4 · [2 J₁(x sin θ)/(x sin θ)]²`` over the forward hemisphere
+  (integral π a² for x ≫ 1), is subtracted from the Mie differential cross-section
+  (:func:`fraunhofer_differential_cross_section`), what would fall below 0 clipped, and what
+  remains is the fibre's reflection and refraction: ``μ_s = N C_geo``, ``μ_a = N C_abs`` with C_abs
+  the Mie absorption.  A ray meeting a fibre then interacts with it, as in geometric optics.
+
+Independent reference: for a strongly absorbing proxy what remains is its external Fresnel
+reflection, ``dC/dΩ = (a²/4) R((π − Θ)/2)`` (van de Hulst 1957, §12.21), in tests/test_fibre_optics.py.
+
+Not yet here: the fibres' orientation along the yarn axis (a direction-dependent phase function:
+the transport's kernel takes one phase function of cos Θ; docs/fitting.md, "Fibres").
+"""
+
+from __future__ import annotations
+
+import math
+
+import miepython
+import numpy as np
+from scipy.special import j1
+
+from precompute.optics.dye import dye_absorption_coefficient
+from precompute.optics.medium import Dye, Fibres
+from precompute.optics.mie import (PHASE_TABLE_TOLERANCE, PhaseGridTooCoarse, SpeciesScattering,
+                                   differential_scattering_cross_section)
+from precompute.optics.phase import normalize_phase, phase_integral
+
+#: The proxy sphere's diameter over the fibre's: equal volume-to-surface ratio (module docstring).
+PROXY_DIAMETER_RATIO = 1.5
+
+
+def proxy_diameter_nm(fibres: Fibres) -> float:
+    """The diameter of the fibre's equal volume-to-surface sphere, nm (module docstring)."""
+    return PROXY_DIAMETER_RATIO * fibres.diameter_um * 1000.0
+
+
+def fibre_absorption_per_mm(fibres: Fibres, dye: Dye | None, wavelengths_nm: np.ndarray) -> np.ndarray:
+    """(L,) absorption coefficient of the fibre material, 1/mm: its grey ``absorption_per_mm`` plus
+    the dye's ``ε w ρ_f`` (:func:`precompute.optics.dye.dye_absorption_coefficient`)."""
+    mu_a = np.full(len(wavelengths_nm), float(fibres.absorption_per_mm))
+    if dye is not None:
+        mu_a += dye_absorption_coefficient(dye, wavelengths_nm)
+    return mu_a
+
+
+def fibre_index(fibres: Fibres, dye: Dye | None, wavelengths_nm: np.ndarray) -> np.ndarray:
+    """(L,) complex index ``n + ik`` of the (dyed) fibre material: ``k = μ_a λ / 4π`` (λ in vacuum)."""
+    wavelengths_nm = np.asarray(wavelengths_nm, float)
+    n = fibres.refractive_index.at(wavelengths_nm)
+    k = fibre_absorption_per_mm(fibres, dye, wavelengths_nm) * wavelengths_nm * 1e-6 / (4.0 * math.pi)
+    return n.real + 1j * (n.imag + k)
+
+
+def fraunhofer_differential_cross_section(radius_nm: float, wavenumber: float, cos_theta: np.ndarray) -> np.ndarray:
+    """``dC/dΩ`` (nm²/sr) of Fraunhofer diffraction by a disc of ``radius_nm`` for light of
+    ``wavenumber`` (1/nm, in the host): ``a² x²/4 · [2 J₁(x sin θ)/(x sin θ)]²``, x = k a, on the
+    forward hemisphere, 0 behind (its integral is π a² for x ≫ 1; Bohren & Huffman 1983, §4.4.3)."""
+    x = wavenumber * radius_nm
+    sin_theta = np.sqrt(np.clip(1.0 - cos_theta**2, 0.0, 1.0))
+    u = x * sin_theta
+    safe = np.where(u > 1e-8, u, 1.0)
+    airy = np.where(u > 1e-8, 2.0 * j1(safe) / safe, 1.0)
+    return np.where(cos_theta > 0.0, radius_nm**2 * x**2 / 4.0 * airy**2, 0.0)
+
+
+def fibre_scattering(fibres: Fibres, dye: Dye | None, wavelengths_nm: np.ndarray, host_index: np.ndarray,
+                     cos_theta: np.ndarray) -> SpeciesScattering:
+    """μs, μa (1/mm) and phase function of the fibres in a host of real index ``host_index`` (L,),
+    on the caller's ``cos_theta`` grid (module docstring: the equal volume-to-surface proxy's Mie
+    scattering with its diffraction peak removed).  Raises :class:`precompute.optics.mie.PhaseGridTooCoarse`
+    when the grid's integral of the Mie cross-section misses it by more than
+    :data:`precompute.optics.mie.PHASE_TABLE_TOLERANCE`, as for any particle (an automatic grid is
+    then refined).  What is left after the diffraction is taken out is ``Q_sca − 1`` only as x → ∞:
+    at finite x the edge terms of the extinction (``Q_ext − 2 ∝ x^(−2/3)``, van de Hulst 1957,
+    §17.2) stay in it."""
+    wavelengths_nm = np.asarray(wavelengths_nm, float)
+    diameter = proxy_diameter_nm(fibres)
+    radius = diameter / 2.0
+    area = math.pi * radius**2
+    density_per_nm3 = fibres.volume_fraction / (math.pi * diameter**3 / 6.0)
+    index = fibre_index(fibres, dye, wavelengths_nm)
+    count = len(wavelengths_nm)
+    mu_s, mu_a = np.zeros(count), np.zeros(count)
+    phase = np.full((count, len(cos_theta)), 1.0 / (4.0 * math.pi))
+    for i, (wavelength, n_host, n_fibre) in enumerate(zip(wavelengths_nm, host_index, index)):
+        m = complex(n_fibre.real, -n_fibre.imag)  # miepython writes an absorbing index n − ik
+        qext, qsca, _, _ = miepython.efficiencies(m, diameter, wavelength, n_env=n_host)
+        wavenumber = 2.0 * math.pi * n_host / wavelength
+        mie = differential_scattering_cross_section(m / n_host, wavenumber * radius, wavenumber, cos_theta)
+        miss = abs(float(phase_integral(cos_theta, mie)) / (qsca * area) - 1.0)
+        if miss > PHASE_TABLE_TOLERANCE:
+            raise PhaseGridTooCoarse(len(cos_theta), f"a finer cos θ grid (or \"auto\"): the fibres' Mie "
+                                     f"cross-section at {wavelength:g} nm is missed by {miss:.1e}", miss)
+        geometric = np.clip(mie - fraunhofer_differential_cross_section(radius, wavenumber, cos_theta), 0.0, None)
+        c_geometric = float(phase_integral(cos_theta, geometric))
+        mu_s[i] = density_per_nm3 * c_geometric * 1e6
+        mu_a[i] = density_per_nm3 * max(qext - qsca, 0.0) * area * 1e6
+        if c_geometric > 0.0:
+            phase[i] = normalize_phase(cos_theta, geometric)
+    return SpeciesScattering(mu_s=mu_s, mu_a=mu_a, phase=phase, number_density_per_um3=density_per_nm3 * 1e9)
+
+
+__all__ = ["PROXY_DIAMETER_RATIO", "fibre_absorption_per_mm", "fibre_index",
+           "fibre_scattering", "fraunhofer_differential_cross_section", "proxy_diameter_nm"]

@@ -72,8 +72,18 @@ def simulate_slab(medium: TransportMedium, thickness_mm: float, index: float, *,
     n_wl = len(medium.wavelengths_nm)
     sums = np.zeros((SLAB_TASKS, SLAB_TALLY_ROWS, n_wl))
     events = np.zeros(SLAB_TASKS, dtype=np.int64)
-    with numba_threads(thread_count(threads)):
-        _kernels.slab_kernel(counts, seed, thickness_mm, index, medium.kernel(), sums, events)
+    threads = thread_count(threads)
+    # One task per thread a call, the others given no paths: between calls a Ctrl-C stops the run.
+    # A task's tallies depend on its stream (seed, task) and its paths only, so the result is the
+    # one call's bit for bit.
+    batch_counts, batch_sums, batch_events = np.zeros_like(counts), np.zeros_like(sums), np.zeros_like(events)
+    with numba_threads(threads):
+        for first in range(0, SLAB_TASKS, threads):
+            batch = slice(first, first + threads)
+            batch_counts[:] = 0
+            batch_counts[batch] = counts[batch]
+            _kernels.slab_kernel(batch_counts, seed, thickness_mm, index, medium.kernel(), batch_sums, batch_events)
+            sums[batch], events[batch] = batch_sums[batch], batch_events[batch]
     results = np.empty((len(SLAB_RESULTS), n_wl))
     _kernels.slab_results(sums, paths, index, results)
     rows = dict(zip(SLAB_RESULTS, results))

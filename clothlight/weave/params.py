@@ -199,6 +199,14 @@ class WeaveParameters:
                                    self.crimp_amplitudes_mm).min())
 
     @property
+    def cover_factor(self) -> float:
+        """Fractional cover of the cloth seen from above, 0–1: each system covers the share 2a/p
+        of the cloth (a the yarn's half-width, p the spacing), and the two together
+        1 − (1 − 2a/p)² (Peirce 1937; :mod:`.closeup` compares it with real sheeting)."""
+        share = 2.0 * self.cross_section_mm[0] / self.spacing_mm
+        return 1.0 - (1.0 - share) ** 2
+
+    @property
     def sample_size_mm(self) -> tuple[float, float]:
         """Extent of the sample along x (the warp direction) and y (the weft direction), mm."""
         return self.weft_count * self.spacing_mm, self.warp_count * self.spacing_mm

@@ -87,9 +87,13 @@ def main(argv=None) -> int:
             if r["ended_first"]:
                 print(f"| {name} | {moment:g} s | {r['exit']} (ended first) | | {', '.join(r['left']) or '–'} | |")
                 continue
-            bad = r["exit"] != 130 or r["left"] or r["traceback"] or r["seconds_to_exit"] > 10
+            # Killed by the signal itself (-2): Python restores SIGINT's default while it finalises,
+            # so a Ctrl-C in the last moments of an exit ends the process as the signal does; a shell
+            # reports that as 130 too.
+            code = "130 (signal)" if r["exit"] == -signal.SIGINT else r["exit"]
+            bad = code not in (130, "130 (signal)") or r["left"] or r["traceback"] or r["seconds_to_exit"] > 10
             failures += bool(bad)
-            print(f"| {name} | {moment:g} s | {r['exit']} | {r['seconds_to_exit']:.1f} | "
+            print(f"| {name} | {moment:g} s | {code} | {r['seconds_to_exit']:.1f} | "
                   f"{', '.join(r['left']) or '–'} | {r['last_line']}{' **FAILS**' if bad else ''} |", flush=True)
     print(f"\n{failures} interrupted run(s) failed the rule (exit 130 within 10 s, nothing left, no traceback)")
     return 1 if failures else 0

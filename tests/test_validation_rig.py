@@ -246,8 +246,10 @@ def test_the_whole_sweep_writes_calibrated_results_plots_and_report(tmp_path, co
     settings = RigSettings(incidences_deg=(0.0, 60.0), views_deg=(-60.0, 0.0, 60.0), resolution=16, samples=1)
     calls = []
     results = run_validation(None, tmp_path, tables_dir=constant_bake, measured_csv=SYNTHETIC_CSV, settings=settings,
-                             progress=lambda done, total, what: calls.append((done, total)))
-    assert calls == [(k, 16) for k in range(1, 17)]  # 2 materials × (6 views + 2 swatches)
+                             progress=lambda done, total, what: calls.append((done, total, what)))
+    # 2 materials × (6 views + 2 swatches), then the report, written before the folder is swapped in
+    assert [call[:2] for call in calls] == [(k, 16) for k in range(1, 17)] + [(16, 16)]
+    assert calls[-1][2] == "report written"
     on_disk = json.loads((tmp_path / "results.json").read_text())
     measured_sum = sum(next(p for p in on_disk["measurement"]["in_plane"]["0"] if p[0] == 0.0)[1:])  # θi = θv = 0
     patch = on_disk["settings"]["patch_mm"]

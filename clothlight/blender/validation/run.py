@@ -212,6 +212,9 @@ class ValidationRun:
             seconds[kind] = time.perf_counter() - material_start
         self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
         self.results["files"] = write_report(self.results, self._folder)
+        # A last step before the folder is swapped in: a stop asked for while the report was written
+        # still leaves nothing.
+        yield Progress(done, self.total, "report written")
 
     def _render_path(self, kind: str, theta_i: float = 0.0, theta_v: float = 0.0, swatch: str | None = None):
         name = f"swatch_{swatch}.exr" if swatch else f"i{theta_i:+05.1f}_v{theta_v:+05.1f}.exr"
@@ -305,6 +308,10 @@ class ValidationRun:
                 swatches = {kind: self._swatch_entries(kind, images[kind]) for kind in self.materials if images[kind]}
                 self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
                 self.results["files"] = write_report(self.results, self._folder)
+                if progress is not None:  # as steps(): a stop asked for now still leaves nothing
+                    progress(self.total, self.total, "report written")
+                if cancel is not None and cancel():
+                    raise ValidationCancelled("validation cancelled; nothing was written")
         finally:
             self._folder = self.out_dir
             rig.remove()

@@ -42,7 +42,8 @@ from ..medium_settings import (
 )
 from . import running_jobs
 from ..weave import BUILT_IN, WeaveParameterError, WeaveParameters
-from ..weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM
+from ..weave.closeup import FLYAWAY_BOUNDS, CloseupSettings
+from ..weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM, IRREGULARITY_BOUNDS
 
 from precompute.optics import medium as _medium
 #: The allowed ranges, one definition shared with the bake's API and command line (precompute/bounds.py).
@@ -50,6 +51,7 @@ from precompute import bounds as _bounds
 from precompute.errors import ParameterError
 
 _WEAVE = WeaveParameters()
+_CLOSEUP = CloseupSettings()
 _REQUEST = preset_request(_medium.DEFAULT_PRESET)
 
 PATTERN_LABELS = {
@@ -148,6 +150,41 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
     segments_around: IntProperty(
         name="Segments Around", default=_WEAVE.segments_around, **COUNT_BOUNDS["segments_around"].limits(), soft_max=48,
         description="Mesh segments around a yarn's cross-section")
+    use_plies: BoolProperty(
+        name="Plies and Twist", default=False,
+        description="Yarns made of the Base Medium's plies (its yarn.ply_count) twisted about the yarn axis at its "
+                    "twist angle (yarn.twist_angle_deg), the one twist of the preset; off: smooth tubes")
+    spacing_jitter: FloatProperty(
+        name="Spacing Jitter", default=0.0, **IRREGULARITY_BOUNDS["spacing_jitter"].limits(), soft_max=0.1,
+        precision=3, step=1, subtype="FACTOR",
+        description="Seeded irregularity: every yarn moves across the cloth by up to this fraction of the spacing "
+                    f"(the Cotton Sheeting Close-Up preset: {_CLOSEUP.spacing_jitter:g})")
+    height_jitter: FloatProperty(
+        name="Height Jitter", default=0.0, **IRREGULARITY_BOUNDS["height_jitter"].limits(), soft_max=0.5,
+        precision=3, step=1, subtype="FACTOR",
+        description="Seeded irregularity: every crossing moves up or down by up to this fraction of the yarn's "
+                    f"half-thickness (the Cotton Sheeting Close-Up preset: {_CLOSEUP.height_jitter:g})")
+    ply_radius_jitter: FloatProperty(
+        name="Ply Radius Jitter", default=0.0, **IRREGULARITY_BOUNDS["ply_radius_jitter"].limits(), soft_max=0.5,
+        precision=3, step=1, subtype="FACTOR",
+        description="Seeded irregularity: every ply is thinner at each crossing by up to this fraction of its "
+                    f"radius (the Cotton Sheeting Close-Up preset: {_CLOSEUP.ply_radius_jitter:g})")
+    irregularity_seed: IntProperty(
+        name="Seed", default=_CLOSEUP.seed, min=0, max=2**31 - 1,
+        description="Seed of the irregularity and the flyaway fibres: the same seed builds the same sample")
+    flyaway_density_per_mm: FloatProperty(
+        name="Fibres per mm", default=_CLOSEUP.flyaway_density_per_mm,
+        **FLYAWAY_BOUNDS["flyaway_density_per_mm"].limits(), soft_max=30.0, precision=1,
+        description="Flyaway fibres leaving each millimetre of yarn (Uster hairiness H = 5 of a carded cotton "
+                    "with 0.5 mm fibres is 10)")
+    flyaway_length_mm: FloatProperty(
+        name="Fibre Length (mm)", default=_CLOSEUP.flyaway_length_mm, min=0.001,
+        max=FLYAWAY_BOUNDS["flyaway_length_mm"].high, soft_max=3.0, precision=2, step=1,
+        description="Mean length of a flyaway fibre, in millimetres (lengths are exponential, as measured)")
+    flyaway_curl_per_mm: FloatProperty(
+        name="Fibre Curl (rad/mm)", default=_CLOSEUP.flyaway_curl_per_mm,
+        **FLYAWAY_BOUNDS["flyaway_curl_per_mm"].limits(), soft_max=10.0, precision=1,
+        description="How much a flyaway fibre bends: the rms turn of its path per millimetre, in radians")
     real_world_size: BoolProperty(
         name="Real-World Size", default=True,
         description="Scale the sample to its physical size in the scene's units (a 0.5 mm spacing measures "
@@ -169,10 +206,28 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
         shape = ({"yarn_radius_mm": typed_number(self.yarn_radius_mm)} if self.cross_section == "ROUND"
                  else {"semi_axes_mm": (typed_number(self.half_width_mm), typed_number(self.half_thickness_mm))})
         crimp = None if self.auto_crimp else (typed_number(self.crimp_warp_mm), typed_number(self.crimp_weft_mm))
+        plies, twist = self.medium_plies() if self.use_plies else (1, 0.0)
         return WeaveParameters(
             interlacing=self.interlacing(), warp_count=self.warp_count, weft_count=self.weft_count,
             spacing_mm=typed_number(self.spacing_mm), crimp_amplitude_mm=crimp,
-            segments_per_crossing=self.segments_per_crossing, segments_around=self.segments_around, **shape)
+            segments_per_crossing=self.segments_per_crossing, segments_around=self.segments_around,
+            ply_count=plies, twist_angle_deg=typed_number(twist), spacing_jitter=typed_number(self.spacing_jitter),
+            height_jitter=typed_number(self.height_jitter), ply_radius_jitter=typed_number(self.ply_radius_jitter),
+            seed=self.irregularity_seed, **shape)
+
+    def medium_plies(self) -> tuple[int, float]:
+        """The plies and twist angle (degrees) of the scene's Base Medium preset (``[yarn]``)."""
+        yarn = preset_config(self.id_data.clothlight.medium.base).get("yarn", {})
+        return int(yarn.get("ply_count", 1)), float(yarn.get("twist_angle_deg", 0.0))
+
+    def closeup_settings(self) -> CloseupSettings:
+        """The flyaway fibres' and the irregularity's settings as the close-up core takes them."""
+        return CloseupSettings(
+            spacing_jitter=typed_number(self.spacing_jitter), height_jitter=typed_number(self.height_jitter),
+            ply_radius_jitter=typed_number(self.ply_radius_jitter),
+            flyaway_density_per_mm=typed_number(self.flyaway_density_per_mm),
+            flyaway_length_mm=typed_number(self.flyaway_length_mm),
+            flyaway_curl_per_mm=typed_number(self.flyaway_curl_per_mm), seed=self.irregularity_seed)
 
     @property
     def yarn_thickness_mm(self) -> float:

@@ -77,6 +77,19 @@ def weave_record(params: WeaveParameters) -> dict:
     return record
 
 
+def weave_from_record(record) -> WeaveParameters:
+    """The parameters a sample was built from, read back from its :func:`weave_record` (a dict or
+    the object's ID property)."""
+    record = record.to_dict() if hasattr(record, "to_dict") else dict(record)
+    closeup = {key: record[key] for key in ("ply_count", "twist_angle_deg", "spacing_jitter", "height_jitter",
+                                            "ply_radius_jitter", "seed") if key in record}
+    return WeaveParameters(
+        interlacing=np.array(record["interlacing"], dtype=bool), warp_count=record["warp_count"],
+        weft_count=record["weft_count"], spacing_mm=record["spacing_mm"],
+        semi_axes_mm=tuple(record["semi_axes_mm"]), crimp_amplitude_mm=tuple(record["crimp_amplitude_mm"]),
+        segments_per_crossing=record["segments_per_crossing"], segments_around=record["segments_around"], **closeup)
+
+
 def build_sample_object(params: WeaveParameters = WeaveParameters(), name: str = DEFAULT_NAME,
                         collection=None) -> bpy.types.Object:
     """Create the sample object ``name`` in ``collection`` (default: the scene's), or, if a

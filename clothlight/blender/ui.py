@@ -10,6 +10,7 @@ from __future__ import annotations
 import bpy
 
 from . import operators, running_jobs
+from .closeup_operator import CLOTHLIGHT_OT_add_flyaways
 from ..fit_job import fit_unavailable_reason
 from ..jobs import bake_unavailable_reason
 from ..prebaked import prebaked_tables
@@ -81,6 +82,33 @@ class CLOTHLIGHT_PT_sample(_SidebarPanel, bpy.types.Panel):
         rebuild = operators.is_sample(context.active_object)
         layout.operator("clothlight.build_sample", text="Rebuild Sample" if rebuild else "Build Sample",
                         icon="FILE_REFRESH" if rebuild else "MESH_GRID")
+
+
+class CLOTHLIGHT_PT_closeup(_SidebarPanel, bpy.types.Panel):
+    bl_label = "Close-Up"
+    bl_parent_id = "CLOTHLIGHT_PT_sample"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        weave = context.scene.clothlight.weave
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(weave, "use_plies")
+        if weave.use_plies:
+            plies, twist = weave.medium_plies()
+            layout.label(text=f"{plies} plies at {twist:g}° ({context.scene.clothlight.medium.base})", icon="INFO")
+        col = layout.column(align=True)
+        col.prop(weave, "spacing_jitter")
+        col.prop(weave, "height_jitter")
+        col.prop(weave, "ply_radius_jitter")
+        layout.prop(weave, "irregularity_seed")
+        col = layout.column(align=True)
+        col.prop(weave, "flyaway_density_per_mm")
+        col.prop(weave, "flyaway_length_mm")
+        col.prop(weave, "flyaway_curl_per_mm")
+        if CLOTHLIGHT_OT_add_flyaways.is_registered:
+            layout.operator(CLOTHLIGHT_OT_add_flyaways.bl_idname, icon="CURVES")
 
 
 class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
@@ -310,6 +338,7 @@ class CLOTHLIGHT_PT_material_properties(bpy.types.Panel):
 CLASSES = (
     CLOTHLIGHT_PT_main,
     CLOTHLIGHT_PT_sample,
+    CLOTHLIGHT_PT_closeup,
     CLOTHLIGHT_PT_medium,
     CLOTHLIGHT_PT_bake_settings,
     CLOTHLIGHT_PT_bake_grids,

@@ -1,0 +1,56 @@
+"""The close-up's operator: flyaway fibres grown on the active woven sample (issue 46).
+
+Add Flyaway Fibres reads the active sample's own weave (what it was built from, its
+``clothlight_weave`` record), the Weave panel's fibre settings and the Base Medium preset (the
+fibres' dye, material and radius), and builds the fibres as a child of the sample
+(:mod:`.flyaway_object`), replacing the ones it had.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from precompute.errors import ParameterError
+
+from .sample_object import WEAVE_PROPERTY, weave_from_record
+
+
+def _is_sample(obj) -> bool:
+    return obj is not None and obj.type == "MESH" and WEAVE_PROPERTY in obj
+
+
+class CLOTHLIGHT_OT_add_flyaways(bpy.types.Operator):
+    """Grow flyaway fibres on the active woven sample (rebuilt in place), dyed as the Base Medium"""
+
+    bl_idname = "clothlight.add_flyaways"
+    bl_label = "Add Flyaway Fibres"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.mode != "OBJECT":
+            cls.poll_message_set("Switch to Object Mode")
+            return False
+        if not _is_sample(context.active_object):
+            cls.poll_message_set("Select a ClothLight sample (Build Sample makes one)")
+            return False
+        return True
+
+    def execute(self, context):
+        # imported here: the fibres' colour needs colour-science, which enabling the add-on must not import
+        from .flyaway_object import build_flyaway_object
+
+        settings = context.scene.clothlight
+        sample = context.active_object
+        try:
+            params = weave_from_record(sample[WEAVE_PROPERTY])
+            fibres = build_flyaway_object(sample, params, settings.weave.closeup_settings(), settings.medium.base)
+        except ParameterError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        count = 0 if fibres is None else len(fibres.data.curves)
+        self.report({"INFO"}, f"{sample.name}: {count} flyaway fibres of {settings.medium.base}")
+        return {"FINISHED"}
+
+
+CLASSES = (CLOTHLIGHT_OT_add_flyaways,)

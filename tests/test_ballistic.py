@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from precompute.errors import ParameterError
 from precompute.optics import ballistic
 from precompute.tables.grids import AngularGrid
 from precompute.tables.layout import interpolate_attenuation, interpolate_unscattered_rho
@@ -30,6 +31,20 @@ def test_a_normal_exit_comes_straight_through_or_back_after_one_reflection():
     np.testing.assert_allclose(length, 2.0 * np.arange(1, ballistic.ORDERS + 1))
     f = ((INDEX - 1) / (INDEX + 1)) ** 2
     np.testing.assert_allclose(fresnel, (1 - f) ** 2 * f ** np.arange(ballistic.ORDERS))
+
+
+def test_a_yarn_of_fibres_in_air_lets_its_unscattered_light_straight_through():
+    # boundary index 1 (issue 43's host of air): no refraction, no reflection inside, the chord's length
+    rng = np.random.default_rng(5)
+    wo = unit(rng.normal(size=(100, 3)))
+    wo[:, 2] = np.abs(wo[:, 2])
+    wo[0] = [0.0, 1.0, 0.0]  # grazing, where Fresnel's formula is 0/0
+    wi, fresnel, length = ballistic.unscattered_paths(wo, 1.0)
+    np.testing.assert_allclose(wi[:, 0], -wo, atol=1e-9)
+    np.testing.assert_array_equal(fresnel, np.repeat([[1.0] + [0.0] * (ballistic.ORDERS - 1)], len(wo), axis=0))
+    np.testing.assert_allclose(length[:, 0], 2.0 * wo[:, 2] / (1.0 - wo[:, 0] ** 2), atol=1e-12)
+    with pytest.raises(ParameterError, match="≥ 1"):
+        ballistic.unscattered_paths(wo, 0.9)
 
 
 @pytest.mark.parametrize("seed", range(3))

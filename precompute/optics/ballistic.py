@@ -63,8 +63,11 @@ CONE_CUTOFF = 14.0
 
 
 def _fresnel(cos_i: np.ndarray, eta: float) -> np.ndarray:
-    """Unpolarised Fresnel reflectance from outside (index 1) into index ``eta`` at cosine ``cos_i``."""
+    """Unpolarised Fresnel reflectance from outside (index 1) into index ``eta`` at cosine ``cos_i``
+    (0 for ``eta`` = 1, where the formula is 0/0 at grazing)."""
     c = np.clip(cos_i, 0.0, 1.0)
+    if eta == 1.0:
+        return np.zeros_like(c)
     cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - c * c) / (eta * eta)))
     rs = (c - eta * cos_t) / (c + eta * cos_t)
     rp = (eta * c - cos_t) / (eta * c + cos_t)
@@ -79,7 +82,8 @@ def unscattered_paths(wo, index: float, orders: int = ORDERS):
     wo
         Exit directions (…, 3), unit, yarn frame, z ≥ 0.
     index
-        Boundary index of the yarn (host), outside index 1.
+        Boundary index of the yarn (host), outside index 1; 1 for a yarn of fibres in air, whose
+        unscattered light crosses it straight, with no reflection inside (one path of weight 1).
     orders
         Paths per direction: k = 0 … orders − 1 internal reflections.
 
@@ -92,8 +96,8 @@ def unscattered_paths(wo, index: float, orders: int = ORDERS):
     length_over_radius : (…, orders)
         The path's length inside the yarn divided by the yarn radius.
     """
-    if not np.isfinite(index) or index <= 1.0:
-        raise ParameterError("index", index, "a boundary index > 1")
+    if not np.isfinite(index) or index < 1.0:
+        raise ParameterError("index", index, "a boundary index ≥ 1")
     if int(orders) < 1:
         raise ParameterError("orders", orders, "an integer ≥ 1")
     wo = np.asarray(wo, float)

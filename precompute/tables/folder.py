@@ -323,7 +323,10 @@ def check_output_folder(out: str | pathlib.Path, names: Iterable[str], option: s
                                                    f"only (this one also holds {shown}, which a new {job} would "
                                                    "remove)")
     place = existing_place(out.parent)
-    if not place.is_dir() or not can_create_in(place):
+    if not place.is_dir():
+        raise ParameterError(option, str(out), f"a folder to write the {job} into (its parent {place} is a file, "
+                                               "not a folder)")
+    if not can_create_in(place):
         raise ParameterError(option, str(out), f"a folder in a writable place ({place} is not writable)")
     return out
 

@@ -4,8 +4,9 @@
 2. The Monte-Carlo bake of its yarn BRDF tables (cached: a second run is instant).
 3. Plots of the baked tables (in-plane curves, exit maps, albedo spectra, colour swatches).
 4. The virtual gonioreflectometer in Blender: the woven sample under the paper's sweep (θi = 0, 30,
-   45, 60°; θv = −60 … 70°), the yarn material against the paper's baseline and the shipped
-   synthetic example measurement, with plots, JSON and a Markdown report.
+   45, 60°; θv = −60 … 70°), the yarn material against the paper's baseline and a real fabric,
+   MERL's red-fabric2 (the raw measurement through its neural fit, shipped with its licence:
+   clothlight/validation/data/README.md), with plots, JSON and a Markdown report.
 
 Each step runs the same public command a user would type; the script stops at the first failure
 and finally prints where every output is.
@@ -23,8 +24,8 @@ import sys
 import time
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
-#: The shipped example measurement is synthetic (see scripts/make_synthetic_measurement.py).
-SYNTHETIC_MEASUREMENT = REPO_ROOT / "clothlight" / "validation" / "data" / "synthetic_red_cotton.csv"
+#: The real fabric the default is fitted to (clothlight/validation/data/README.md).
+MEASURED_FABRIC = REPO_ROOT / "clothlight" / "validation" / "data" / "merl_red_fabric2.csv"
 
 
 def step(title: str, command: list[str]) -> str:
@@ -53,7 +54,7 @@ def main() -> None:
                                        "--out", str(out / "bake"), "--json"]))
     step("3. table plots", [python, "-m", "precompute", "plot", bake["brdf_table"], "--out", str(out / "plots")])
     step("4. validation sweep", [python, "-m", "clothlight.validate", "--tables", str(out / "bake"),
-                                 "--measured", str(SYNTHETIC_MEASUREMENT), "--out", str(out / "validation")])
+                                 "--measured", str(MEASURED_FABRIC), "--out", str(out / "validation")])
 
     print("\n== outputs ==")
     for path in sorted(p for p in out.rglob("*") if p.is_file() and "renders" not in p.parts):

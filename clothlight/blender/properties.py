@@ -184,7 +184,7 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
     flyaway_curl_per_mm: FloatProperty(
         name="Fibre Curl (rad/mm)", default=_CLOSEUP.flyaway_curl_per_mm,
         **FLYAWAY_BOUNDS["flyaway_curl_per_mm"].limits(), soft_max=10.0, precision=1,
-        description="How much a flyaway fibre bends: the rms turn of its path per millimetre, in radians")
+        description="How much a flyaway fibre bends: the rms curvature of its path, in radians per millimetre")
     real_world_size: BoolProperty(
         name="Real-World Size", default=True,
         description="Scale the sample to its physical size in the scene's units (a 0.5 mm spacing measures "

@@ -9,7 +9,7 @@ close-up geometry needs is the preset's ``[closeup]`` table, every key optional:
     the seeded irregularity (:mod:`.irregularity`), fractions;
 ``flyaway_density_per_mm``, ``flyaway_length_mm``, ``flyaway_curl_per_mm``
     the flyaway fibres (:mod:`.flyaways`): fibres leaving 1 mm of yarn, their mean length, the
-    rms bend of their path per mm (their radius and colour are the medium's fibres',
+    rms curvature of their path in rad/mm (their radius and colour are the medium's fibres',
     :mod:`.fibre_optics`);
 ``seed``
     the seed of both.
@@ -21,8 +21,8 @@ Defaults, for a carded ring-spun cotton:
   protruding fibres falls off exponentially with their length below 3 mm (A. Barella and A. M.
   Manich, "The hair-length distribution of yarns, measured by means of the Zweigle G 565
   hairiness meter", J. Textile Inst. 84(3), 326–335, 1993).  H = 5 with a mean length of 0.5 mm
-  is 10 fibres per mm of yarn.  The curl is an
-  appearance setting, not a published figure: 2 rad/mm bends a 0.5 mm fibre by about a radian.
+  is 10 fibres per mm of yarn.  The curl is an appearance setting, not a published figure: an rms
+  curvature of 5 rad/mm (a radius of 0.2 mm) kinks a 0.5 mm fibre by about a radian in all.
 - Evenness.  A ring-spun cotton yarn's mass per length varies by a CV of 12–18 % (USTER
   STATISTICS): plies thinner by up to 15 %; the yarns by up to 3 % of the spacing from their
   places, the crossings by up to 15 % of the yarn's half-thickness from their heights.
@@ -76,7 +76,7 @@ class CloseupSettings:
     ply_radius_jitter: float = 0.15
     flyaway_density_per_mm: float = 10.0
     flyaway_length_mm: float = 0.5
-    flyaway_curl_per_mm: float = 2.0
+    flyaway_curl_per_mm: float = 5.0
     seed: int = 0
 
     def __post_init__(self):

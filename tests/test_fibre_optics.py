@@ -115,3 +115,14 @@ def test_the_fibres_table_is_checked():
                                 ("colour", 1, "one of the keys")):
         with pytest.raises(ParameterError, match=allowed):
             medium_from_dict({**config, "fibres": {**config["fibres"], key: value}}, base)
+
+
+def test_a_boundary_of_air_reflects_no_sheen_and_stays_finite_at_grazing():
+    from precompute.optics.cook_torrance import cook_torrance
+
+    rng = np.random.default_rng(2)
+    light, view = (v / np.linalg.norm(v, axis=-1, keepdims=True) for v in rng.normal(size=(2, 500, 3)))
+    light[:, 2], view[:, 2] = np.abs(light[:, 2]), np.abs(view[:, 2])
+    view[0] = -light[0]  # lit from straight behind the view (the back-lit swatch): no half vector, c = 0
+    assert np.all(cook_torrance(light, view, 0.3, 1.0) == 0.0)
+    assert np.all(np.isfinite(cook_torrance(light, view, 0.3, 1.557)))

@@ -90,7 +90,10 @@ def cook_torrance(light, view, m: float = DEFAULT_SLOPE, n: float = DEFAULT_IOR)
     d = np.exp(-tan2 / (m * m)) / (math.pi * m * m * nh**4)
     g_att = 1.0 / (1.0 + _smith_lambda(nv, m) + _smith_lambda(nl, m))
     g = np.sqrt(n * n - 1.0 + c * c)
-    f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1.0 + (c * (g + c) - 1.0) ** 2 / (c * (g - c) + 1.0) ** 2)
+    # n = 1 (a yarn of fibres in air) reflects nothing; the formula is 0/0 where c = 0 (light and view
+    # opposite: the swatch lit from behind, masked below)
+    g_plus_c = np.where(g + c > 0.0, g + c, 1.0)
+    f = 0.5 * (g - c) ** 2 / g_plus_c**2 * (1.0 + (c * (g + c) - 1.0) ** 2 / (c * (g - c) + 1.0) ** 2)
     safe = np.where(above, 4.0 * nl * nv, 1.0)
     return np.where(above, f * d * g_att / safe, 0.0)
 

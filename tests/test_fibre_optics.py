@@ -12,19 +12,13 @@ from precompute.optics.fibre import (
     fibre_index,
     fibre_scattering,
     fraunhofer_differential_cross_section,
+    fresnel_reflectance,
     proxy_diameter_nm,
+    reflection_differential_cross_section,
 )
 from precompute.optics.medium import Fibres, RefractiveIndex, load_preset_config, medium_from_dict
-from precompute.optics.phase import angle_cos_theta_grid, phase_integral
-
-
-def fresnel_unpolarised(cos_i: np.ndarray, n: float) -> np.ndarray:
-    """Unpolarised Fresnel reflectance from air onto a dielectric of index n (Born & Wolf §1.5.3)."""
-    sin_t = np.sqrt(1.0 - cos_i**2) / n
-    cos_t = np.sqrt(1.0 - sin_t**2)
-    r_s = (cos_i - n * cos_t) / (cos_i + n * cos_t)
-    r_p = (n * cos_i - cos_t) / (n * cos_i + cos_t)
-    return 0.5 * (r_s**2 + r_p**2)
+from precompute.optics.mie import differential_scattering_cross_section
+from precompute.optics.phase import angle_cos_theta_grid, asymmetry_parameter, phase_integral
 
 
 def opaque_fibre(diameter_um=20.0, wavelength_nm=600.0, k=0.01):
@@ -34,27 +28,49 @@ def opaque_fibre(diameter_um=20.0, wavelength_nm=600.0, k=0.01):
     return Fibres(RefractiveIndex(1.557), diameter_um, 0.5, absorption_per_mm=absorption_per_mm)
 
 
-def test_an_opaque_fibre_scatters_its_fresnel_reflection_as_geometric_optics_says():
+def test_the_reflection_law_of_the_phase_function_is_exact_mie_of_an_opaque_sphere():
+    # van de Hulst §12.21's specular sphere, (a²/4) R((π − Θ)/2), against miepython's exact series for a
+    # sphere that absorbs all it lets in, behind it (no diffraction there, no light through)
     fibres, wavelength = opaque_fibre(), 600.0
-    cos_theta = angle_cos_theta_grid(20001)
-    result = fibre_scattering(fibres, None, np.array([wavelength]), np.array([1.0]), cos_theta)
-    density_per_nm3 = result.number_density_per_um3 * 1e-9
-    differential = result.phase[0] * result.mu_s[0] / (density_per_nm3 * 1e6)  # dC/dΩ, nm²/sr
     radius = proxy_diameter_nm(fibres) / 2.0
-    # van de Hulst 1957 §12.21: a specular sphere reflects dC/dΩ = (a²/4) R(i), i = (π − Θ)/2.
+    wavenumber = 2.0 * math.pi / wavelength
+    cos_theta = angle_cos_theta_grid(20001)
+    m = complex(fibre_index(fibres, None, np.array([wavelength]))[0].conjugate())
+    mie = differential_scattering_cross_section(m, wavenumber * radius, wavenumber, cos_theta)
+    law = reflection_differential_cross_section(radius, 1.557, cos_theta)
     theta = np.arccos(cos_theta)
-    expected = radius**2 / 4.0 * fresnel_unpolarised(np.cos((math.pi - theta) / 2.0), 1.557)
-    for low, high in ((100, 120), (120, 140), (140, 160), (160, 175)):  # behind: no diffraction, no refraction
+    for low, high in ((100, 120), (120, 140), (140, 160), (160, 175)):
         band = (theta >= math.radians(low)) & (theta <= math.radians(high))
-        ratio = phase_integral(cos_theta[band], differential[band]) / phase_integral(cos_theta[band], expected[band])
+        ratio = phase_integral(cos_theta[band], mie[band]) / phase_integral(cos_theta[band], law[band])
         assert ratio == pytest.approx(1.0, abs=0.06), (low, high)
+
+
+def test_the_fibres_phase_function_is_their_reflection_behind_and_keeps_the_mie_mean_cosine():
+    fibres = Fibres(RefractiveIndex(1.557), 15.0, 0.5)
+    cos_theta = angle_cos_theta_grid(20001)
+    result = fibre_scattering(fibres, None, np.array([550.0]), np.array([1.0]), cos_theta)
+    c_geometric = result.mu_s[0] / (result.number_density_per_um3 * 1e-9 * 1e6)
+    radius = proxy_diameter_nm(fibres) / 2.0
+    law = reflection_differential_cross_section(radius, 1.557, cos_theta)
+    assert np.all(result.phase[0] * c_geometric >= law * (1.0 - 1e-9))  # the reflection, undyed, is all in it
+    m = complex(1.557, 0.0)
+    wavenumber = 2.0 * math.pi / 550.0
+    mie = differential_scattering_cross_section(m, wavenumber * radius, wavenumber, cos_theta)
+    geometric = np.clip(mie - fraunhofer_differential_cross_section(radius, wavenumber, cos_theta), 0.0, None)
+    # no glory: the sphere's focusing back toward the source (within 5° of it) is gone
+    glory, near = cos_theta < math.cos(math.radians(175.0)), (cos_theta > -0.985) & (cos_theta < -0.94)
+    assert geometric[glory].mean() > 2.0 * geometric[near].mean()
+    assert result.phase[0, glory].mean() < 1.1 * result.phase[0, near].mean()
+    # the mean cosine is the proxy's Mie one less its diffraction
+    g_mie = asymmetry_parameter(cos_theta, geometric / phase_integral(cos_theta, geometric))
+    assert asymmetry_parameter(cos_theta, result.phase[0]) == pytest.approx(g_mie, abs=1e-3)
 
 
 def test_an_opaque_fibre_absorbs_what_its_surface_does_not_reflect_as_x_grows():
     # geometric optics: C_abs = πa² (1 − R̄), R̄ the sphere's hemispherical Fresnel reflectance; Mie
     # approaches it as the edge terms (∝ x^(-2/3), van de Hulst §17.2) fade
     cos_i = np.linspace(0.0, 1.0, 20001)
-    mean_reflectance = np.trapz(fresnel_unpolarised(cos_i, 1.557) * 2.0 * cos_i, cos_i)
+    mean_reflectance = np.trapz(fresnel_reflectance(cos_i, 1.557) * 2.0 * cos_i, cos_i)
     misses = []
     for diameter_um in (20.0, 80.0):  # proxy size parameters 157 and 628 at 600 nm
         fibres = opaque_fibre(diameter_um)

@@ -31,9 +31,20 @@ Per-fibre scattering, a first physical model, randomly oriented:
   (:func:`fraunhofer_differential_cross_section`), what would fall below 0 clipped, and what
   remains is the fibre's reflection and refraction: ``μ_s = N C_geo``, ``μ_a = N C_abs`` with C_abs
   the Mie absorption.  A ray meeting a fibre then interacts with it, as in geometric optics.
+* **The phase function: external reflection exactly, the light through the fibre by its mean
+  cosine** (:func:`fibre_phase`).  The light a large convex particle in random orientation reflects
+  off its outside has the angular pattern of a sphere's, ``dC/dΩ = (a²/4) R((π − Θ)/2)``, R the
+  unpolarised Fresnel reflectance (van de Hulst 1957, §§ 8.42, 12.21): undyed, white, and exact for
+  randomly oriented fibres.  What passes through the fibre is not a sphere's: a sphere focuses its
+  once-reflected-inside light back toward the source (the glory and the rainbow of a ball lens), which
+  a cylinder does only across its axis and an irregular fibre not at all (nonspherical particles have
+  smooth phase functions without them: Macke, Mueller & Raschke, J. Atmos. Sci. 53, 2813 (1996);
+  Mishchenko, Rossow, Macke & Lacis, JGR 101, 16973 (1996)).  That part is therefore a
+  Henyey–Greenstein lobe whose mean cosine makes the whole phase function's g the proxy's Mie g
+  (less diffraction), the quantity equal volume-to-surface spheres do reproduce (Grenfell & Warren).
 
-Independent reference: for a strongly absorbing proxy what remains is its external Fresnel
-reflection, ``dC/dΩ = (a²/4) R((π − Θ)/2)`` (van de Hulst 1957, §12.21), in tests/test_fibre_optics.py.
+Independent references (tests/test_fibre_optics.py): the reflection law against exact Mie theory of
+an opaque sphere; the absorption against geometric optics, ``πa² (1 − R̄)``, as x grows.
 
 Not yet here: the fibres' orientation along the yarn axis (a direction-dependent phase function:
 the transport's kernel takes one phase function of cos Θ; docs/fitting.md, "Fibres").
@@ -51,10 +62,12 @@ from precompute.optics.dye import dye_absorption_coefficient
 from precompute.optics.medium import Dye, Fibres
 from precompute.optics.mie import (PHASE_TABLE_TOLERANCE, PhaseGridTooCoarse, SpeciesScattering,
                                    differential_scattering_cross_section)
-from precompute.optics.phase import normalize_phase, phase_integral
+from precompute.optics.phase import asymmetry_parameter, henyey_greenstein_phase, normalize_phase, phase_integral
 
 #: The proxy sphere's diameter over the fibre's: equal volume-to-surface ratio (module docstring).
 PROXY_DIAMETER_RATIO = 1.5
+#: The mean cosine of the light through a fibre is held inside this (a Henyey–Greenstein lobe).
+TRANSMITTED_G_LIMIT = 0.95
 
 
 def proxy_diameter_nm(fibres: Fibres) -> float:
@@ -91,6 +104,40 @@ def fraunhofer_differential_cross_section(radius_nm: float, wavenumber: float, c
     return np.where(cos_theta > 0.0, radius_nm**2 * x**2 / 4.0 * airy**2, 0.0)
 
 
+def fresnel_reflectance(cos_i: np.ndarray, n: float) -> np.ndarray:
+    """Unpolarised Fresnel reflectance onto a dielectric of relative index ``n`` ≥ 1 at incidence
+    cosine ``cos_i`` (Born & Wolf §1.5.3); 1 at grazing, 0 for ``n`` = 1."""
+    c = np.clip(np.asarray(cos_i, float), 0.0, 1.0)
+    cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - c * c) / (n * n)))
+    denominator_s, denominator_p = c + n * cos_t, n * c + cos_t
+    safe_s, safe_p = np.where(denominator_s > 0, denominator_s, 1.0), np.where(denominator_p > 0, denominator_p, 1.0)
+    r_s = np.where(denominator_s > 0, (c - n * cos_t) / safe_s, 1.0)
+    r_p = np.where(denominator_p > 0, (n * c - cos_t) / safe_p, 1.0)
+    return 0.5 * (r_s**2 + r_p**2)
+
+
+def reflection_differential_cross_section(radius_nm: float, n: float, cos_theta: np.ndarray) -> np.ndarray:
+    """``dC/dΩ = (a²/4) R((π − Θ)/2)`` (nm²/sr): the external reflection of a large sphere of
+    ``radius_nm`` and relative index ``n``, and of any large convex particle of its surface in random
+    orientation (van de Hulst 1957, §§ 8.42, 12.21), at scattering angle Θ = arccos ``cos_theta``."""
+    incidence = (np.pi - np.arccos(np.clip(cos_theta, -1.0, 1.0))) / 2.0
+    return radius_nm**2 / 4.0 * fresnel_reflectance(np.cos(incidence), n)
+
+
+def fibre_phase(cos_theta: np.ndarray, reflected: np.ndarray, c_geometric: float, g_geometric: float) -> np.ndarray:
+    """The fibres' phase function (1/sr) on ``cos_theta`` (module docstring): their external
+    reflection ``reflected`` (dC/dΩ, nm²/sr) exactly, and the rest of ``c_geometric`` (nm²) in a
+    Henyey–Greenstein lobe whose mean cosine makes the whole one's ``g_geometric``."""
+    c_reflected = float(phase_integral(cos_theta, reflected))
+    c_through = max(c_geometric - c_reflected, 0.0)
+    if c_through <= 0.0:
+        return normalize_phase(cos_theta, reflected)
+    g_reflected = float(asymmetry_parameter(cos_theta, reflected / c_reflected)) if c_reflected > 0 else 0.0
+    g_through = (g_geometric * (c_through + c_reflected) - g_reflected * c_reflected) / c_through
+    g_through = float(np.clip(g_through, -TRANSMITTED_G_LIMIT, TRANSMITTED_G_LIMIT))
+    return normalize_phase(cos_theta, reflected + c_through * henyey_greenstein_phase(cos_theta, g_through))
+
+
 def fibre_scattering(fibres: Fibres, dye: Dye | None, wavelengths_nm: np.ndarray, host_index: np.ndarray,
                      cos_theta: np.ndarray) -> SpeciesScattering:
     """μs, μa (1/mm) and phase function of the fibres in a host of real index ``host_index`` (L,),
@@ -124,9 +171,12 @@ def fibre_scattering(fibres: Fibres, dye: Dye | None, wavelengths_nm: np.ndarray
         mu_s[i] = density_per_nm3 * c_geometric * 1e6
         mu_a[i] = density_per_nm3 * max(qext - qsca, 0.0) * area * 1e6
         if c_geometric > 0.0:
-            phase[i] = normalize_phase(cos_theta, geometric)
+            g_geometric = float(asymmetry_parameter(cos_theta, geometric / c_geometric))
+            reflected = reflection_differential_cross_section(radius, n_fibre.real / n_host, cos_theta)
+            phase[i] = fibre_phase(cos_theta, reflected, c_geometric, g_geometric)
     return SpeciesScattering(mu_s=mu_s, mu_a=mu_a, phase=phase, number_density_per_um3=density_per_nm3 * 1e9)
 
 
-__all__ = ["PROXY_DIAMETER_RATIO", "fibre_absorption_per_mm", "fibre_index",
-           "fibre_scattering", "fraunhofer_differential_cross_section", "proxy_diameter_nm"]
+__all__ = ["PROXY_DIAMETER_RATIO", "TRANSMITTED_G_LIMIT", "fibre_absorption_per_mm", "fibre_index", "fibre_phase",
+           "fibre_scattering", "fraunhofer_differential_cross_section", "fresnel_reflectance", "proxy_diameter_nm",
+           "reflection_differential_cross_section"]

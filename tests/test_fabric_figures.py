@@ -83,3 +83,13 @@ def test_views_at_any_azimuth_reach_the_rig_square_to_the_weave():
         assert camera_on_sample == [0.0, 90.0]
     # views in the plane or across it are rendered as before
     assert sample_azimuths(0.0) == SAMPLE_AZIMUTHS_DEG == sample_azimuths(90.0)
+
+
+def test_a_dye_series_is_refused_for_fibres_whose_dye_changes_their_scattering(tmp_path):
+    from clothlight.fit.forward import build_forward_model
+    from precompute.errors import ParameterError
+    from precompute.optics.medium import load_preset_config
+
+    config, base = load_preset_config("fibre_cotton")
+    with pytest.raises(ParameterError, match="--dye-series"):  # before any render
+        build_forward_model([(0.0, 180.0, 0.0, 0.0)], config, base, cache_dir=tmp_path, dye_range=(0.1, 10.0))

@@ -290,7 +290,10 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
     resolve against ``base_dir``).  ``progress(done, total)`` follows the response's renders when it
     is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call).  With
     ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone."""
-    medium_from_dict(preset_config, pathlib.Path(base_dir))
+    medium = medium_from_dict(preset_config, pathlib.Path(base_dir))
+    if dye_range is not None and medium.fibres is not None:
+        # the dye of fibres changes their scattering (their index), not only the medium's absorption
+        raise ParameterError("--dye-series", "a medium of fibres", "a medium whose dye only absorbs (no [fibres])")
     measured_views = [tuple(float(a) for a in view) for view in measured_views]
     response = cloth_response(measured_views, seed=seed, cache_dir=cache_dir, progress=progress)
     if dye_range is not None:

@@ -17,8 +17,8 @@ partial folder):
     The summary a person reads: parameters and where they ended, the relative RMS errors of the
     model and the baseline on fit and held-out views per channel, the figures.
 ``fit.png``, ``residuals.png``, ``history.png``
-    Measured vs model vs baseline per incidence (plane of incidence and held-out perpendicular
-    plane), their residuals, and the objective of every evaluation coloured by its accuracy.
+    Measured vs model vs baseline per incidence (plane of incidence and the held-out azimuths, one
+    curve each), their residuals, and the objective of every evaluation coloured by its accuracy.
 """
 
 from __future__ import annotations
@@ -189,7 +189,7 @@ def report_markdown(result: FitResult, measured_name: str = "", figures: bool = 
     held_count = int(result.views.held_out.sum())
     lines = [f"# Medium fit: {result.config.get('name', 'custom')} to {measured_name or 'a measurement'}", "",
              f"{int(result.views.fit.sum())} fit views (plane of incidence), {held_count} held-out views "
-             "(perpendicular plane, never seen by the optimiser).  Objective: per-channel relative RMS error on "
+             "(every other azimuth, never seen by the optimiser).  Objective: per-channel relative RMS error on "
              "the fit views, combined as their RMS over R, G, B"
              + (" plus the colour-ratio penalty" if result.target_ratios else "") + " (docs/fitting.md).", "",
              f"- objective of the fitted medium (final evaluation at relative error {result.schedule.final:g}): "
@@ -242,8 +242,9 @@ def report_markdown(result: FitResult, measured_name: str = "", figures: bool = 
     lines += ["## Figures", "",
               "![measured, fitted medium and fitted baseline per incidence](fit.png)", "",
               "`fit.png`: per incidence θi (rows), the plane of incidence (left: signed view angle, negative on "
-              "the light's side) and the held-out perpendicular plane (right); dots measured, solid the fitted "
-              "medium, dashed the fitted baseline, per channel.", "",
+              "the light's side) and the held-out azimuths (right: the perpendicular plane ○ and, where measured, "
+              "45° △ and 135° ▽ from the plane of incidence); markers measured, solid the fitted medium, dashed "
+              "the fitted baseline, per channel.", "",
               "![residuals](residuals.png)", "",
               "`residuals.png`: (model − measured) over the channel's RMS on the fit views.", "",
               "![objective per evaluation](history.png)", "",
@@ -254,6 +255,19 @@ def report_markdown(result: FitResult, measured_name: str = "", figures: bool = 
 
 
 # ---- plots --------------------------------------------------------------------------------------
+
+
+#: Markers of the held-out views by their azimuth from the plane of incidence, |Δφ| in degrees.
+_AZIMUTH_MARKERS = {45: "^", 90: "o", 135: "v"}
+
+
+def _azimuth_groups(views, select: np.ndarray) -> list[tuple[np.ndarray, str]]:
+    """The views ``select`` grouped by |Δφ| (the plane of incidence is one group), each with its
+    marker: the held-out column draws one curve per azimuth."""
+    a = views.angles_deg[select]
+    folded = np.abs(((a[:, 3] - a[:, 1]) % 360.0 + 180.0) % 360.0 - 180.0)
+    folded = np.where(views.fit[select], 0.0, np.round(folded))
+    return [(select[folded == value], _AZIMUTH_MARKERS.get(int(value), "o")) for value in np.unique(folded)]
 
 
 def write_plots(result: FitResult, folder: pathlib.Path) -> dict[str, pathlib.Path]:
@@ -279,25 +293,26 @@ def write_plots(result: FitResult, folder: pathlib.Path) -> dict[str, pathlib.Pa
             at = views.at_incidence(theta_i)
             for column, (mask, title, xlabel) in enumerate((
                     (views.fit, "plane of incidence (fit)", "signed view angle θv, °"),
-                    (views.held_out, "perpendicular plane (held out)", "view zenith θo, °"))):
+                    (views.held_out, "other azimuths (held out; Δφ by marker)", "view zenith θo, °"))):
                 ax = axes[row, column]
                 select = np.flatnonzero(at & mask)
-                select = select[np.argsort(views.signed_view_deg[select], kind="stable")]
-                x = views.signed_view_deg[select]
-                for c, channel in enumerate(CHANNELS):
-                    colour = _COLOURS[channel]
-                    if name == "fit":
-                        ax.plot(x, np.maximum(measured[select, c], floor), "o", color=colour, ms=3.5,
-                                label=f"measured {channel}")
-                        ax.plot(x, np.maximum(result.model_rgb[select, c], floor), "-", color=colour,
-                                label=f"medium {channel}")
-                        ax.plot(x, np.maximum(result.baseline_rgb[select, c], floor), "--", color=colour, alpha=0.7,
-                                label=f"baseline {channel}")
-                    else:
-                        ax.plot(x, (result.model_rgb[select, c] - measured[select, c]) / scale[c], "-o", ms=3,
-                                color=colour, label=f"medium {channel}")
-                        ax.plot(x, (result.baseline_rgb[select, c] - measured[select, c]) / scale[c], "--",
-                                color=colour, alpha=0.7, label=f"baseline {channel}")
+                for group, marker in _azimuth_groups(views, select):
+                    group = group[np.argsort(views.signed_view_deg[group], kind="stable")]
+                    x = views.signed_view_deg[group]
+                    for c, channel in enumerate(CHANNELS):
+                        colour = _COLOURS[channel]
+                        if name == "fit":
+                            ax.plot(x, np.maximum(measured[group, c], floor), marker, color=colour, ms=3.5,
+                                    label=f"measured {channel}")
+                            ax.plot(x, np.maximum(result.model_rgb[group, c], floor), "-", color=colour,
+                                    label=f"medium {channel}")
+                            ax.plot(x, np.maximum(result.baseline_rgb[group, c], floor), "--", color=colour,
+                                    alpha=0.7, label=f"baseline {channel}")
+                        else:
+                            ax.plot(x, (result.model_rgb[group, c] - measured[group, c]) / scale[c], "-" + marker,
+                                    ms=3, color=colour, label=f"medium {channel}")
+                            ax.plot(x, (result.baseline_rgb[group, c] - measured[group, c]) / scale[c], "--",
+                                    color=colour, alpha=0.7, label=f"baseline {channel}")
                 if name == "fit" and len(select):
                     ax.set_yscale("log")
                 if name == "residuals":

@@ -201,7 +201,7 @@ def sample_gaps(layout, semi_axes_mm: tuple[float, float], spacing_mm: float,
     return gaps.reshape(picks, ends)
 
 
-def sample_curvature(layout, spacing_mm: float) -> float:
+def sample_curvature(layout) -> float:
     """Largest curvature (1/mm) of any centreline of an irregular sample: between crossings at
     distance Δ with heights z₀, z₁ it is |z₀ − z₁|/2 · π²/Δ² where the slope is zero."""
     largest = 0.0

@@ -105,7 +105,7 @@ def _perpendicular_turn(direction: np.ndarray, angles: np.ndarray, rng) -> np.nd
     return turned / np.linalg.norm(turned, axis=1, keepdims=True)
 
 
-def _roots(params, layout: SampleLayout, rng, count: int, knots, heights, lateral, warp: bool, yarn: np.ndarray):
+def _roots(params, rng, count: int, knots, heights, lateral, warp: bool, yarn: np.ndarray):
     """Root points, outward normals and twist-helix directions (F, 3) of ``count`` fibres on the
     yarns ``yarn`` (indices into this family)."""
     spacing = params.spacing_mm
@@ -153,7 +153,7 @@ def flyaway_fibres(params, settings, radius_mm: float, layout: SampleLayout | No
         yarn = np.repeat(np.arange(yarns), counts)
         total = len(yarn)
         if total:
-            surface, outward, helix = _roots(params, layout, rng, total, knots, heights, lateral, warp, yarn)
+            surface, outward, helix = _roots(params, rng, total, knots, heights, lateral, warp, yarn)
             way = np.where(rng.uniform(size=total) < 0.5, -1.0, 1.0)[:, None]
             lift = np.radians(rng.uniform(*LIFT_RANGE_DEG, total))[:, None]
             direction = np.cos(lift) * way * helix + np.sin(lift) * outward

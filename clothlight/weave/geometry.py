@@ -43,8 +43,9 @@ class WovenMesh:
     uv
         (V, 2) float64: u = arc length along the yarn's centreline from its start, mm (it grows
         along ``tangent``); v = angle around the cross-section / 2π in [0, 1): 0 on the +B side,
-        0.25 on top (towards the cloth normal), 0.5 on the −B side, 0.75 underneath.  Cap
-        centres carry v = 0.  Per face corner, with the seam closed, see :meth:`corner_uv`.
+        0.25 on top (towards the cloth normal), 0.5 on the −B side, 0.75 underneath; around a
+        ply of a plied yarn, from the ply's crest on (:func:`.plies.ply_rings`).  Cap centres
+        carry v = 0.  Per face corner, with the seam closed, see :meth:`corner_uv`.
     tangent
         (V, 3) float64: unit axis of the vertex's tube at its ring: the yarn's centreline tangent,
         or, for a plied yarn, the ply's own helical axis (the cylinder the yarn shader sees).

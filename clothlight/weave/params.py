@@ -329,7 +329,7 @@ class WeaveParameters:
         if closest <= 2.0 * width:
             return (f"neighbouring parallel yarns {closest:.4g} mm apart, closer than their width "
                     f"2·{width:g} mm")
-        curvature = sample_curvature(layout, self.spacing_mm)
+        curvature = sample_curvature(layout)
         if thickness * curvature >= 1.0:
             return (f"a centreline bent to a radius of {1 / curvature:.4g} mm, below the half-thickness "
                     f"{thickness:.4g} mm: the tube would fold onto itself")

@@ -142,3 +142,9 @@ def test_a_boundary_of_air_reflects_no_sheen_and_stays_finite_at_grazing():
     view[0] = -light[0]  # lit from straight behind the view (the back-lit swatch): no half vector, c = 0
     assert np.all(cook_torrance(light, view, 0.3, 1.0) == 0.0)
     assert np.all(np.isfinite(cook_torrance(light, view, 0.3, 1.557)))
+
+
+def test_fibres_packed_denser_than_spheres_can_be_have_optics():
+    config, base = load_preset_config("fibre_cotton")
+    dense = medium_from_dict({**config, "fibres": {**config["fibres"], "volume_fraction": 0.8}}, base)
+    assert np.all(medium_optics(dense).mu_t > medium_optics(medium_from_dict(config, base)).mu_t)

@@ -105,11 +105,11 @@ def planned_phase_grid(params: MediumParameters) -> tuple[str, int]:
 
 
 def _sized_scatterers(params: MediumParameters) -> tuple[ParticleSpecies, ...]:
-    """The particles, and the fibres' proxy sphere as one more, for choosing the cos θ grid."""
+    """The particles, and the fibres' proxy sphere as one more, for choosing the cos θ grid (which
+    reads its size alone: the index and the fraction given it are placeholders)."""
     if params.fibres is None:
         return params.particles
-    proxy = ParticleSpecies("fibres", RefractiveIndex(n=1.5), params.fibres.volume_fraction,
-                            diameter_nm=proxy_diameter_nm(params.fibres))
+    proxy = ParticleSpecies("fibres", RefractiveIndex(n=1.5), 0.5, diameter_nm=proxy_diameter_nm(params.fibres))
     return (*params.particles, proxy)
 
 

@@ -3,10 +3,11 @@ plied, irregular cotton sheeting) with the default red_cotton's yarn material an
 in Cycles' hair BSDF, against a Principled BSDF with sheen under Cycles' default SVM on the same
 geometry (the sample and its fibres), CPU, medians of interleaved renders.  Goals: at most 2x the
 reference, and the fibres at most 1.5x the close-up without them.  Writes each configuration's
-last render as a PNG beside its EXR and prints the folder.
+last render as a PNG and prints the folder (a temporary one, or ``--out DIR``).
 
-    python benchmarks/bench_closeup.py            # 320² pixels, 64 samples, 5 repeats
-    python benchmarks/bench_closeup.py --quick    # 160², 16 samples, 3 repeats
+    python benchmarks/bench_closeup.py                                   # 320² pixels, 64 samples, 5 repeats
+    python benchmarks/bench_closeup.py --quick                           # 160², 16 samples, 3 repeats
+    python benchmarks/bench_closeup.py --out docs/images/closeup         # the renders of docs/closeups.md
 """
 
 import pathlib
@@ -31,7 +32,11 @@ from render_cost import REFERENCE, light_and_camera, principled_with_sheen
 QUICK = "--quick" in sys.argv
 PIXELS, SAMPLES, REPEATS = (160, 16, 3) if QUICK else (320, 64, 5)
 
-out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-closeup-"))
+if "--out" in sys.argv:
+    out = pathlib.Path(sys.argv[sys.argv.index("--out") + 1]).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+else:
+    out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-closeup-"))
 grids = ["transport.angular_resolution=8", "transport.incidence_resolution=9"]
 tables = yarn_tables_from_bake(bake(DEFAULT_PRESET, grids, paths_per_cell=500).folder)
 
@@ -66,7 +71,7 @@ for round_index in range(REPEATS + 1):   # round 0 warms up: shader compile, BVH
         fibres.hide_render = fibre_material is None
         if fibre_material is not None:
             fibres.data.materials[0] = fibre_material
-        scene.render.filepath = str(out / f"{label}.png")
+        scene.render.filepath = str(out / (label.replace(" ", "_").replace(",", "").replace("+", "and") + ".png"))
         scene.render.image_settings.file_format = "PNG"
         start = time.perf_counter()
         bpy.ops.render.render(write_still=True)

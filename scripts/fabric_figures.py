@@ -1,9 +1,10 @@
-"""Issue 43's figures of a cloth against a measured fabric: a bake folder's tables, or a preset.
+"""Issue 43's figures of a cloth against a measured fabric: a bake folder's tables, a preset, or a fit.
 
 The cloth BRDF at every measured view comes from the fit's forward model (the cloth response,
 rendered once per view set and cached, docs/fitting.md): for ``--tables`` the bake's own atlas,
 unscattered table and specular term; for ``--preset`` a candidate's tables simulated at
-``--relative-error`` with the preset's ``[fit]`` sheen.  Beside it, the paper's Lambert +
+``--relative-error`` with the preset's ``[fit]`` sheen; for ``--fit`` the views a fit's
+``fit.json`` holds (its final evaluation, python -m clothlight.fit --out), no render.  Beside it, the paper's Lambert +
 Cook–Torrance baseline fitted to the plane of incidence.  Printed (and with ``--json`` written):
 relative RMS pooled and per channel on the plane of incidence and on the held-out azimuths,
 backscatter model / measured at θi 60°, θv −60° and −40° (and θi 45°, θv −60°), off-specular B/R and
@@ -11,6 +12,7 @@ G/R against the measurement (``precompute/fit/figures.py``), and lit from behind
 
     python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --tables bake
     python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --preset red_cotton
+    python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --fit out/fit
 """
 
 from __future__ import annotations
@@ -41,6 +43,20 @@ def bake_folder_brdf(model, folder: pathlib.Path):
                             specular_slope=float(specular["slope"]))
 
 
+def fit_folder_brdf(folder: pathlib.Path, measured):
+    """The model BRDF (n_views + 2, 3) a fit's ``fit.json`` holds at its final evaluation, then its
+    swatches, and a label; ValueError when its views are not ``measured``'s."""
+    import numpy as np
+
+    fit = json.loads((folder / "fit.json").read_text())
+    if not np.allclose([v["measured"] for v in fit["views"]], measured):
+        raise ValueError(f"{folder / 'fit.json'} was fitted to another measurement")
+    swatches = fit.get("swatches") or {}
+    rows = [v["model"] for v in fit["views"]] + [swatches.get("front_rgb", [np.nan] * 3),
+                                                  swatches.get("back_rgb", [np.nan] * 3)]
+    return np.array(rows, float), f"fit {folder} (its final evaluation)"
+
+
 def main() -> int:
     from clothlight.fit.forward import build_forward_model
     from precompute.fit.baseline import baseline_brdf, fit_baseline
@@ -54,6 +70,7 @@ def main() -> int:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--tables", type=pathlib.Path, help="a bake folder (python -m precompute bake --out)")
     source.add_argument("--preset", help="a shipped preset name or a preset TOML, simulated at --relative-error")
+    source.add_argument("--fit", type=pathlib.Path, help="a fit's folder (its fit.json) against the same measurement")
     parser.add_argument("--relative-error", type=float, default=0.03, help="a --preset's forward model's (0.03)")
     parser.add_argument("--seed", type=int, default=1, help="a --preset's transport seed (1)")
     parser.add_argument("--json", type=pathlib.Path, help="also write the figures here")
@@ -62,17 +79,20 @@ def main() -> int:
     measurement = load_measurement(args.measured)
     views = split_views(measurement)
     objective = Objective(measurement, views)
-    config, base_dir = load_preset_config(args.preset or "red_cotton")
-    model = build_forward_model(views.forward_views, config, base_dir, seed=0)
     count = len(views.forward_views)
-    if args.tables is not None:
-        cloth = bake_folder_brdf(model, args.tables)
-        label = f"tables {args.tables}"
+    if args.fit is not None:
+        cloth, label = fit_folder_brdf(args.fit, objective.measured)
     else:
-        sheen = specular_from_config(config)
-        cloth = model(config, specular_weight=sheen["specular_weight"], specular_slope=sheen["specular_slope"],
-                      relative_error=args.relative_error, seed=args.seed)
-        label = f"preset {args.preset} at relative error {args.relative_error:g}"
+        config, base_dir = load_preset_config(args.preset or "red_cotton")
+        model = build_forward_model(views.forward_views, config, base_dir, seed=0)
+        if args.tables is not None:
+            cloth = bake_folder_brdf(model, args.tables)
+            label = f"tables {args.tables}"
+        else:
+            sheen = specular_from_config(config)
+            cloth = model(config, specular_weight=sheen["specular_weight"], specular_slope=sheen["specular_slope"],
+                          relative_error=args.relative_error, seed=args.seed)
+            label = f"preset {args.preset} at relative error {args.relative_error:g}"
     baseline = fit_baseline(objective)
     fitted = baseline_brdf(views.angles_deg, baseline.albedo, baseline.weight, baseline.slope)
     results = {"measured": str(args.measured),

@@ -131,3 +131,27 @@ def test_the_sheeting_preset_is_the_close_up_default():
     for name in ("spacing_jitter", "height_jitter", "ply_radius_jitter"):
         assert float(values[name]) == pytest.approx(getattr(settings, name))
     assert values["use_plies"] == "True" and values["pattern"] == "'plain'"
+
+
+@pytest.mark.render
+def test_fibres_lit_from_behind_pass_their_dyes_colour(tmp_path):
+    """End to end through Cycles: the fibres alone (the sample hidden), lit from below and seen from
+    above, show the light their hair BSDF's absorption lets through — redder than blue for the red dye,
+    bluer than red for the blue one."""
+    from clothlight.blender.measurement_render import render_to_array
+    from tests.helpers import add_camera, add_sun, empty_render_scene
+
+    transmitted = {}
+    for preset in ("red_cotton", "blue_cotton"):
+        scene = empty_render_scene(resolution=48, samples=16)
+        scene.cycles.shading_system = False
+        params = sheeting_weave(warp_count=4, weft_count=4)
+        sample = build_sample_object(params)
+        sample.hide_render = True
+        build_flyaway_object(sample, params, CloseupSettings(flyaway_density_per_mm=40.0), preset)
+        add_sun(scene, (0.0, 0.0, -1.0), 3.0)
+        add_camera(scene, (0.0, 0.0, 1.0), ortho_scale=1.6, distance=10.0)
+        transmitted[preset] = render_to_array(scene, tmp_path / f"{preset}.exr")[..., :3].reshape(-1, 3).sum(axis=0)
+    red, blue = transmitted["red_cotton"], transmitted["blue_cotton"]
+    assert red.sum() > 0 and blue.sum() > 0
+    assert red[0] > red[2] and blue[2] > blue[0]

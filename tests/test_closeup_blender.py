@@ -155,3 +155,29 @@ def test_fibres_lit_from_behind_pass_their_dyes_colour(tmp_path):
     red, blue = transmitted["red_cotton"], transmitted["blue_cotton"]
     assert red.sum() > 0 and blue.sum() > 0
     assert red[0] > red[2] and blue[2] > blue[0]
+
+
+def test_the_close_up_panel_names_the_base_mediums_plies(settings_registered):
+    from types import SimpleNamespace
+
+    from clothlight.blender import ui
+
+    drawn = []
+
+    class Layout:
+        use_property_split = use_property_decorate = False
+
+        def __getattr__(self, name):
+            def record(*args, **kwargs):
+                drawn.append((name, kwargs.get("text", args[1] if len(args) > 1 else args[0] if args else None)))
+                return self
+            return record
+
+    scene = settings_registered
+    scene.clothlight.weave.use_plies = True
+    scene.clothlight.medium.base = "delustred_polyester"
+    ui.CLOTHLIGHT_PT_closeup.draw(SimpleNamespace(layout=Layout()), SimpleNamespace(scene=scene))
+    assert ("label", "1 ply at 5° (delustred_polyester)") in drawn
+    assert ("operator", "clothlight.add_flyaways") in drawn            # registered by the fixture
+    for name in ("spacing_jitter", "height_jitter", "ply_radius_jitter", "flyaway_density_per_mm"):
+        assert ("prop", name) in drawn

@@ -97,7 +97,8 @@ class CLOTHLIGHT_PT_closeup(_SidebarPanel, bpy.types.Panel):
         layout.prop(weave, "use_plies")
         if weave.use_plies:
             plies, twist = weave.medium_plies()
-            layout.label(text=f"{plies} plies at {twist:g}° ({context.scene.clothlight.medium.base})", icon="INFO")
+            noun = "ply" if plies == 1 else "plies"
+            layout.label(text=f"{plies} {noun} at {twist:g}° ({context.scene.clothlight.medium.base})", icon="INFO")
         col = layout.column(align=True)
         col.prop(weave, "spacing_jitter")
         col.prop(weave, "height_jitter")

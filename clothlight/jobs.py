@@ -108,6 +108,23 @@ class BakeCancelled(JobCancelled):
     """The bake was cancelled before it finished."""
 
 
+class ClothBakeFailed(JobFailed):
+    """The child cloth bake stopped with an error; ``message`` is meant for the user, ``log`` for the console."""
+
+
+class ClothBakeCancelled(JobCancelled):
+    """The cloth bake was cancelled before it finished."""
+
+
+@dataclasses.dataclass
+class ClothBakeOutcome:
+    """A finished cloth bake: its cloth table folder (in the cache) and whether it rendered (False:
+    the measurement was in the cache)."""
+
+    folder: pathlib.Path
+    rendered: bool
+
+
 @dataclasses.dataclass
 class BakeOutcome:
     """A finished bake: its table folder and the bake's summary figures."""
@@ -452,3 +469,48 @@ class BakeJob(ChildJob):
         if not sys.executable or not os.path.isfile(sys.executable):
             raise BakeFailed(f"Blender's Python executable is missing ({sys.executable!r}): cannot bake")
         return super().start()
+
+
+class ClothBakeJob(ChildJob):
+    """The cloth tables of a yarn bake (the garment's BSDF, :mod:`clothlight.cloth_bake_worker`) in a
+    child process.  ``start()``, then ``poll()`` until ``done``; or ``wait()``.
+
+    Parameters
+    ----------
+    yarn_tables
+        The yarn bake folder the cloth is measured with.
+    cache_dir
+        The cache folder (the bake's): the cloth tables are stored there.
+    settings
+        Goniometer settings by name (``incidence_resolution``, ``exit_resolution``,
+        ``pixels_per_patch``, ``samples``); absent: the command's defaults.
+    blender
+        ``bpy.app.binary_path``: inside Blender, the child is Blender (:func:`child_command`).
+    numba_cache_dir, bytecode_cache_dir
+        As :class:`ChildJob`.
+    """
+
+    module = "clothlight.cloth_bake_worker"
+    what = "cloth bake"
+    imports_bpy = True
+    failure = ClothBakeFailed
+    cancellation = ClothBakeCancelled
+    cancelled_note = "no cloth table was written"
+    killed_note = "a later bake removes its temporary folder"
+
+    def __init__(self, yarn_tables, *, cache_dir, settings: dict | None = None, blender: str | None = None,
+                 numba_cache_dir=None, bytecode_cache_dir=None):
+        super().__init__(numba_cache_dir=numba_cache_dir, bytecode_cache_dir=bytecode_cache_dir, blender=blender)
+        self.yarn_tables = pathlib.Path(yarn_tables)
+        self.cache_dir = pathlib.Path(cache_dir)
+        self.settings = dict(settings or {})
+        self.outcome: ClothBakeOutcome | None = None
+
+    def arguments(self) -> list[str]:
+        arguments = ["--tables", str(self.yarn_tables), "--cache-dir", str(self.cache_dir)]
+        for name, value in sorted(self.settings.items()):
+            arguments += [f"--{name.replace('_', '-')}", str(int(value))]
+        return arguments
+
+    def outcome_from(self, event: dict) -> ClothBakeOutcome:
+        return ClothBakeOutcome(folder=pathlib.Path(event["folder"]), rendered=bool(event["rendered"]))

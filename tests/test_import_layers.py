@@ -33,8 +33,8 @@ LAYERS = (
     ("physics command line", ("precompute.cli", "precompute.__main__")),
     ("add-on without Blender", ("clothlight",)),
     ("add-on in Blender", ("clothlight.blender",)),
-    ("jobs that render: the fit, the command lines of the sweep and the garment",
-     ("clothlight.fit", "clothlight.validate", "clothlight.garment.__main__")),
+    ("jobs that render: the fit, the command lines of the sweep and the garment, the cloth bake's worker",
+     ("clothlight.fit", "clothlight.validate", "clothlight.garment.__main__", "clothlight.cloth_bake_worker")),
 )
 
 

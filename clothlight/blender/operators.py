@@ -1,9 +1,10 @@
-"""Operators of the ClothLight add-on: Build Sample, Bake Tables, Fit to Measurement, Apply Material, Set Up Cycles.
+"""Operators of the ClothLight add-on: Build Sample, Bake Tables, Bake Cloth, Fit to Measurement, Apply Material,
+Set Up Cycles.
 
 Each reports errors through Blender's report system (bad input names the parameter; unexpected
 failures print their traceback to the console and report one line).  Build Sample and Apply
-Material edit the scene and are undoable; neither leaves unused data blocks behind.  Bake Tables
-and Fit to Measurement run in a child process (:mod:`clothlight.jobs`, :mod:`clothlight.fit_job`):
+Material edit the scene and are undoable; neither leaves unused data blocks behind.  Bake Tables,
+Bake Cloth and Fit to Measurement run in a child process (:mod:`clothlight.jobs`, :mod:`clothlight.fit_job`):
 in the interface they are modal, with a progress bar in the status bar and Esc (or the panel's
 Cancel button) to stop them; in background mode (``blender -b``, or Blender as a Python module)
 ``execute()`` runs the same job to the end.  A fit's result is loaded into the medium settings
@@ -24,7 +25,8 @@ import bpy
 
 from . import preferences
 from ..fit_job import FitJob, fit_unavailable_reason
-from ..jobs import BakeCancelled, BakeFailed, BakeJob, JobCancelled, JobFailed, bake_unavailable_reason
+from ..jobs import (BakeCancelled, BakeFailed, BakeJob, ClothBakeJob, JobCancelled, JobFailed,
+                    bake_unavailable_reason)
 from ..medium_settings import BakeRequest, preset_request
 from .materials import (
     GENERAL_MODE,
@@ -39,7 +41,7 @@ from .materials import (
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from ..prebaked import tables_for_request
 from .properties import ParameterError, millimetre_scale
-from .running_jobs import RunningBake, RunningFit
+from .running_jobs import RunningBake, RunningClothBake, RunningFit
 from .render_setup import use_cycles, use_cycles_osl_on_cpu
 from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
 from .sun_link import SUN_PROPERTY
@@ -477,6 +479,67 @@ class CLOTHLIGHT_OT_cancel_bake(bpy.types.Operator):
         return {"FINISHED"}
 
 
+# -- Bake Cloth ----------------------------------------------------------------------------------
+
+
+class CLOTHLIGHT_OT_bake_cloth(_ChildJobOperator, bpy.types.Operator):
+    """Bake the garment's cloth BSDF from the medium's yarn tables (the woven sample measured in a virtual
+    gonioreflectometer, in a background process; cached). Garment Material then uses it. Esc cancels"""
+
+    bl_idname = "clothlight.bake_cloth"
+    bl_label = "Bake Cloth"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def _start(self, context) -> ClothBakeJob | None:
+        try:
+            folder, warning = tables_for(context.scene.clothlight.medium)
+        except LookupError as error:
+            self.report({"ERROR"}, str(error))
+            return None
+        if warning:
+            self.report({"WARNING"}, warning)
+        return ClothBakeJob(folder, cache_dir=preferences.cache_directory(context), blender=bpy.app.binary_path,
+                            numba_cache_dir=preferences.numba_cache_directory(),
+                            bytecode_cache_dir=preferences.bytecode_cache_directory())
+
+    def _finish(self, scene, job: ClothBakeJob):
+        if isinstance(job.error, JobCancelled):
+            self.report({"WARNING"}, str(job.error))
+            return {"CANCELLED"}
+        if isinstance(job.error, JobFailed):
+            if not job.error.bad_input and job.error.log:
+                print(job.error.log, file=sys.stderr)
+            self.report({"ERROR"}, f"Cloth bake failed: {job.error}")
+            return {"CANCELLED"}
+        scene.clothlight.cloth_tables_dir = str(job.outcome.folder)
+        how = "measured" if job.outcome.rendered else "found in the cache"
+        self.report({"INFO"}, f"Cloth tables {how}: {job.outcome.folder}")
+        return {"FINISHED"}
+
+    _running = RunningClothBake
+    _what = "Cloth bake"
+    _unavailable_reason = staticmethod(bake_unavailable_reason)
+
+    def _status(self, job) -> str:
+        return "Baking the ClothLight cloth" + (f", {job.stage}" if job.stage else "")
+
+
+class CLOTHLIGHT_OT_cancel_cloth_bake(bpy.types.Operator):
+    """Stop the running cloth bake; no cloth table is written"""
+
+    bl_idname = "clothlight.cancel_cloth_bake"
+    bl_label = "Cancel Cloth Bake"
+    bl_options = {"INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return RunningClothBake.job is not None
+
+    def execute(self, context):
+        RunningClothBake.job.cancel()
+        return {"FINISHED"}
+
+
 # -- Fit to Measurement --------------------------------------------------------------------------
 
 
@@ -652,6 +715,8 @@ CLASSES = (
     CLOTHLIGHT_OT_build_sample,
     CLOTHLIGHT_OT_bake_tables,
     CLOTHLIGHT_OT_cancel_bake,
+    CLOTHLIGHT_OT_bake_cloth,
+    CLOTHLIGHT_OT_cancel_cloth_bake,
     CLOTHLIGHT_OT_fit_medium,
     CLOTHLIGHT_OT_cancel_fit,
     CLOTHLIGHT_OT_load_fit,

@@ -1,4 +1,4 @@
-"""The bake and the fit the interface is running, and the recolouring bake a dye change schedules.
+"""The bake, the cloth bake and the fit the interface is running, and the recolouring bake a dye change schedules.
 
 Held here, apart from the operators that start them, so that the settings (a dye change with Dye
 Range on schedules a bake: :mod:`.properties`), the operators and the panels (their progress) all
@@ -10,7 +10,7 @@ from __future__ import annotations
 import bpy
 
 from ..fit_job import FitJob
-from ..jobs import BakeJob
+from ..jobs import BakeJob, ClothBakeJob
 
 
 class RunningBake:
@@ -70,10 +70,21 @@ def running_fit() -> FitJob | None:
     return RunningFit.job
 
 
+class RunningClothBake:
+    """The one cloth bake the interface is running (None when idle); the Garment panel draws its progress."""
+
+    job: ClothBakeJob | None = None
+    scene_name: str = ""
+
+
+def running_cloth_bake() -> ClothBakeJob | None:
+    return RunningClothBake.job
+
+
 def stop_all() -> None:
     """Cancel the pending recolouring bake and every running job (the add-on is being disabled)."""
     ScheduledRecolour.cancel()
-    for holder in (RunningBake, RunningFit):
+    for holder in (RunningBake, RunningClothBake, RunningFit):
         if holder.job is not None:
             holder.job.cancel()
             holder.job = None

@@ -286,13 +286,22 @@ class CLOTHLIGHT_PT_garment(_SidebarPanel, bpy.types.Panel):
         settings = context.scene.clothlight
         layout = self.layout
         layout.label(text="Cloth BSDF on any mesh (paper §7)")
+        job = running_jobs.running_cloth_bake()
+        if job is not None:
+            row = layout.row(align=True)
+            row.progress(factor=job.progress, type="BAR", text=f"Baking cloth: {job.progress:.0%}")
+            row.operator("clothlight.cancel_cloth_bake", text="", icon="CANCEL")
+            if job.stage:
+                layout.label(text=job.stage)
+        else:
+            layout.operator("clothlight.bake_cloth", icon="RENDER_STILL")
         layout.prop(settings, "cloth_tables_dir")
         layout.prop(settings, "garment_open_weave")
         layout.prop(settings, "garment_transmission")
         layout.prop(settings, "garment_weave_repeats")
         layout.operator("clothlight.apply_garment_material", icon="MOD_CLOTH")
         column = layout.column(align=True)
-        column.label(text="Bake a cloth BSDF from a terminal:", icon="CONSOLE")
+        column.label(text="Or from a terminal:", icon="CONSOLE")
         column.label(text=BAKE_COMMAND)
 
 

@@ -89,7 +89,8 @@ def test_a_dye_series_is_refused_for_fibres_whose_dye_changes_their_scattering(t
     from clothlight.fit.forward import build_forward_model
     from precompute.errors import ParameterError
     from precompute.optics.medium import load_preset_config
+    from tests.test_fibre_optics import FIBRE_COTTON
 
-    config, base = load_preset_config("fibre_cotton")
+    config, base = load_preset_config(FIBRE_COTTON)
     with pytest.raises(ParameterError, match="--dye-series"):  # before any render
         build_forward_model([(0.0, 180.0, 0.0, 0.0)], config, base, cache_dir=tmp_path, dye_range=(0.1, 10.0))

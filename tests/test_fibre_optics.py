@@ -16,9 +16,12 @@ from precompute.optics.fibre import (
     proxy_diameter_nm,
     reflection_differential_cross_section,
 )
-from precompute.optics.medium import Fibres, RefractiveIndex, load_preset_config, medium_from_dict
+from precompute.optics.medium import PRESET_DIR, Fibres, RefractiveIndex, load_preset_config, medium_from_dict
 from precompute.optics.mie import differential_scattering_cross_section
 from precompute.optics.phase import angle_cos_theta_grid, asymmetry_parameter, phase_integral
+
+#: A yarn of fibres in air, not shipped (docs/fitting.md, "Against the raw-data fabrics").
+FIBRE_COTTON = PRESET_DIR / "experimental" / "fibre_cotton.toml"
 
 
 def opaque_fibre(diameter_um=20.0, wavelength_nm=600.0, k=0.01):
@@ -99,7 +102,7 @@ def test_extinction_per_volume_is_the_fibres_projected_area_per_volume():
     # equal volume-to-surface proxy: μ_t = φ S / 4V = φ / d for long cylinders (Cauchy), whatever the
     # index, plus the edge terms of the extinction the diffraction leaves (≈ 2 x^(-2/3): 6-10 % here)
     # and the ripple of a monodisperse sphere
-    config, base = load_preset_config("fibre_cotton")
+    config, base = load_preset_config(FIBRE_COTTON)
     medium = medium_from_dict({**config, "dye": {**config["dye"], "weight_percent": 0.0}}, base)
     optics = medium_optics(medium)
     expected = medium.fibres.volume_fraction / (medium.fibres.diameter_um * 1e-3)
@@ -107,7 +110,7 @@ def test_extinction_per_volume_is_the_fibres_projected_area_per_volume():
 
 
 def test_the_dye_is_in_the_fibres_whose_surfaces_still_reflect():
-    config, base = load_preset_config("fibre_cotton")
+    config, base = load_preset_config(FIBRE_COTTON)
     heavy = medium_from_dict({**config, "dye": {**config["dye"], "weight_percent": 10.0}}, base)
     fibre_optics = medium_optics(heavy)
     blue = fibre_optics.wavelengths_nm <= 500.0
@@ -125,7 +128,7 @@ def test_the_dye_is_in_the_fibres_whose_surfaces_still_reflect():
 
 
 def test_the_fibres_table_is_checked():
-    config, base = load_preset_config("fibre_cotton")
+    config, base = load_preset_config(FIBRE_COTTON)
     for key, value, allowed in (("volume_fraction", 0.95, "0.9"), ("diameter_um", 0.1, "µm"),
                                 ("cross_section", "ellipse", "circle"), ("absorption_per_mm", -1.0, "≥ 0"),
                                 ("colour", 1, "one of the keys")):
@@ -145,6 +148,6 @@ def test_a_boundary_of_air_reflects_no_sheen_and_stays_finite_at_grazing():
 
 
 def test_fibres_packed_denser_than_spheres_can_be_have_optics():
-    config, base = load_preset_config("fibre_cotton")
+    config, base = load_preset_config(FIBRE_COTTON)
     dense = medium_from_dict({**config, "fibres": {**config["fibres"], "volume_fraction": 0.8}}, base)
     assert np.all(medium_optics(dense).mu_t > medium_optics(medium_from_dict(config, base)).mu_t)

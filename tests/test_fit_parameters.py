@@ -30,6 +30,7 @@ from precompute.optics.medium import (
     load_preset_config,
     medium_from_dict,
 )
+from tests.test_fibre_optics import FIBRE_COTTON
 from tests.test_fit_optimise import preset_with_voids, real_fabric_views, synthetic_brdf
 
 
@@ -65,7 +66,7 @@ def test_fit_ranges_lie_within_what_the_medium_accepts(name):
     if p.path == "dye.weight_percent":
         assert 0 <= p.low and p.high < 100
     # either end, written into a preset, loads (the sum of fractions aside)
-    config, base_dir = load_preset_config("fibre_cotton") if p.path.startswith("fibres.") else preset_with_voids()
+    config, base_dir = load_preset_config(FIBRE_COTTON) if p.path.startswith("fibres.") else preset_with_voids()
     for value in (p.low, p.high):
         new, keywords = apply(config, None, {name: value})
         if p.is_specular:

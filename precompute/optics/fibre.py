@@ -47,7 +47,7 @@ Independent references (tests/test_fibre_optics.py): the reflection law against 
 an opaque sphere; the absorption against geometric optics, ``πa² (1 − R̄)``, as x grows.
 
 Not yet here: the fibres' orientation along the yarn axis (a direction-dependent phase function:
-the transport's kernel takes one phase function of cos Θ; docs/fitting.md, "Fibres").
+the transport's kernel takes one phase function of cos Θ; docs/fitting.md, "A yarn of fibres").
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from clothlight.weave.fibre_optics import (
 )
 from clothlight.weave.flyaways import flyaway_fibres
 from precompute.errors import ParameterError
-from precompute.optics.medium import load_preset, load_preset_config, preset_names
+from precompute.optics.medium import PRESET_DIR, load_preset, load_preset_config, preset_names
 from precompute.tables.color import spectral_to_rgb
 from tests.test_weave import depth_inside_tube
 
@@ -143,7 +143,8 @@ def test_fibres_leave_along_the_twist_helix():
 # -- the fibres' colour ---------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["red_cotton", "blue_cotton", "paper_2008", "undyed_cotton", "fibre_cotton"])
+@pytest.mark.parametrize("name", ["red_cotton", "blue_cotton", "paper_2008", "undyed_cotton",
+                                  str(PRESET_DIR / "experimental" / "fibre_cotton.toml")])   # a medium of fibres
 def test_hair_absorption_passes_the_dyed_fibres_colour(name):
     """Cycles attenuates by exp(−σ·chord) with the chord in fibre radii: straight through a fibre
     (chord 2) σ gives back the colour of the fibre's spectral transmittance, and it follows the dye."""

@@ -32,7 +32,7 @@ def opaque_fibre(diameter_um=20.0, wavelength_nm=600.0, k=0.01):
 
 
 def test_the_reflection_law_of_the_phase_function_is_exact_mie_of_an_opaque_sphere():
-    # van de Hulst §12.21's specular sphere, (a²/4) R((π − Θ)/2), against miepython's exact series for a
+    # van de Hulst's specular sphere (1957, chapter 12), (a²/4) R((π − Θ)/2), against miepython's exact series for a
     # sphere that absorbs all it lets in, behind it (no diffraction there, no light through)
     fibres, wavelength = opaque_fibre(), 600.0
     radius = proxy_diameter_nm(fibres) / 2.0
@@ -71,7 +71,7 @@ def test_the_fibres_phase_function_is_their_reflection_behind_and_keeps_the_mie_
 
 def test_an_opaque_fibre_absorbs_what_its_surface_does_not_reflect_as_x_grows():
     # geometric optics: C_abs = πa² (1 − R̄), R̄ the sphere's hemispherical Fresnel reflectance; Mie
-    # approaches it as the edge terms (∝ x^(-2/3), van de Hulst §17.2) fade
+    # approaches it as the edge terms (∝ x^(-2/3), van de Hulst 1957, chapter 17) fade
     cos_i = np.linspace(0.0, 1.0, 20001)
     mean_reflectance = np.trapz(fresnel_reflectance(cos_i, 1.557) * 2.0 * cos_i, cos_i)
     misses = []

@@ -34,7 +34,7 @@ Per-fibre scattering, a first physical model, randomly oriented:
 * **The phase function: external reflection exactly, the light through the fibre by its mean
   cosine** (:func:`fibre_phase`).  The light a large convex particle in random orientation reflects
   off its outside has the angular pattern of a sphere's, ``dC/dΩ = (a²/4) R((π − Θ)/2)``, R the
-  unpolarised Fresnel reflectance (van de Hulst 1957, §§ 8.42, 12.21): undyed, white, and exact for
+  unpolarised Fresnel reflectance (van de Hulst 1957, chapters 8 and 12): undyed, white, and exact for
   randomly oriented fibres.  What passes through the fibre is not a sphere's: a sphere focuses its
   once-reflected-inside light back toward the source (the glory and the rainbow of a ball lens), which
   a cylinder does only across its axis and an irregular fibre not at all (nonspherical particles have
@@ -95,7 +95,7 @@ def fibre_index(fibres: Fibres, dye: Dye | None, wavelengths_nm: np.ndarray) -> 
 def fraunhofer_differential_cross_section(radius_nm: float, wavenumber: float, cos_theta: np.ndarray) -> np.ndarray:
     """``dC/dΩ`` (nm²/sr) of Fraunhofer diffraction by a disc of ``radius_nm`` for light of
     ``wavenumber`` (1/nm, in the host): ``a² x²/4 · [2 J₁(x sin θ)/(x sin θ)]²``, x = k a, on the
-    forward hemisphere, 0 behind (its integral is π a² for x ≫ 1; Bohren & Huffman 1983, §4.4.3)."""
+    forward hemisphere, 0 behind (its integral is π a² for x ≫ 1; van de Hulst 1957, chapter 8)."""
     x = wavenumber * radius_nm
     sin_theta = np.sqrt(np.clip(1.0 - cos_theta**2, 0.0, 1.0))
     u = x * sin_theta
@@ -106,7 +106,7 @@ def fraunhofer_differential_cross_section(radius_nm: float, wavenumber: float, c
 
 def fresnel_reflectance(cos_i: np.ndarray, n: float) -> np.ndarray:
     """Unpolarised Fresnel reflectance onto a dielectric of relative index ``n`` ≥ 1 at incidence
-    cosine ``cos_i`` (Born & Wolf §1.5.3); 1 at grazing, 0 for ``n`` = 1."""
+    cosine ``cos_i`` (Born & Wolf, chapter 1); 1 at grazing, 0 for ``n`` = 1."""
     c = np.clip(np.asarray(cos_i, float), 0.0, 1.0)
     cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - c * c) / (n * n)))
     denominator_s, denominator_p = c + n * cos_t, n * c + cos_t
@@ -119,7 +119,7 @@ def fresnel_reflectance(cos_i: np.ndarray, n: float) -> np.ndarray:
 def reflection_differential_cross_section(radius_nm: float, n: float, cos_theta: np.ndarray) -> np.ndarray:
     """``dC/dΩ = (a²/4) R((π − Θ)/2)`` (nm²/sr): the external reflection of a large sphere of
     ``radius_nm`` and relative index ``n``, and of any large convex particle of its surface in random
-    orientation (van de Hulst 1957, §§ 8.42, 12.21), at scattering angle Θ = arccos ``cos_theta``."""
+    orientation (van de Hulst 1957, chapters 8 and 12), at scattering angle Θ = arccos ``cos_theta``."""
     incidence = (np.pi - np.arccos(np.clip(cos_theta, -1.0, 1.0))) / 2.0
     return radius_nm**2 / 4.0 * fresnel_reflectance(np.cos(incidence), n)
 
@@ -147,7 +147,7 @@ def fibre_scattering(fibres: Fibres, dye: Dye | None, wavelengths_nm: np.ndarray
     :data:`precompute.optics.mie.PHASE_TABLE_TOLERANCE`, as for any particle (an automatic grid is
     then refined).  What is left after the diffraction is taken out is ``Q_sca − 1`` only as x → ∞:
     at finite x the edge terms of the extinction (``Q_ext − 2 ∝ x^(−2/3)``, van de Hulst 1957,
-    §17.2) stay in it."""
+    chapter 17) stay in it."""
     wavelengths_nm = np.asarray(wavelengths_nm, float)
     diameter = proxy_diameter_nm(fibres)
     radius = diameter / 2.0

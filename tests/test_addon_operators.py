@@ -127,7 +127,8 @@ def test_medium_settings_load_the_preset_and_send_only_changed_values(addon, sce
 
 def test_weave_settings_with_bad_values_are_refused_by_name_and_build_nothing(addon, scene):
     weave = scene.clothlight.weave
-    weave.yarn_radius_mm = 0.3  # wider than half the 0.5 mm spacing: neighbouring yarns would intersect
+    weave.cross_section = "ROUND"
+    weave.yarn_radius_mm = 0.3  # wider than half the spacing (0.4 mm): neighbouring yarns would intersect
     with pytest.raises(RuntimeError, match="yarn_radius_mm"):
         bpy.ops.clothlight.build_sample()
     weave.yarn_radius_mm = 0.1
@@ -147,8 +148,10 @@ def test_build_sample_makes_a_real_size_sample_and_rebuilds_it_in_place(addon, s
     assert bpy.ops.clothlight.build_sample() == {"FINISHED"}
     obj = bpy.context.active_object
     assert obj["clothlight_weave"]["warp_count"] == 4
-    # Modelled in mm, shown at its physical size in a metre scene: 6 picks × 0.5 mm = 3 mm = 0.003 m.
-    assert obj.dimensions.x == pytest.approx(0.003, rel=0.02)
+    # Modelled in mm, shown at its physical size in a metre scene: 6 picks × 0.4 mm = 2.4 mm = 0.0024 m
+    # (the default: cotton sheeting, clothlight.weave.closeup.sheeting_weave).
+    assert weave.spacing_mm == pytest.approx(0.4) and weave.cross_section == "ELLIPTICAL" and weave.use_plies
+    assert obj.dimensions.x == pytest.approx(6 * 0.4e-3, rel=0.02)
     weave.pattern = "twill_2_1"
     weave.warp_count = 3
     assert bpy.ops.clothlight.build_sample() == {"FINISHED"}
@@ -635,8 +638,9 @@ def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come
     assert "This medium is undyed" in _draw_panels(context)
     scene.clothlight.medium.base = "red_cotton"
     tiny(scene.clothlight.medium)
-    scene.clothlight.weave.pattern = "plain"
-    bpy.ops.clothlight.build_sample()
+    weave = scene.clothlight.weave
+    weave.pattern, weave.cross_section, weave.auto_crimp = "plain", "ELLIPTICAL", False  # the default sample
+    assert bpy.ops.clothlight.build_sample() == {"FINISHED"}
     bpy.ops.clothlight.apply_material()
     sample = bpy.context.active_object
     context = SimpleNamespace(scene=scene, active_object=sample, window_manager=bpy.context.window_manager,

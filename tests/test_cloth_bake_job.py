@@ -10,8 +10,8 @@ import pytest
 
 pytest.importorskip("bpy")
 
-from clothlight.garment.tables import check_cloth_table_folder  # noqa: E402
-from clothlight.jobs import ClothBakeCancelled, ClothBakeFailed, ClothBakeJob  # noqa: E402
+from clothlight.garment.tables import check_cloth_table_folder
+from clothlight.jobs import ClothBakeCancelled, ClothBakeFailed, ClothBakeJob
 
 pytestmark = [pytest.mark.blender, pytest.mark.render, pytest.mark.slow]
 

@@ -24,7 +24,6 @@ from precompute.errors import ParameterError
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.optics.ballistic import ATTENUATION_SAMPLES
 from precompute.tables.closure_fit import LOBES
-from precompute.errors import ParameterError
 from tests.helpers import cook_torrance_between, write_yarn_table_folder
 
 bpy = pytest.importorskip("bpy")

@@ -42,7 +42,7 @@ from ..medium_settings import (
 )
 from . import running_jobs
 from ..weave import BUILT_IN, WeaveParameterError, WeaveParameters
-from ..weave.closeup import FLYAWAY_BOUNDS, CloseupSettings
+from ..weave.closeup import FLYAWAY_BOUNDS, CloseupSettings, sheeting_weave
 from ..weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM, IRREGULARITY_BOUNDS
 
 from precompute.optics import medium as _medium
@@ -50,7 +50,9 @@ from precompute.optics import medium as _medium
 from precompute import bounds as _bounds
 from precompute.errors import ParameterError
 
-_WEAVE = WeaveParameters()
+#: What Build Sample makes by default: cotton sheeting at its real density, of the default medium's
+#: plies, irregular (clothlight.weave.closeup.sheeting_weave; the validation rig keeps its own sample).
+_WEAVE = sheeting_weave()
 _CLOSEUP = CloseupSettings()
 _REQUEST = preset_request(_medium.DEFAULT_PRESET)
 
@@ -113,7 +115,7 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
         description="Centre-to-centre distance of neighbouring yarns, warp and weft alike, in millimetres "
                     "(0.5 mm is 20 threads per centimetre)")
     cross_section: EnumProperty(
-        name="Cross-Section", default="ROUND",
+        name="Cross-Section", default="ELLIPTICAL" if _WEAVE.semi_axes_mm else "ROUND",
         items=[("ROUND", "Round", "A circular yarn, as the paper's model (§3.2)"),
                ("ELLIPTICAL", "Elliptical", "A yarn flattened in the cloth plane, as in dense cloth (§7)")],
         description="Shape of the yarn's cross-section")
@@ -123,23 +125,23 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
         description="Radius of the round yarn, in millimetres. The tables are baked for the medium's yarn "
                     "radius: keep the two equal")
     half_width_mm: FloatProperty(
-        name="Half-Width (mm)", default=DEFAULT_YARN_RADIUS_MM * 1.5, min=0.001, max=10.0, soft_min=0.02,
+        name="Half-Width (mm)", default=_WEAVE.cross_section_mm[0], min=0.001, max=10.0, soft_min=0.02,
         soft_max=1.0, precision=3, step=1,
         description="Semi-axis of the elliptical cross-section in the cloth plane, in millimetres")
     half_thickness_mm: FloatProperty(
-        name="Half-Thickness (mm)", default=DEFAULT_YARN_RADIUS_MM * 0.75, min=0.001, max=10.0, soft_min=0.02,
+        name="Half-Thickness (mm)", default=_WEAVE.cross_section_mm[1], min=0.001, max=10.0, soft_min=0.02,
         soft_max=1.0, precision=3, step=1,
         description="Semi-axis of the elliptical cross-section across the cloth, in millimetres")
     auto_crimp: BoolProperty(
-        name="Automatic Crimp", default=True,
+        name="Automatic Crimp", default=_WEAVE.crimp_amplitude_mm is None,
         description=f"Crimp just clearing the crossing yarns: (1 + {CROSSING_CLEARANCE:g}) × the yarn's half-thickness")
     crimp_warp_mm: FloatProperty(
-        name="Warp Crimp (mm)", default=DEFAULT_YARN_RADIUS_MM * (1 + CROSSING_CLEARANCE), min=0.0, max=10.0,
+        name="Warp Crimp (mm)", default=_WEAVE.crimp_amplitudes_mm[0], min=0.0, max=10.0,
         soft_max=1.0, precision=3, step=1,
         description="Height of a warp yarn's centreline above (below) the cloth's mid-plane where it passes over "
                     "(under) a pick, in millimetres")
     crimp_weft_mm: FloatProperty(
-        name="Weft Crimp (mm)", default=DEFAULT_YARN_RADIUS_MM * (1 + CROSSING_CLEARANCE), min=0.0, max=10.0,
+        name="Weft Crimp (mm)", default=_WEAVE.crimp_amplitudes_mm[1], min=0.0, max=10.0,
         soft_max=1.0, precision=3, step=1,
         description="Height of a weft yarn's centreline above (below) the cloth's mid-plane where it passes over "
                     "(under) an end, in millimetres")
@@ -151,24 +153,27 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
         name="Segments Around", default=_WEAVE.segments_around, **COUNT_BOUNDS["segments_around"].limits(), soft_max=48,
         description="Mesh segments around a yarn's cross-section")
     use_plies: BoolProperty(
-        name="Plies and Twist", default=False,
+        name="Plies and Twist", default=_WEAVE.ply_count > 1,
         description="Yarns made of the Base Medium's plies (its yarn.ply_count) twisted about the yarn axis at its "
                     "twist angle (yarn.twist_angle_deg), the one twist of the preset; off: smooth tubes")
     spacing_jitter: FloatProperty(
-        name="Spacing Jitter", default=0.0, **IRREGULARITY_BOUNDS["spacing_jitter"].limits(), soft_max=0.1,
+        name="Spacing Jitter", default=_WEAVE.spacing_jitter,
+        **IRREGULARITY_BOUNDS["spacing_jitter"].limits(), soft_max=0.1,
         precision=3, step=1, subtype="FACTOR",
         description="Seeded irregularity: every yarn moves across the cloth by up to this fraction of the spacing "
-                    f"(the Cotton Sheeting Close-Up preset: {_CLOSEUP.spacing_jitter:g})")
+                    "(cotton's default)")
     height_jitter: FloatProperty(
-        name="Height Jitter", default=0.0, **IRREGULARITY_BOUNDS["height_jitter"].limits(), soft_max=0.5,
+        name="Height Jitter", default=_WEAVE.height_jitter,
+        **IRREGULARITY_BOUNDS["height_jitter"].limits(), soft_max=0.5,
         precision=3, step=1, subtype="FACTOR",
         description="Seeded irregularity: every crossing moves up or down by up to this fraction of the yarn's "
-                    f"half-thickness (the Cotton Sheeting Close-Up preset: {_CLOSEUP.height_jitter:g})")
+                    "half-thickness (cotton's default)")
     ply_radius_jitter: FloatProperty(
-        name="Ply Radius Jitter", default=0.0, **IRREGULARITY_BOUNDS["ply_radius_jitter"].limits(), soft_max=0.5,
+        name="Ply Radius Jitter", default=_WEAVE.ply_radius_jitter,
+        **IRREGULARITY_BOUNDS["ply_radius_jitter"].limits(), soft_max=0.5,
         precision=3, step=1, subtype="FACTOR",
         description="Seeded irregularity: every ply is thinner at each crossing by up to this fraction of its "
-                    f"radius (the Cotton Sheeting Close-Up preset: {_CLOSEUP.ply_radius_jitter:g})")
+                    "radius (cotton's default)")
     irregularity_seed: IntProperty(
         name="Seed", default=_CLOSEUP.seed, min=0, max=2**31 - 1,
         description="Seed of the irregularity and the flyaway fibres: the same seed builds the same sample")

@@ -11,7 +11,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import PointerProperty
 
-from . import operators, preferences, preset_menus, properties, running_jobs, sun_link, ui
+from . import closeup_operator, operators, preferences, preset_menus, properties, running_jobs, sun_link, ui
 from .garment import operator as garment_operator
 from .validation import operator as validation_operator
 
@@ -22,6 +22,7 @@ CLASSES = (
     *properties.CLASSES,
     *preset_menus.CLASSES,
     *operators.CLASSES,
+    *closeup_operator.CLASSES,
     *validation_operator.CLASSES,
     *garment_operator.CLASSES,
     *ui.CLASSES,

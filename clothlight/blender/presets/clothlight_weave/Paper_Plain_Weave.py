@@ -11,3 +11,7 @@ weave.yarn_radius_mm = 0.1
 weave.auto_crimp = True
 weave.segments_per_crossing = 8
 weave.segments_around = 12
+weave.use_plies = False
+weave.spacing_jitter = 0.0
+weave.height_jitter = 0.0
+weave.ply_radius_jitter = 0.0

@@ -37,6 +37,7 @@ def main() -> int:
     parser.add_argument("--free", required=True, help="the medium's free parameters (the sheen's two are added)")
     parser.add_argument("--sheen-index", type=float, default=1.557, help="the sheen's Fresnel index (1.557)")
     parser.add_argument("--max-back-front", type=float, default=None, help="as python -m clothlight.fit's")
+    parser.add_argument("--target-ratios", default=None, help="as python -m clothlight.fit's, e.g. B/R=0.06,G/R=0.14")
     parser.add_argument("--budget-evaluations", type=int, default=60)
     parser.add_argument("--budget-seconds", type=float, default=None)
     parser.add_argument("--seed", type=int, default=0)
@@ -50,7 +51,7 @@ def main() -> int:
     free = [*args.free.split(","), "specular_weight", "specular_slope"]
     result = fit_medium(measurement, config, base_dir, free=free, forward_model=model, seed=args.seed,
                         budget=Budget(args.budget_evaluations, args.budget_seconds),
-                        max_back_front=args.max_back_front,
+                        max_back_front=args.max_back_front, target_ratios=args.target_ratios,
                         progress=lambda p: print(f"{p.evaluations}/{p.total} best {p.best_objective:.4f}", flush=True))
     write_fit_folder(result, args.out, measured_name=args.measured.name)
     model_metrics = result.metrics["model"]

@@ -95,7 +95,9 @@ def test_flyaways_rebuild_in_place_and_leak_nothing(empty_scene):
 def test_the_panel_builds_the_base_mediums_plies_and_the_operator_grows_fibres(settings_registered):
     scene = settings_registered
     weave = scene.clothlight.weave
-    assert weave.parameters().ply_count == 1           # plies are asked for, not the default
+    assert weave.use_plies  # the default sample is the close-up: the Base Medium's plies
+    weave.use_plies = False
+    assert weave.parameters().ply_count == 1
     weave.use_plies = True
     yarn = load_preset(scene.clothlight.medium.base).yarn
     params = weave.parameters()

@@ -522,6 +522,9 @@ def check_dye_series(configuration: BakeConfiguration, dye_series) -> tuple[floa
     dye = configuration.medium.dye
     if dye is None:
         raise ParameterError("dye_series", dye_series, "a dyed medium (this preset has no [dye])")
+    if configuration.medium.fibres is not None:  # their dye changes their index, hence their scattering
+        raise ParameterError("dye_series", dye_series, "a medium without [fibres]: a fibre's dye changes how it "
+                                                       "scatters, so a dye change needs a new simulation")
     low, high = bounds.check_dye_range(dye_series)
     if not low <= dye.weight_percent <= high:
         raise ParameterError("dye.weight_percent", dye.weight_percent, f"within the dye series' {low:g}–{high:g} %")

@@ -183,6 +183,8 @@ TRANSPORT_DEFAULTS = MappingProxyType({
 #: and at 100 µm it is already ~1200 terms in the blue.
 PARTICLE_DIAMETER_NM = Bound("particles[*].diameter_nm", 1.0, 100_000.0, unit="nm")
 YARN_RADIUS_MM = Bound("yarn.radius_mm", 0.001, 10.0, unit="mm")
+#: Fibre diameters, µm: from fine microfibres to coarse wool and bast fibres.
+FIBRE_DIAMETER_UM = Bound("fibres.diameter_um", 1.0, 100.0, unit="µm")
 #: Plies twisted into one yarn: sewing threads and shirting go up to 6; one is a single yarn.
 YARN_PLY_COUNT = Bound("yarn.ply_count", 1, 6, integer=True)
 #: Surface twist angle of the yarn (the helix angle of its plies and fibres to its axis): 0 is
@@ -271,7 +273,8 @@ def decayed_tally_bytes(n_around: int, angular_resolution: int, wavelengths: int
     return 4 * n_in * n_around * n_out * wavelengths * steps
 
 
-__all__ = ["ANGULAR_RESOLUTION", "HOST_REFRACTIVE_INDEX", "INCIDENCE_RESOLUTION", "MEMORY_FRACTION", "N_ALONG",
+__all__ = ["ANGULAR_RESOLUTION", "FIBRE_DIAMETER_UM", "HOST_REFRACTIVE_INDEX", "INCIDENCE_RESOLUTION",
+           "MEMORY_FRACTION", "N_ALONG",
            "N_AROUND", "PARTICLE_DIAMETER_NM", "PATHS_PER_CELL", "SEED", "SLAB_ALBEDO", "SLAB_G", "SLAB_INDEX",
            "SLAB_PATHS", "SLAB_SEED", "SLAB_TAU", "TARGET_REL_STDERR", "TRANSPORT_DEFAULTS", "WAVELENGTH_COUNT",
            "YARN_RADIUS_MM", "YARN_PLY_COUNT", "YARN_TWIST_ANGLE_DEG",

@@ -151,3 +151,11 @@ def test_fibres_packed_denser_than_spheres_can_be_have_optics():
     config, base = load_preset_config(FIBRE_COTTON)
     dense = medium_from_dict({**config, "fibres": {**config["fibres"], "volume_fraction": 0.8}}, base)
     assert np.all(medium_optics(dense).mu_t > medium_optics(medium_from_dict(config, base)).mu_t)
+
+
+def test_the_bake_refuses_a_dye_series_for_fibres_whose_dye_changes_how_they_scatter():
+    from precompute.bake import bake_configuration, check_dye_series
+
+    configuration = bake_configuration(FIBRE_COTTON)
+    with pytest.raises(ParameterError, match="dye_series = .*without \\[fibres\\]"):
+        check_dye_series(configuration, (0.05, 3.0))

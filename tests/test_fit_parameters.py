@@ -23,8 +23,8 @@ from precompute.fit.parameters import (
     parse_free,
 )
 from precompute.fit.report import to_toml
+from precompute.bounds import FIBRE_DIAMETER_UM
 from precompute.optics.medium import (
-    FIBRE_DIAMETER_UM,
     MAX_FIBRE_VOLUME_FRACTION,
     MAX_VOLUME_FRACTION,
     load_preset_config,

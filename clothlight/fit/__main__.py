@@ -32,7 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m clothlight.fit",
         description="CMA-ES over the free parameters of a medium against a measured-data CSV: fitted on the "
-        "plane of incidence, checked on the perpendicular plane (held out), compared with the paper's "
+        "plane of incidence, checked on the measurement's other azimuths (held out), compared with the paper's "
         "Lambert + Cook-Torrance baseline fitted to the same views. Writes preset.toml, fit.json, report.md "
         "and plots into --out. docs/fitting.md.",
     )

@@ -45,8 +45,6 @@ DEFAULT_PRESET = "red_cotton"
 MAX_VOLUME_FRACTION = 0.74
 #: Densest packing of parallel equal cylinders (hexagonal, π/(2√3) ≈ 0.9069): no bundle of fibres fills more.
 MAX_FIBRE_VOLUME_FRACTION = 0.90
-#: Fibre diameters, µm: from fine microfibres to coarse wool and bast fibres.
-FIBRE_DIAMETER_UM = bounds.Bound("fibres.diameter_um", 1.0, 100.0, unit="µm")
 DEPENDENT_SCATTERING_MODELS = ("none", "percus-yevick")
 #: ``medium.phase_samples`` value that lets the optics choose the cos θ grid (the default).
 AUTO_PHASE_SAMPLES = "auto"
@@ -292,7 +290,7 @@ class Fibres:
     def __post_init__(self):
         if not isinstance(self.refractive_index, RefractiveIndex):
             raise ParameterError("fibres.refractive_index", self.refractive_index, "a RefractiveIndex")
-        FIBRE_DIAMETER_UM.check(self.diameter_um)
+        bounds.FIBRE_DIAMETER_UM.check(self.diameter_um)
         fraction = _finite("fibres.volume_fraction", self.volume_fraction, f"(0, {MAX_FIBRE_VOLUME_FRACTION})")
         if not 0.0 < fraction < MAX_FIBRE_VOLUME_FRACTION:
             raise ParameterError("fibres.volume_fraction", self.volume_fraction, f"(0, {MAX_FIBRE_VOLUME_FRACTION})")

@@ -12,11 +12,8 @@ import bpy
 
 from precompute.errors import ParameterError
 
+from .operators import is_sample
 from .sample_object import WEAVE_PROPERTY, weave_from_record
-
-
-def _is_sample(obj) -> bool:
-    return obj is not None and obj.type == "MESH" and WEAVE_PROPERTY in obj
 
 
 class CLOTHLIGHT_OT_add_flyaways(bpy.types.Operator):
@@ -31,7 +28,7 @@ class CLOTHLIGHT_OT_add_flyaways(bpy.types.Operator):
         if context.mode != "OBJECT":
             cls.poll_message_set("Switch to Object Mode")
             return False
-        if not _is_sample(context.active_object):
+        if not is_sample(context.active_object):
             cls.poll_message_set("Select a ClothLight sample (Build Sample makes one)")
             return False
         return True

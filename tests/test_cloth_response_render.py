@@ -63,8 +63,8 @@ def test_the_response_reproduces_the_sweep_within_one_percent_per_view_on_three_
     response = measure_response(media["thin"], views, resolution=128, supersampling=4)
     settings = RigSettings(incidences_deg=INCIDENCES, views_deg=VIEWS)
     for name, tables in media.items():
-        results = run_validation(None, tmp_path / "sweeps" / name, materials=("yarn",), tables_dir=tables.brdf_path.parent,
-                                 swatches=False, settings=settings)
+        results = run_validation(None, tmp_path / "sweeps" / name, materials=("yarn",),
+                                 tables_dir=tables.brdf_path.parent, swatches=False, settings=settings)
         sweep = {(v["theta_i_deg"], v["theta_v_deg"]): np.array(v["brdf_rgb"])
                  for v in results["materials"]["yarn"]["views"]}
         model = response.cloth_brdf(_read(tables.brdf_path), _read(tables.unscattered_path), _layout(tables),

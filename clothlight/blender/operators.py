@@ -25,7 +25,7 @@ import bpy
 
 from . import preferences
 from ..fit_job import FitJob, fit_unavailable_reason
-from ..jobs import (BakeJob, ClothBakeJob, JobCancelled, JobFailed,
+from ..jobs import (BakeCancelled, BakeFailed, BakeJob, ClothBakeJob, JobCancelled, JobFailed,
                     bake_unavailable_reason)
 from ..medium_settings import BakeRequest, preset_request
 from .materials import (
@@ -414,36 +414,8 @@ class _ChildJobOperator:
     def modal(self, context, event):
         return _modal_job(self, context, event, self._running)
 
-    def _report_unfinished(self, job) -> set | None:
-        """Report a cancelled or failed ``job`` ({'CANCELLED'}, its log on the console for a
-        failure that is not bad input); None when it finished."""
-        if isinstance(job.error, JobCancelled):
-            self.report({"WARNING"}, str(job.error))
-            return {"CANCELLED"}
-        if isinstance(job.error, JobFailed):
-            if not job.error.bad_input and job.error.log:
-                print(job.error.log, file=sys.stderr)
-            self.report({"ERROR"}, f"{self._what} failed: {job.error}")
-            return {"CANCELLED"}
-        return None
-
     def cancel(self, context):
         _end_job(self, self._running)
-
-
-class _CancelJobOperator:
-    """What the panels' Cancel buttons do: ask the one running job of ``_running`` to stop."""
-
-    _running: type
-    bl_options = {"INTERNAL"}
-
-    @classmethod
-    def poll(cls, context):
-        return cls._running.job is not None
-
-    def execute(self, context):
-        self._running.job.cancel()
-        return {"FINISHED"}
 
 
 class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
@@ -464,9 +436,14 @@ class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
         return job
 
     def _finish(self, scene, job: BakeJob):
-        unfinished = self._report_unfinished(job)
-        if unfinished is not None:
-            return unfinished
+        if isinstance(job.error, BakeCancelled):
+            self.report({"WARNING"}, str(job.error))
+            return {"CANCELLED"}
+        if isinstance(job.error, BakeFailed):
+            if not job.error.bad_input and job.error.log:
+                print(job.error.log, file=sys.stderr)
+            self.report({"ERROR"}, f"Bake failed: {job.error}")
+            return {"CANCELLED"}
         outcome = job.outcome
         medium = scene.clothlight.medium
         recoloured = _recolour_materials(medium, job.request, outcome.folder)
@@ -486,12 +463,20 @@ class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
         return "Baking ClothLight tables"
 
 
-class CLOTHLIGHT_OT_cancel_bake(_CancelJobOperator, bpy.types.Operator):
+class CLOTHLIGHT_OT_cancel_bake(bpy.types.Operator):
     """Stop the running bake; no table is written"""
 
     bl_idname = "clothlight.cancel_bake"
     bl_label = "Cancel Bake"
-    _running = RunningBake
+    bl_options = {"INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return RunningBake.job is not None
+
+    def execute(self, context):
+        RunningBake.job.cancel()
+        return {"FINISHED"}
 
 
 # -- Bake Cloth ----------------------------------------------------------------------------------
@@ -518,9 +503,14 @@ class CLOTHLIGHT_OT_bake_cloth(_ChildJobOperator, bpy.types.Operator):
                             bytecode_cache_dir=preferences.bytecode_cache_directory())
 
     def _finish(self, scene, job: ClothBakeJob):
-        unfinished = self._report_unfinished(job)
-        if unfinished is not None:
-            return unfinished
+        if isinstance(job.error, JobCancelled):
+            self.report({"WARNING"}, str(job.error))
+            return {"CANCELLED"}
+        if isinstance(job.error, JobFailed):
+            if not job.error.bad_input and job.error.log:
+                print(job.error.log, file=sys.stderr)
+            self.report({"ERROR"}, f"Cloth bake failed: {job.error}")
+            return {"CANCELLED"}
         scene.clothlight.cloth_tables_dir = str(job.outcome.folder)
         how = "measured" if job.outcome.rendered else "found in the cache"
         self.report({"INFO"}, f"Cloth tables {how}: {job.outcome.folder}")
@@ -534,12 +524,20 @@ class CLOTHLIGHT_OT_bake_cloth(_ChildJobOperator, bpy.types.Operator):
         return "Baking the ClothLight cloth" + (f", {job.stage}" if job.stage else "")
 
 
-class CLOTHLIGHT_OT_cancel_cloth_bake(_CancelJobOperator, bpy.types.Operator):
+class CLOTHLIGHT_OT_cancel_cloth_bake(bpy.types.Operator):
     """Stop the running cloth bake; no cloth table is written"""
 
     bl_idname = "clothlight.cancel_cloth_bake"
     bl_label = "Cancel Cloth Bake"
-    _running = RunningClothBake
+    bl_options = {"INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return RunningClothBake.job is not None
+
+    def execute(self, context):
+        RunningClothBake.job.cancel()
+        return {"FINISHED"}
 
 
 # -- Fit to Measurement --------------------------------------------------------------------------
@@ -585,9 +583,14 @@ class CLOTHLIGHT_OT_fit_medium(_ChildJobOperator, bpy.types.Operator):
         return job
 
     def _finish(self, scene, job: FitJob):
-        unfinished = self._report_unfinished(job)
-        if unfinished is not None:
-            return unfinished
+        if isinstance(job.error, JobCancelled):
+            self.report({"WARNING"}, str(job.error))
+            return {"CANCELLED"}
+        if isinstance(job.error, JobFailed):
+            if not job.error.bad_input and job.error.log:
+                print(job.error.log, file=sys.stderr)
+            self.report({"ERROR"}, f"Fit failed: {job.error}")
+            return {"CANCELLED"}
         outcome = job.outcome
         settings = scene.clothlight
         last = {"folder": str(outcome.folder), "preset": str(outcome.preset), "relative_rms": outcome.relative_rms,
@@ -612,12 +615,20 @@ class CLOTHLIGHT_OT_fit_medium(_ChildJobOperator, bpy.types.Operator):
         return "Fitting the ClothLight medium" + (f", {job.stage}" if job.stage else "")
 
 
-class CLOTHLIGHT_OT_cancel_fit(_CancelJobOperator, bpy.types.Operator):
+class CLOTHLIGHT_OT_cancel_fit(bpy.types.Operator):
     """Stop the running fit; nothing is written"""
 
     bl_idname = "clothlight.cancel_fit"
     bl_label = "Cancel Fit"
-    _running = RunningFit
+    bl_options = {"INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return RunningFit.job is not None
+
+    def execute(self, context):
+        RunningFit.job.cancel()
+        return {"FINISHED"}
 
 
 class CLOTHLIGHT_OT_load_fit(bpy.types.Operator):

@@ -240,7 +240,8 @@ def test_garment_material_refuses_meshes_without_uvs_and_incomplete_bakes(tmp_pa
 def red_cotton_cloth(tmp_path_factory):
     cache = tmp_path_factory.mktemp("cache")
     settings = GoniometerSettings(incidence_resolution=3, exit_resolution=3, pixels_per_patch=10, samples=2)
-    folder, measured = bake_cloth(YARN_BAKE, settings, cache_dir=cache)
+    # The render-based measurement, the response's check (tests/test_garment_response_render.py)
+    folder, measured = bake_cloth(YARN_BAKE, settings, cache_dir=cache, method="render")
     assert measured
     return folder, settings, cache
 
@@ -249,7 +250,7 @@ def test_cloth_bake_is_cached_and_self_describing(tmp_path, red_cotton_cloth):
     from precompute.tables.exr import read_table
 
     folder, settings, cache = red_cotton_cloth
-    again, measured = bake_cloth(YARN_BAKE, settings, cache_dir=cache)
+    again, measured = bake_cloth(YARN_BAKE, settings, cache_dir=cache, method="render")
     assert again == folder and not measured
     # A yarn bake whose lobes were refitted (another cache key, the same ρ) measures nothing again.
     import shutil
@@ -267,7 +268,7 @@ def test_cloth_bake_is_cached_and_self_describing(tmp_path, red_cotton_cloth):
     if FILE_HASHES_KEY in summary:
         summary[FILE_HASHES_KEY] = file_hashes(refitted, summary[FILE_HASHES_KEY])
     (refitted / "summary.json").write_text(json.dumps(summary))
-    assert bake_cloth(refitted, settings, cache_dir=cache)[1] is False
+    assert bake_cloth(refitted, settings, cache_dir=cache, method="render")[1] is False
     tables = cloth_tables_from_bake(folder)
     for side, path in tables.brdf_paths.items():
         table = read_table(path, "brdf")

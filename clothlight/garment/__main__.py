@@ -1,5 +1,9 @@
 """``python -m clothlight.garment bake``: measure a cloth BSDF on the woven sample and bake it.
 
+By default the measurement is read off the weave's cloth response (rendered once per weave and
+gonioreflectometer settings, cached, then seconds for any yarn); ``--method render`` renders the
+measurement with the yarn itself, the response's check (docs/garment.md).
+
 Example::
 
     python -m precompute bake --out out/bake                       # the yarn (paper's red cotton)
@@ -42,6 +46,7 @@ def build_parser():
         GONIO_PIXELS_PER_PATCH,
         GONIO_SAMPLES,
     )
+    from .goniometry import MEASUREMENT_METHODS
 
     parser = argparse.ArgumentParser(prog="python -m clothlight.garment", description=__doc__.split("\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)
@@ -60,6 +65,10 @@ def build_parser():
                            f"(default {pixels})")
     bake.add_argument("--samples", type=GONIO_SAMPLES.argument("--samples"), default=samples,
                       help=f"Cycles samples per pixel, {GONIO_SAMPLES.allowed()} (default {samples})")
+    bake.add_argument("--method", choices=MEASUREMENT_METHODS, default=MEASUREMENT_METHODS[0],
+                      help="response: read the measurement off the weave's cloth response, rendered once per weave "
+                           "and these settings (cached), seconds for each yarn; render: render it with this yarn, "
+                           "the response's check (default: %(default)s)")
     from precompute import distributed
     default_scheduler = distributed.default_scheduler() or distributed.NO_SCHEDULER
     bake.add_argument("--scheduler", default=default_scheduler, metavar="local|tcp://HOST:PORT|none",
@@ -97,7 +106,7 @@ def _measure(args, interrupt):
 
     try:
         folder, measured = bake_cloth(args.tables, settings, cache_dir=args.cache_dir, progress=progress,
-                                      scheduler=args.scheduler)
+                                      scheduler=args.scheduler, method=args.method)
     finally:
         if progress_shown:
             print(file=sys.stderr)  # end the progress line: what follows starts on its own
@@ -146,8 +155,13 @@ def _main(argv) -> int:
     if args.json:
         sys.stdout.write(json.dumps(summary, indent=1) + "\n")
         return 0
-    print(f"cloth tables: {out} ({'measured' if measured else 'from the cache'}, "
-          f"{summary['seconds']['renders']:.0f} s of renders)")
+    how = summary["measurement"]
+    if how["method"] == "response":
+        print(f"cloth tables: {out} (read off the weave's cloth response in {how['seconds']:.1f} s; the response's "
+              f"{summary['seconds']['renders']:.0f} s of renders {'now' if measured else 'were cached'})")
+    else:
+        print(f"cloth tables: {out} ({'measured' if measured else 'from the cache'}, "
+              f"{summary['seconds']['renders']:.0f} s of renders)")
     print(f"energy: reflected + transmitted + open ≤ {summary['energy']['max_total']:.3f} of the incident flux")
     fit = summary["closure_fit_relative_error_median_rgb"]
     print("closure fit, median relative error (R, G, B): "

@@ -147,9 +147,10 @@ def required_sample_half_size_mm(layout: RegionLayout, half_thickness_mm: float,
 @dataclass(frozen=True)
 class OrthographicView:
     """An orthographic camera looking at ``center`` from ``toward_camera``: its image axes
-    (``right``, ``up``, both unit and perpendicular to the view), pixel side ``pixel_mm`` and
-    image size ``width`` × ``height`` pixels.  ``up`` is the world +z projected onto the image
-    plane (+y when looking along z), so the cloth's foreshortening runs along it."""
+    (``right``, ``up``, both unit and perpendicular to the view), pixel width ``pixel_mm`` (along
+    ``right``) and height ``pixel_mm · aspect`` (along ``up``), and image size ``width`` × ``height``
+    pixels.  ``up`` is the world +z projected onto the image plane (+y when looking along z), so
+    the cloth's foreshortening runs along it."""
 
     toward_camera: tuple[float, float, float]
     center: tuple[float, float, float]
@@ -158,11 +159,17 @@ class OrthographicView:
     pixel_mm: float
     width: int
     height: int
+    aspect: float = 1.0
 
     @property
     def ortho_scale(self) -> float:
         """Blender's orthographic scale: the image's larger side, mm."""
-        return self.pixel_mm * max(self.width, self.height)
+        return max(self.pixel_mm * self.width, self.pixel_mm * self.aspect * self.height)
+
+    @property
+    def pixel_aspect(self) -> tuple[float, float]:
+        """Blender's (pixel_aspect_x, pixel_aspect_y), each ≥ 1, of this view's pixels."""
+        return (1.0 / self.aspect, 1.0) if self.aspect < 1.0 else (1.0, self.aspect)
 
     def camera_matrix(self, distance: float) -> np.ndarray:
         """The camera object's 4 × 4 world matrix at ``distance`` from the centre (Blender cameras
@@ -179,7 +186,7 @@ class OrthographicView:
         centre z: (…, 2) x, y, mm."""
         w, r, u, c = (np.asarray(v, float) for v in (self.toward_camera, self.right, self.up, self.center))
         a = (np.asarray(columns, float) - self.width / 2.0) * self.pixel_mm
-        b = (self.height / 2.0 - np.asarray(rows, float)) * self.pixel_mm
+        b = (self.height / 2.0 - np.asarray(rows, float)) * self.pixel_mm * self.aspect
         # The point c + a r + b u of the image plane slid along the view direction back to the
         # mid-plane: an affine map of (a, b), taken per coordinate so that a row of columns and a
         # column of rows broadcast to the image without (…, 3) temporaries.
@@ -188,9 +195,14 @@ class OrthographicView:
         return np.stack(np.broadcast_arrays(x, y), axis=-1)
 
 
-def view_of(toward_camera, layout: RegionLayout, pixels_per_patch: int) -> OrthographicView:
+def view_of(toward_camera, layout: RegionLayout, pixels_per_patch: int, *,
+            pixels_square_on_cloth: bool = False) -> OrthographicView:
     """The camera that sees every region of ``layout`` from ``toward_camera`` with at least
-    ``pixels_per_patch`` pixels across each patch's foreshortened side."""
+    ``pixels_per_patch`` pixels across each patch's foreshortened side: square pixels, so that a
+    grazing view has 1/cos θ_v times as many across the other side.  With ``pixels_square_on_cloth``
+    the pixels are foreshortened as the cloth is (height = width · cos θ_v along ``up``): each one
+    sees a square of side patch / ``pixels_per_patch`` on the cloth's mid-plane, the same in every
+    view."""
     w = np.asarray(toward_camera, float)
     w = w / np.linalg.norm(w)
     if abs(w[2]) < 1e-6:
@@ -198,13 +210,14 @@ def view_of(toward_camera, layout: RegionLayout, pixels_per_patch: int) -> Ortho
     up = np.array([0.0, 0.0, 1.0]) - w[2] * w
     up = np.array([0.0, 1.0, 0.0]) if np.linalg.norm(up) < 1e-6 else up / np.linalg.norm(up)
     right = np.cross(up, w)
-    pixel = layout.patch_mm * abs(w[2]) / pixels_per_patch
+    height_mm = layout.patch_mm * abs(w[2]) / pixels_per_patch
+    pixel, aspect = (layout.patch_mm / pixels_per_patch, abs(w[2])) if pixels_square_on_cloth else (height_mm, 1.0)
     half = layout.half_extent_mm
     corners = np.array([[sx * half, sy * half, 0.0] for sx in (-1, 1) for sy in (-1, 1)])
     width = 2.0 * np.max(np.abs(corners @ right)) / pixel
-    height = 2.0 * np.max(np.abs(corners @ up)) / pixel
+    height = 2.0 * np.max(np.abs(corners @ up)) / height_mm
     return OrthographicView(tuple(w), layout.center, tuple(right), tuple(up), float(pixel),
-                            int(math.ceil(width)) + 2, int(math.ceil(height)) + 2)
+                            int(math.ceil(width)) + 2, int(math.ceil(height)) + 2, float(aspect))
 
 
 def patch_weights(view: OrthographicView, layout: RegionLayout,
@@ -249,3 +262,30 @@ def patch_rho(pixels: np.ndarray, index: np.ndarray, weight: np.ndarray, view: O
                    axis=-1) / counted[:, None] / sun_irradiance
     coverage = np.bincount(patches, w * pixels[..., -1][seen], n) / counted
     return rho, coverage
+
+
+#: How the cloth BSDF is measured: read off the weave's cloth response (:mod:`.response`, the
+#: default) or rendered with the yarn itself (``measure_cloth``, the response's check).
+MEASUREMENT_METHODS = ("response", "render")
+
+
+@dataclass
+class ClothMeasurement:
+    """What the cloth gonioreflectometer measures of a yarn on a weave (rendered, ``measure_cloth``, or
+    from its response, :mod:`.response`): ρ per side (N_i², N_o², 3) in that side's frame, 1/sr, and
+    the part of it that is the yarns' specular term (§5.2, about the cloth normal; (N_i², N_o²),
+    grey); the specular visibility per side (N_i², N_o²), the fraction of the patch's projection
+    where that term shines (yarn facing the sun, lit, seen); the coverage per side and exit cell
+    (N_o²,), the fraction of the cloth hidden by yarn along that view; the yarn material's specular
+    parameters (``weight``, ``slope`` m, ``ior``); the scene's patch side, sample size and half
+    thickness, mm; and the seconds its renders took."""
+
+    rho: dict
+    specular: dict
+    specular_visibility: dict
+    specular_parameters: dict
+    coverage: dict
+    patch_mm: float
+    sample_size_mm: tuple[float, float]
+    half_thickness_mm: float
+    render_seconds: float

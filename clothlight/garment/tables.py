@@ -172,7 +172,7 @@ def check_energy(energy: dict, incidence_resolution: int) -> None:
 
 
 def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key: str, code_digest: str) -> dict:
-    """Write the tables of a :class:`.measure.ClothMeasurement` into ``folder`` (created) and its
+    """Write the tables of a :class:`.goniometry.ClothMeasurement` into ``folder`` (created) and its
     summary; returns the summary."""
     start = time.perf_counter()
     folder = pathlib.Path(folder)

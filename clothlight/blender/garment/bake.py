@@ -1,56 +1,99 @@
 """Bake a cloth BSDF (measure → tables), or find it in the cache.
 
-Two cache entries, as for a yarn (``precompute.bake``: spectral → tables): the measurement
-(``measurement.npz``: ρ per side and coverage), keyed by the yarn's ρ, host index and specular term, the
-gonioreflectometer's settings (weave included) and the code that measures (the yarn shader
-included: the measurement renders it); and the tables written from it, keyed by that key and
-the code that fits and writes them (and renders the weave detail texture, :mod:`.detail`).
-Changing the fit re-renders nothing.
+Two ways to measure, the same quantity (:mod:`clothlight.garment.response_measurement`):
+
+* ``response`` (the default): the weave's cloth response (``cloth_response/<key>``: ``response.npz``,
+  what every camera sample of every view sees in the yarn's frame, and the weave detail texture),
+  rendered once per weave and gonioreflectometer settings and keyed by them and the code that
+  renders it, whatever the yarn; a yarn's measurement is then read off it in seconds, inside the
+  tables' entry.
+* ``render``: the measurement rendered with the yarn itself (``cloth_measurement/<key>``:
+  ``measurement.npz``, ρ per side and coverage), keyed by the yarn's ρ, host index and specular term,
+  the gonioreflectometer's settings (weave included) and the code that measures (the yarn shader
+  included: the measurement renders it): the response's check.
+
+The tables (``cloth_tables/<key>``) are keyed by what they were measured from (the measurement's
+key, or the response's and the yarn's tables) and the code that fits and writes them.  Changing
+the fit re-renders nothing.
 """
 
 from __future__ import annotations
 
 import json
 import pathlib
+import shutil
 import tempfile
+import time
 from collections.abc import Callable
 
 import numpy as np
 
 from ...yarn_tables import yarn_tables_from_bake
-from ...garment.goniometry import SIDES
-from .detail import render_weave_detail
-from .measure import ClothMeasurement, GoniometerSettings, _sample_weave, measure_cloth
+from ...garment.goniometry import MEASUREMENT_METHODS, SIDES, ClothMeasurement
+from ...garment.response import GarmentResponse
+from ...garment.response_measurement import measurement_from_response, yarn_lookup
 from ...garment.tables import DETAIL_FILE, SUMMARY_FILE, write_cloth_summary, write_cloth_tables
+from .detail import render_weave_detail
+from .measure import GoniometerSettings, _sample_weave, measure_cloth, measure_response
 
 from precompute.cache import entries as cache
 from precompute.cache import sources
+from precompute.errors import ParameterError
 from precompute.tables import exr as precompute_tables
 
 MEASUREMENT_NAMESPACE = "cloth_measurement"
+RESPONSE_NAMESPACE = "cloth_response"
 TABLES_NAMESPACE = "cloth_tables"
 MEASUREMENT_FILE = "measurement.npz"
+RESPONSE_FILE = "response.npz"
+#: The weave detail texture's description (:func:`.detail.render_weave_detail`) beside it in a response.
+DETAIL_DESCRIPTION_FILE = "weave_detail.json"
+#: Camera samples along a patch's side in the response (one per pixel, at pixel centres, each a
+#: square on the cloth).  The regular grid's error against 96² samples a patch (paper's red cotton
+#: and the same ρ without its unscattered light, N_i = 3, N_o = 3): 15: 1.9 % / 7.3 %, 21: 1.8 % /
+#: 2.5 %, 24: 4.2 % / 6.3 %, 31: 1.2 % / 2.9 %; the render-based measurement at its defaults
+#: (4 random samples per pixel): 1.5 % / 5.5–6.4 % (docs/garment.md, "Cloth tables in seconds").
+RESPONSE_SAMPLES_PER_SIDE = 21
 _ROOT = pathlib.Path(__file__).resolve().parents[3]
 #: The code of each stage, digested into its key (``precompute.cache.sources``): the modules it runs and
 #: every project module they import, transitively, with the OSL shaders they compile.  The
 #: measurement runs :mod:`.measure` on the yarn tables :mod:`clothlight.yarn_tables` finds, and of
 #: this file what stores it, without the fit this file imports (tests/test_sources.py checks that
-#: what it calls here comes from those modules).
+#: what it calls here comes from those modules).  The response is rendered by :mod:`.measure` and
+#: :mod:`.detail`: not by what reads it.
 MEASUREMENT_SOURCES = {"entries": ("clothlight.blender.garment.measure", "clothlight.yarn_tables"),
                        "files": ("clothlight/blender/garment/bake.py",)}
+RESPONSE_SOURCES = {"entries": ("clothlight.blender.garment.measure", "clothlight.blender.garment.detail"),
+                    "files": ("clothlight/blender/garment/bake.py",)}
 TABLE_SOURCES = {"entries": ("clothlight.blender.garment.bake",)}
 
 
 def measurement_inputs(yarn_tables, settings: GoniometerSettings) -> dict:
     """Everything a cloth measurement depends on (its cache key is their hash): of the yarn bake
-    only what the sun-mode yarn material reads — ρ (the pixels' hash, not the bake's cache key,
-    which also changes with the closure fit), the host index and the weight and slope of the
-    specular term (a fitted preset's, ``YarnTableFiles.specular``; None: the shader's defaults)."""
+    what the sun-mode yarn material reads (:func:`yarn_inputs`), the settings and the code."""
+    return {**yarn_inputs(yarn_tables), "goniometer": settings.to_dict(),
+            "code_digest": sources.stage_digest(_ROOT, **MEASUREMENT_SOURCES)}
+
+
+def yarn_inputs(yarn_tables) -> dict:
+    """What the sun-mode yarn material reads of a yarn bake: ρ and the unscattered light's
+    attenuation (the pixels' hashes, not the bake's cache key, which also changes with the closure
+    fit), the host index and the weight and slope of the specular term (a fitted preset's,
+    ``YarnTableFiles.specular``; None: the shader's defaults)."""
     rho = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").pixels
+    attenuation = precompute_tables.read_table(yarn_tables.unscattered_path, "unscattered").pixels
     specular = yarn_tables.specular
-    return {"yarn_rho_sha256": precompute_tables.content_hash(rho), "host_index": yarn_tables.host_index,
-            "specular": None if specular is None else {key: float(specular[key]) for key in ("weight", "slope")},
-            "goniometer": settings.to_dict(), "code_digest": sources.stage_digest(_ROOT, **MEASUREMENT_SOURCES)}
+    return {"yarn_rho_sha256": precompute_tables.content_hash(rho),
+            "yarn_unscattered_sha256": precompute_tables.content_hash(attenuation),
+            "host_index": yarn_tables.host_index,
+            "specular": None if specular is None else {key: float(specular[key]) for key in ("weight", "slope")}}
+
+
+def response_inputs(settings: GoniometerSettings, samples_per_side: int = RESPONSE_SAMPLES_PER_SIDE) -> dict:
+    """Everything a cloth response depends on (its cache key is their hash): the gonioreflectometer's
+    settings (weave included), the samples along a patch's side and the code that renders it — no yarn."""
+    return {"goniometer": settings.to_dict(), "samples_per_side": int(samples_per_side),
+            "code_digest": sources.stage_digest(_ROOT, **RESPONSE_SOURCES)}
 
 
 #: The per-side arrays of a :class:`ClothMeasurement`, as the cache stores them.
@@ -77,39 +120,96 @@ def load_measurement(path) -> ClothMeasurement:
                                 render_seconds=float(data["render_seconds"]))
 
 
+def cloth_response(settings: GoniometerSettings, tables, *, cache_dir,
+                   samples_per_side: int = RESPONSE_SAMPLES_PER_SIDE,
+                   progress: Callable[[int, int, str], None] | None = None, scheduler: str | None = None,
+                   table_folder=None) -> tuple[pathlib.Path, str, bool]:
+    """The cache folder of the cloth response of ``settings`` (``response.npz`` and the weave detail
+    texture), its key, and whether this call rendered it.  ``tables`` (and ``table_folder``, their
+    bake folder, for a ``scheduler``): any yarn's, to render the lookups with."""
+    inputs = response_inputs(settings, samples_per_side)
+    key = cache.cache_key(inputs)
+    folder = cache.lookup(cache_dir, RESPONSE_NAMESPACE, key)
+    if folder is not None:
+        return folder, key, False
+
+    def render(target: pathlib.Path) -> None:
+        with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
+            response = measure_response(tables, settings, samples_per_side=samples_per_side, render_dir=renders,
+                                        progress=progress, scheduler=scheduler, table_folder=table_folder)
+        response.save(target / RESPONSE_FILE)
+        detail = render_weave_detail(_sample_weave(settings), target / DETAIL_FILE)
+        (target / DETAIL_DESCRIPTION_FILE).write_text(json.dumps(detail))
+
+    folder, _ = cache.store(cache_dir, RESPONSE_NAMESPACE, key, inputs, render)
+    return folder, key, True
+
+
 def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(), *, cache_dir=None,
                progress: Callable[[int, int, str], None] | None = None,
-               scheduler: str | None = None) -> tuple[pathlib.Path, bool]:
+               scheduler: str | None = None, method: str = MEASUREMENT_METHODS[0]) -> tuple[pathlib.Path, bool]:
     """The folder of the cloth tables for the yarn bake ``yarn_bake_dir`` and ``settings``; and
-    whether this call rendered the measurement (False: it was in the cache).  ``scheduler``: where
-    the measurement's renders run (:func:`.measure.measure_cloth`); the tables do not depend on it."""
+    whether this call rendered (False: what it measures from was in the cache).  ``method``: one of
+    :data:`~clothlight.garment.goniometry.MEASUREMENT_METHODS` (module docstring).  ``scheduler``: where the renders run
+    (:func:`.measure.measure_cloth`); the tables do not depend on it."""
+    if method not in MEASUREMENT_METHODS:
+        raise ParameterError("method", method, f"one of {MEASUREMENT_METHODS}")
     tables = yarn_tables_from_bake(yarn_bake_dir)
     cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else cache.default_cache_dir()
-    measured_in = measurement_inputs(tables, settings)
-    measured_key = cache.cache_key(measured_in)
-    measured_folder = cache.lookup(cache_dir, MEASUREMENT_NAMESPACE, measured_key)
-    rendered = measured_folder is None
-    if rendered:
-        def measure(target: pathlib.Path) -> None:
-            with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
-                save_measurement(target / MEASUREMENT_FILE,
-                                 measure_cloth(tables, settings, render_dir=renders, progress=progress,
-                                               scheduler=scheduler, table_folder=yarn_bake_dir))
-
-        measured_folder, _ = cache.store(cache_dir, MEASUREMENT_NAMESPACE, measured_key, measured_in, measure)
-    tables_in = {"measurement": measured_key, "code_digest": sources.stage_digest(_ROOT, **TABLE_SOURCES)}
+    code_digest = sources.stage_digest(_ROOT, **TABLE_SOURCES)
+    if method == "render":
+        measured_folder, measured_key, rendered = _rendered_measurement(tables, settings, cache_dir, progress,
+                                                                        scheduler, yarn_bake_dir)
+        tables_in = {"measurement": measured_key, "code_digest": code_digest}
+    else:
+        response_folder, response_key, rendered = cloth_response(settings, tables, cache_dir=cache_dir,
+                                                                 progress=progress, scheduler=scheduler,
+                                                                 table_folder=yarn_bake_dir)
+        tables_in = {"response": response_key, "yarn": yarn_inputs(tables), "code_digest": code_digest}
     key = cache.cache_key(tables_in)
     folder = cache.lookup(cache_dir, TABLES_NAMESPACE, key)
     if folder is None:
         def write(target: pathlib.Path) -> None:
-            summary = write_cloth_tables(target, load_measurement(measured_folder / MEASUREMENT_FILE), settings,
-                                         tables, cache_key=key, code_digest=tables_in["code_digest"])
-            summary["weave_detail"] = {"file": DETAIL_FILE,
-                                       **render_weave_detail(_sample_weave(settings), target / DETAIL_FILE)}
+            if method == "render":
+                measurement = load_measurement(measured_folder / MEASUREMENT_FILE)
+                how = {"method": method, "measurement_key": measured_key}
+                detail = render_weave_detail(_sample_weave(settings), target / DETAIL_FILE)
+            else:
+                start = time.perf_counter()
+                measurement = measurement_from_response(GarmentResponse.load(response_folder / RESPONSE_FILE),
+                                                        yarn_lookup(tables))
+                how = {"method": method, "response_key": response_key,
+                       "samples_per_side": RESPONSE_SAMPLES_PER_SIDE,
+                       "seconds": time.perf_counter() - start}
+                shutil.copyfile(response_folder / DETAIL_FILE, target / DETAIL_FILE)
+                detail = json.loads((response_folder / DETAIL_DESCRIPTION_FILE).read_text())
+            summary = write_cloth_tables(target, measurement, settings, tables, cache_key=key,
+                                         code_digest=tables_in["code_digest"])
+            summary["measurement"] = how
+            summary["weave_detail"] = {"file": DETAIL_FILE, **detail}
             write_cloth_summary(target, summary)
 
         folder, _ = cache.store(cache_dir, TABLES_NAMESPACE, key, tables_in, write)
     return folder, rendered
+
+
+def _rendered_measurement(tables, settings, cache_dir, progress, scheduler, yarn_bake_dir):
+    """The cache folder of the render-based measurement of ``tables`` (measured now, or found), its
+    key, and whether this call rendered it."""
+    measured_in = measurement_inputs(tables, settings)
+    measured_key = cache.cache_key(measured_in)
+    measured_folder = cache.lookup(cache_dir, MEASUREMENT_NAMESPACE, measured_key)
+    if measured_folder is not None:
+        return measured_folder, measured_key, False
+
+    def measure(target: pathlib.Path) -> None:
+        with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
+            save_measurement(target / MEASUREMENT_FILE,
+                             measure_cloth(tables, settings, render_dir=renders, progress=progress,
+                                           scheduler=scheduler, table_folder=yarn_bake_dir))
+
+    measured_folder, _ = cache.store(cache_dir, MEASUREMENT_NAMESPACE, measured_key, measured_in, measure)
+    return measured_folder, measured_key, True
 
 
 def read_summary(folder) -> dict:

@@ -29,6 +29,7 @@ from ..measurement_render import (
     configure_measurement_render,
     remove_data_blocks,
     render_passes_to_arrays,
+    render_to_array,
     worker_threads,
 )
 from ...render_bounds import (
@@ -49,6 +50,8 @@ from ..validation.rig import VALIDATION_WEAVE, sample_bounds
 from ...weave import WeaveParameters
 from ...garment.goniometry import (
     SIDES,
+    ClothMeasurement,
+    OrthographicView,
     ParameterError,
     exit_directions,
     incidence_directions,
@@ -59,8 +62,12 @@ from ...garment.goniometry import (
     required_sample_half_size_mm,
     view_of,
 )
+from ...garment.response import GarmentResponse, ResponseView, view_samples
 
 SCENE_NAME = "ClothLight Cloth Gonioreflectometer"
+#: The sun-mode shader's outputs a response renders (:func:`_emit_lookup`), and the node that emits them.
+LOOKUP_OUTPUTS = ("LookupIncidence", "LookupExit")
+LOOKUP_NODE = "ClothLight Lookup"
 #: Face attribute: world direction toward the sun that lights the face's region.
 SUN_DIRECTION_ATTRIBUTE = "clothlight_sun_direction"
 
@@ -119,26 +126,6 @@ def _sample_weave(settings: GoniometerSettings) -> WeaveParameters:
     return settings.weave or VALIDATION_WEAVE
 
 
-@dataclass
-class ClothMeasurement:
-    """ρ per side (N_i², N_o², 3) in that side's frame, 1/sr, and the part of it that is the
-    yarns' specular term (§5.2, about the cloth normal; (N_i², N_o²), grey); the specular
-    visibility per side (N_i², N_o²), the fraction of the patch's projection where that term
-    shines (yarn facing the sun, lit, seen); the coverage per side and exit cell (N_o²,), the
-    fraction of the cloth hidden by yarn along that view; the yarn material's specular parameters
-    (``weight``, ``slope`` m, ``ior``); and the layout used."""
-
-    rho: dict
-    specular: dict
-    specular_visibility: dict
-    specular_parameters: dict
-    coverage: dict
-    patch_mm: float
-    sample_size_mm: tuple[float, float]
-    half_thickness_mm: float
-    render_seconds: float
-
-
 def _half_thickness(weave: WeaveParameters) -> tuple[float, float, float]:
     """(half thickness, spacing, repeat) of ``weave``, mm, from a small sample built and removed."""
     probe = build_sample_object(dataclasses.replace(weave, warp_count=4, weft_count=4),
@@ -156,12 +143,17 @@ def _half_thickness(weave: WeaveParameters) -> tuple[float, float, float]:
 
 class _GoniometerScene:
     """The measurement's scene (sample, yarn material driven per face, camera), built for one yarn
-    and ``settings`` and removed by :meth:`close`: :meth:`render_view` measures one exit cell."""
+    and ``settings`` and removed by :meth:`close`: :meth:`render_view` measures one exit cell.
 
-    def __init__(self, tables, settings: GoniometerSettings):
+    With ``response_samples`` N, the scene renders the cloth response instead (:meth:`render_lookups`):
+    the shader's lookup directions (:func:`_emit_lookup`) in the same regions, one camera sample per
+    pixel on an N × N grid of pixels per patch, each pixel a square on the cloth in every view."""
+
+    def __init__(self, tables, settings: GoniometerSettings, response_samples: int | None = None):
         weave = _sample_weave(settings)
         self.n_i, self.n_o = n_i, n_o = settings.incidence_resolution, settings.exit_resolution
-        self.pixels_per_patch = settings.pixels_per_patch
+        self.lookups = response_samples is not None
+        self.pixels_per_patch = response_samples if self.lookups else settings.pixels_per_patch
         self.half_thickness, spacing, repeat = _half_thickness(weave)
         view_tilt = max(max_tilt(exit_directions(n_o, side)) for side in SIDES)
         light_tilt = max(max_tilt(incidence_directions(n_i, side)) for side in SIDES)
@@ -170,8 +162,9 @@ class _GoniometerScene:
         pixel_mm = self.patch_mm * least_cos / settings.pixels_per_patch
         layout = plan_regions(n_i * n_i, self.patch_mm, self.half_thickness, view_tilt, margin_mm=2.0 * pixel_mm)
         # The largest image of the sweep (the most grazing view is the widest), before any render.
-        largest = max(view.width * view.height for view in (view_of(d, layout, settings.pixels_per_patch)
-                                                            for side in SIDES for d in exit_directions(n_o, side)))
+        largest = max(view.width * view.height
+                      for view in (view_of(d, layout, self.pixels_per_patch, pixels_square_on_cloth=self.lookups)
+                                   for side in SIDES for d in exit_directions(n_o, side)))
         check_render_memory(largest, "exit_resolution, incidence_resolution, pixels_per_patch, patch_repeats",
                             (n_o, n_i, settings.pixels_per_patch, settings.patch_repeats))
         half_size = required_sample_half_size_mm(layout, self.half_thickness, view_tilt, light_tilt,
@@ -187,20 +180,21 @@ class _GoniometerScene:
             self._created += [sample.data, sample]
             self.bounds = sample_bounds(sample)
             self.layout = dataclasses.replace(layout, center=self.bounds.center)
-            configure_measurement_render(scene, resolution=(16, 16), samples=settings.samples, seed=settings.seed,
-                                         pixel_average=True)
+            configure_measurement_render(scene, resolution=(16, 16), samples=1 if self.lookups else settings.samples,
+                                         seed=settings.seed, pixel_average=True)
             # The specular marks are diffuse closures that must stay dark: no world, no lamp, and
             # the yarns' emission neither sampled as light (configure_cycles_material) nor seen by
             # diffuse rays.
             scene.cycles.max_bounces = 0
             scene.world = None
             scene.render.use_persistent_data = True
-            scene.view_layers[0].use_pass_diffuse_color = True
+            scene.view_layers[0].use_pass_diffuse_color = not self.lookups
             with bpy.context.temp_override(scene=scene):
                 material = build_yarn_material(tables, name=f"{SCENE_NAME} Yarn", mode=SUN_MODE)
             self._created.append(material)
             shader = shader_node(material)
-            shader.inputs["MarkSpecular"].default_value = 1
+            if not self.lookups:
+                shader.inputs["MarkSpecular"].default_value = 1
             # Even with no bounce Cycles follows a diffuse closure's sampled ray to find emitting
             # surfaces; hidden from diffuse rays, the yarns' emission cannot light the marks.
             sample.visible_diffuse = False
@@ -211,6 +205,7 @@ class _GoniometerScene:
             sample.data.materials.clear()
             sample.data.materials.append(material)
             self._sample = sample
+            self._material = material
             self._attribute = sample.data.attributes.new(SUN_DIRECTION_ATTRIBUTE, "FLOAT_VECTOR", "FACE")
             centers = np.empty(3 * len(sample.data.polygons))
             sample.data.polygons.foreach_get("center", centers)
@@ -237,19 +232,30 @@ class _GoniometerScene:
         with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as folder:
             render_passes_to_arrays(self.scene, pathlib.Path(folder) / "warm_up.exr")
 
+    def _frame(self, side: str, exit_cell: int) -> OrthographicView:
+        """Light the regions for ``side`` and aim the camera along its exit cell ``exit_cell``."""
+        if side != self._side:
+            suns = incidence_directions(self.n_i, side)
+            self._attribute.data.foreach_set("vector", suns[self._region].astype(np.float32).ravel())
+            self._sample.data.update()
+            self._side = side
+        view = view_of(exit_directions(self.n_o, side)[exit_cell], self.layout, self.pixels_per_patch,
+                       pixels_square_on_cloth=self.lookups)
+        self._camera.matrix_world = Matrix(view.camera_matrix(self._distance).tolist())
+        self._camera.data.ortho_scale = view.ortho_scale
+        render = self.scene.render
+        render.resolution_x, render.resolution_y = view.width, view.height
+        render.pixel_aspect_x, render.pixel_aspect_y = view.pixel_aspect
+        # render_passes_to_arrays leaves the single-layer format at half floats after its first render:
+        # a lookup direction in half precision would move the unscattered light's narrow cone.
+        render.image_settings.color_depth = "32"
+        return view
+
     def render_view(self, side: str, exit_cell: int, render_path) -> dict:
         """Exit cell ``exit_cell`` of ``side`` under all suns: ρ (N_i², 3), the specular term and its
         visibility (N_i²,) and the coverage (a float), rendered to ``render_path``."""
         n_i = self.n_i
-        if side != self._side:
-            suns = incidence_directions(n_i, side)
-            self._attribute.data.foreach_set("vector", suns[self._region].astype(np.float32).ravel())
-            self._sample.data.update()
-            self._side = side
-        view = view_of(exit_directions(self.n_o, side)[exit_cell], self.layout, self.pixels_per_patch)
-        self._camera.matrix_world = Matrix(view.camera_matrix(self._distance).tolist())
-        self._camera.data.ortho_scale = view.ortho_scale
-        self.scene.render.resolution_x, self.scene.render.resolution_y = view.width, view.height
+        view = self._frame(side, exit_cell)
         passes = render_passes_to_arrays(self.scene, render_path)
         pixels = passes["Combined"]
         index, weight = patch_weights(view, self.layout)
@@ -258,6 +264,23 @@ class _GoniometerScene:
         marked, _ = patch_rho(marks, index, weight, view, self.layout, sun_irradiance=1.0)
         return {"rho": patch[: n_i * n_i], "visibility": marked[: n_i * n_i, 0],
                 "specular": marked[: n_i * n_i, 1], "coverage": float(np.mean(cover[: n_i * n_i]))}
+
+    def render_lookups(self, side: str, exit_cell: int, render_path) -> ResponseView:
+        """The response's view of exit cell ``exit_cell`` of ``side``: every lit camera sample's
+        lookup directions, rendered to ``render_path`` (one file per output; a scene built with
+        ``response_samples``).  One camera sample per pixel lands where it does whatever the pixel
+        shows, so the two renders see the same points."""
+        view = self._frame(side, exit_cell)
+        path = pathlib.Path(render_path)
+        lookup = {}
+        for output in LOOKUP_OUTPUTS:
+            _emit_lookup(self._material, output)
+            lookup[output] = render_to_array(self.scene, path.with_name(f"{path.stem}_{output}{path.suffix}"))
+        # A pixel of one camera sample (Cycles takes it at the pixel's centre) is a point of its patch
+        # or not: the weights of a one-point lattice.
+        index, weight = patch_weights(view, self.layout, subsamples=1)
+        return view_samples(side, exit_cell, lookup["LookupIncidence"], lookup["LookupExit"],
+                            lookup["LookupIncidence"][..., 3], index, weight, self.n_i * self.n_i)
 
     def close(self) -> None:
         remove_data_blocks(self._created)
@@ -284,19 +307,7 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
     views = _views(settings)
     n_i, n_o = settings.incidence_resolution, settings.exit_resolution
     start = time.perf_counter()
-    if scheduler is None:
-        measured = []
-        scene = _GoniometerScene(tables, settings)
-        try:
-            for done, (side, cell) in enumerate(views, start=1):
-                measured.append(scene.render_view(side, cell, pathlib.Path(render_dir) / f"{side}_exit{cell:03d}.exr"))
-                if progress is not None:
-                    progress(done, len(views), f"{side}: exit cell {cell + 1} of {n_o * n_o}")
-            shape = _scene_shape(scene)
-        finally:
-            scene.close()
-    else:
-        measured, shape = _measure_on_cluster(table_folder, settings, views, scheduler, progress)
+    measured, shape = _render_views(tables, settings, None, render_dir, progress, scheduler, table_folder)
     rho = {side: np.zeros((n_i * n_i, n_o * n_o, 3)) for side in SIDES}
     specular = {side: np.zeros((n_i * n_i, n_o * n_o)) for side in SIDES}
     visibility = {side: np.zeros((n_i * n_i, n_o * n_o)) for side in SIDES}
@@ -310,6 +321,47 @@ def measure_cloth(tables, settings: GoniometerSettings = GoniometerSettings(), *
                             shape["sample_size_mm"], shape["half_thickness_mm"], time.perf_counter() - start)
 
 
+def measure_response(tables, settings: GoniometerSettings = GoniometerSettings(), *, samples_per_side: int,
+                     render_dir, progress: Callable[[int, int, str], None] | None = None, scheduler=None,
+                     table_folder=None) -> GarmentResponse:
+    """Render the cloth response of ``settings.weave`` (:mod:`clothlight.garment.response`): the
+    views of :func:`measure_cloth`, each as the shader's lookup directions at the centres of an
+    ``samples_per_side`` × ``samples_per_side`` grid of pixels per patch, one camera sample a pixel.
+
+    ``tables``: any yarn's (the lookups do not depend on the medium, and neither does the response);
+    ``settings.pixels_per_patch`` and ``settings.samples`` are not used.  ``render_dir``,
+    ``progress``, ``scheduler`` and ``table_folder`` as :func:`measure_cloth`'s."""
+    start = time.perf_counter()
+    views, shape = _render_views(tables, settings, samples_per_side, render_dir, progress, scheduler, table_folder)
+    shape = {key: shape[key] for key in ("patch_mm", "sample_size_mm", "half_thickness_mm")}
+    return GarmentResponse(views, settings.incidence_resolution, settings.exit_resolution, shape,
+                           {"samples_per_side": samples_per_side, "render_seconds": time.perf_counter() - start})
+
+
+def _render_views(tables, settings: GoniometerSettings, response_samples: int | None, render_dir, progress,
+                  scheduler, table_folder) -> tuple[list, dict]:
+    """Every view of :func:`_views` rendered (here or on ``scheduler``) and measured by the scene's
+    :meth:`~_GoniometerScene.render_view` (``response_samples`` None) or its
+    :meth:`~_GoniometerScene.render_lookups`; with the scene's shape."""
+    views = _views(settings)
+    if scheduler is not None:
+        return _measure_on_cluster(table_folder, settings, views, scheduler, progress, response_samples)
+    measured = []
+    scene = _GoniometerScene(tables, settings, response_samples)
+    try:
+        for done, (side, cell) in enumerate(views, start=1):
+            measured.append(_render_one(scene, side, cell, pathlib.Path(render_dir) / f"{side}_exit{cell:03d}.exr"))
+            if progress is not None:
+                progress(done, len(views), f"{side}: exit cell {cell + 1} of {settings.exit_resolution ** 2}")
+        return measured, _scene_shape(scene)
+    finally:
+        scene.close()
+
+
+def _render_one(scene: _GoniometerScene, side: str, cell: int, path):
+    return (scene.render_lookups if scene.lookups else scene.render_view)(side, cell, path)
+
+
 def _scene_shape(scene: _GoniometerScene) -> dict:
     """What a measurement records of its scene besides the views."""
     return {"specular_parameters": scene.specular_parameters, "patch_mm": scene.patch_mm,
@@ -321,14 +373,17 @@ def _scene_shape(scene: _GoniometerScene) -> dict:
 
 #: The code a measurement's workers run, checked against this checkout's (precompute.distributed).
 CLUSTER_CODE = {"entries": ("clothlight.blender.garment.measure",)}
-#: A worker process's scene: a digest of (the yarn files, the settings) → (scene, its table folder).
+#: A worker process's scene: a digest of (the yarn files, the settings, the response's samples) →
+#: (scene, its table folder).
 _worker_scene: dict = {}
 
 
-def measure_views(table_files: dict, settings: GoniometerSettings, views: tuple) -> tuple[dict, list[dict]]:
+def measure_views(table_files: dict, settings: GoniometerSettings, views: tuple,
+                  response_samples: int | None = None) -> tuple[dict, list]:
     """A cluster task: ``views`` ((side, exit cell), ...) measured in this worker's scene for the
-    yarn whose bake folder holds ``table_files`` (``precompute.distributed.folder_payload``); with
-    the scene's shape.
+    yarn whose bake folder holds ``table_files`` (``precompute.distributed.folder_payload``), or
+    with ``response_samples`` their response's lookups (:func:`measure_response`); with the scene's
+    shape.
 
     The scene is built on a worker's first task and kept for the next ones; Cycles renders with
     the worker's threads."""
@@ -339,17 +394,18 @@ def measure_views(table_files: dict, settings: GoniometerSettings, views: tuple)
 
     from ...yarn_tables import yarn_tables_from_bake
 
-    key = hashlib.sha256(pickle.dumps((table_files, settings))).hexdigest()
+    key = hashlib.sha256(pickle.dumps((table_files, settings, response_samples))).hexdigest()
     if key not in _worker_scene:
         _close_worker_scene()
         folder = tempfile.TemporaryDirectory(prefix="clothlight-gonio-tables-")
         distributed.write_payload(table_files, folder.name)
-        _worker_scene[key] = (_GoniometerScene(yarn_tables_from_bake(folder.name), settings), folder)
+        _worker_scene[key] = (_GoniometerScene(yarn_tables_from_bake(folder.name), settings, response_samples),
+                              folder)
     scene = _worker_scene[key][0]
     scene.scene.render.threads_mode = "FIXED"
     scene.scene.render.threads = worker_threads()
     with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
-        measured = [scene.render_view(side, cell, pathlib.Path(renders) / f"{side}_exit{cell:03d}.exr")
+        measured = [_render_one(scene, side, cell, pathlib.Path(renders) / f"{side}_exit{cell:03d}.exr")
                     for side, cell in views]
     return _scene_shape(scene), measured
 
@@ -367,7 +423,7 @@ atexit.register(_close_worker_scene)
 
 
 def _measure_on_cluster(table_folder, settings: GoniometerSettings, views, scheduler,
-                        progress) -> tuple[list[dict], dict]:
+                        progress, response_samples: int | None = None) -> tuple[list, dict]:
 
     if table_folder is None:
         raise ParameterError("table_folder", table_folder, "the yarn bake's folder when a scheduler is given")
@@ -385,11 +441,26 @@ def _measure_on_cluster(table_folder, settings: GoniometerSettings, views, sched
         executor = (scheduler if isinstance(scheduler, distributed.ClusterExecutor)
                     else stack.enter_context(distributed.open_executor(scheduler, code=CLUSTER_CODE)))
         shared = executor.share(table_files)
-        results = executor.map(measure_views, [(shared, settings, (view,)) for view in views], progress=task_done)
+        results = executor.map(measure_views, [(shared, settings, (view,), response_samples) for view in views],
+                               progress=task_done)
     shapes = [shape for shape, _ in results]
     if any(shape != shapes[0] for shape in shapes):
         raise RuntimeError("the workers built different measurement scenes: is their Blender the same?")
     return [measured for _, views_measured in results for measured in views_measured], shapes[0]
+
+
+def _emit_lookup(material, output: str) -> None:
+    """Make ``material`` emit one of the sun-mode shader's lookup outputs (0.5 + 0.5 ω in the yarn
+    frame, the incidence black where another yarn shadows the point) at unit strength, so that a
+    pixel of one camera sample holds its sample's lookup exactly.  (Cycles writes no AOV from an
+    OSL shader, and no multilayer EXR of pixels that are not square: one render per output.)"""
+    tree = material.node_tree
+    emission = tree.nodes.get(LOOKUP_NODE) or tree.nodes.new("ShaderNodeEmission")
+    emission.name = LOOKUP_NODE
+    emission.inputs["Strength"].default_value = 1.0
+    tree.links.new(shader_node(material).outputs[output], emission.inputs["Color"])
+    surface = next(n for n in tree.nodes if n.type == "OUTPUT_MATERIAL").inputs["Surface"]
+    tree.links.new(emission.outputs["Emission"], surface)
 
 
 def _drive_sun_from_attribute(material) -> None:

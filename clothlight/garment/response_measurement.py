@@ -1,0 +1,148 @@
+"""A yarn's cloth measurement from the weave's cloth response: the cloth gonioreflectometer's
+measurement as a linear map of the yarn tables, in seconds instead of an hour of renders (issue 44).
+
+A patch's ρ is the weighted mean of what its camera samples emit (:func:`.goniometry.patch_rho`),
+and a sample emits what the sun-mode shader reads of the yarn tables at its yarn-frame directions
+(:mod:`.response`)::
+
+    ρ_patch(ω_i, ω_o) = Σ_q w_q (ρ(ω_i,q, ω_o,q) + ρ_u(ω_i,q, ω_o,q)) / Σ_q w_q + w f_CT(ω_i, ω_o) cos θ_i V
+
+over the patch's lit samples q.  The shader reads ρ as a fixed blend of 16 atlas pixels
+(:func:`precompute.tables.layout.rho_taps`) and ρ_u as a fixed blend of attenuation-table pixels
+(:func:`precompute.optics.ballistic.unscattered_cone_weights`, :func:`precompute.tables.layout.attenuation_taps`);
+the specular term is the Cook–Torrance lobe about the cloth normal on the viewer's side (§5.2, the
+shader's ``cl_cloth_specular``), the same at every point of a patch, times V, the share of the patch
+where it shines (lit yarn facing the sun).  All three are linear in the tables and evaluated here on
+the response's samples exactly as the shader evaluates them on a render's (``tests/test_garment_response.py``
+holds the map to the shader's own sample by sample), so the measurement is the render-based one's
+estimate from other camera samples (:func:`clothlight.blender.garment.measure.measure_cloth`, kept as
+its check).  No Blender.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from precompute.errors import ParameterError
+from precompute.optics import ballistic
+from precompute.optics.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT, cook_torrance
+from precompute.tables import exr
+from precompute.tables import layout as table_layout
+from precompute.tables.grids import AngularGrid
+
+from ..validation.response import TableLayout
+from .goniometry import SIDES, ClothMeasurement
+from .response import GarmentResponse, ResponseView
+
+#: Threads that evaluate the views: NumPy's gathers and sums release the GIL, and each view is
+#: evaluated alone and put in its place, so the result does not depend on the count.
+DEFAULT_THREADS = 2
+
+
+@dataclass(frozen=True)
+class YarnLookup:
+    """What the sun-mode yarn shader reads of a yarn's tables: the BRDF atlas (N_i·N_o, N_i·N_o, C)
+    (``brdf.exr``), the unscattered light's attenuation (M, C) (``unscattered.exr``), their layout
+    (grids, host index, the sun mode's cone) and the specular term's ``weight``, ``slope`` (Beckmann
+    rms slope m) and ``ior``, as the shader's sockets hold them (float32)."""
+
+    atlas: np.ndarray
+    attenuation: np.ndarray
+    layout: TableLayout
+    specular: dict
+
+
+def yarn_lookup(tables) -> YarnLookup:
+    """The :class:`YarnLookup` of a :class:`clothlight.yarn_tables.YarnTableFiles`, as the sun-mode
+    material reads it (``clothlight.blender.materials``: the tables' host index as IOR, the bake's
+    specular term or the shader's defaults, the sun mode's unscattered cone)."""
+    specular = tables.specular or {}
+    attenuation = exr.read_table(tables.unscattered_path, "unscattered").pixels
+    layout = TableLayout(tables.incidence_resolution, tables.exit_resolution, tables.unscattered_samples,
+                         tables.host_index, ballistic.SUN_MODE_SPREAD_RAD)
+    return YarnLookup(exr.read_table(tables.brdf_path, "brdf").pixels,
+                      np.asarray(attenuation, float).reshape(-1, attenuation.shape[-1]), layout,
+                      {"weight": _socket(specular.get("weight", DEFAULT_WEIGHT)),
+                       "slope": _socket(specular.get("slope", DEFAULT_SLOPE)), "ior": _socket(tables.host_index)})
+
+
+def _socket(value: float) -> float:
+    """``value`` as a shader socket holds it (float32): both measurements record the same."""
+    return float(np.float32(value))
+
+
+def response_rho(response: GarmentResponse, yarn: YarnLookup, threads: int = DEFAULT_THREADS) -> dict:
+    """ρ + ρ_u per side (N_i², N_o², C), 1/sr, without the specular term: the yarn tables looked up
+    at every lit sample exactly as the shader reads them, weighted and summed per patch."""
+    layout = yarn.layout
+    side = layout.incidence_resolution * layout.exit_resolution
+    atlas = np.asarray(yarn.atlas, float)
+    if atlas.ndim != 3 or atlas.shape[:2] != (side, side):
+        raise ParameterError("atlas", atlas.shape, f"({side}, {side}, C): the layout's atlas")
+    pixels = atlas.reshape(side * side, -1)
+    attenuation = np.asarray(yarn.attenuation, float)
+    if attenuation.shape != (layout.unscattered_samples, pixels.shape[1]):
+        raise ParameterError("attenuation", attenuation.shape,
+                             f"({layout.unscattered_samples}, {pixels.shape[1]}): the layout's attenuation table")
+    patches = response.incidence_resolution**2
+
+    def one(view: ResponseView) -> np.ndarray:
+        return _patch_rho(view, pixels, attenuation, layout, patches)
+
+    with ThreadPoolExecutor(max(1, int(threads))) as pool:
+        return response.per_side(list(pool.map(one, response.views)))
+
+
+def _patch_rho(view: ResponseView, pixels: np.ndarray, attenuation: np.ndarray, layout: TableLayout,
+               patches: int) -> np.ndarray:
+    """ρ + ρ_u (N_i², C) of every patch of one view: each lit sample's lookups (``cl_yarn_rho`` and
+    ``cl_unscattered_rho`` through their NumPy twins' taps), weighted and summed per patch over the
+    patch's summed weight."""
+    wi, wo = view.incidence.astype(float), view.exit.astype(float)
+    index, taps = table_layout.rho_taps(layout.incidence_resolution, layout.exit_resolution, wi, wo)
+    values = np.einsum("sk,skc->sc", taps, pixels[index])
+    cone, length = ballistic.unscattered_cone_weights(wi, wo, layout.index, layout.unscattered_spread)
+    # Outside its cone's cutoff a path adds exactly nothing (cl_unscattered_rho): only the few
+    # (sample, path) pairs inside one are looked up.
+    sample, path = np.nonzero(cone > 0.0)
+    lower, fraction = table_layout.attenuation_taps(layout.unscattered_samples, length[sample, path])
+    blend = (1.0 - fraction)[:, None] * attenuation[lower] + fraction[:, None] * attenuation[lower + 1]
+    unscattered = cone[sample, path][:, None] * blend
+    values += np.stack([np.bincount(sample, unscattered[:, c], len(wi)) for c in range(values.shape[1])], axis=-1)
+    weight = view.weight.astype(float)
+    summed = np.stack([np.bincount(view.patch, weight * values[:, c], patches) for c in range(values.shape[1])],
+                      axis=-1)
+    return summed / view.counted[:, None]
+
+
+def response_specular(response: GarmentResponse, weight: float, slope: float, ior: float) -> tuple[dict, dict]:
+    """The specular term's part of ρ per side (N_i², N_o²), 1/sr, and its visibility V (N_i², N_o²):
+    ``weight`` f_CT(ω_i, ω_o) cos θ_i V about the cloth normal on the viewer's side (``cl_cloth_specular``),
+    V the share of the patch that is lit yarn facing the sun (ω_i·z > 0 in the yarn frame), and none
+    where the term itself is 0 (the sun on the other side: the shader marks nothing there)."""
+    patches = response.incidence_resolution**2
+    facing = response.per_side([np.bincount(v.patch, v.weight * (v.incidence[:, 2] > 0.0), patches) / v.counted
+                                for v in response.views])
+    # Each side's cells in its own frame, where the viewer's cloth normal is +z.
+    toward_sun = AngularGrid("sphere", response.incidence_resolution).cell_centers()[:, None, :]
+    toward_camera = AngularGrid("hemisphere", response.exit_resolution).cell_centers()[None, :, :]
+    f_cos = weight * cook_torrance(toward_sun, toward_camera, slope, ior) * np.maximum(toward_sun[..., 2], 0.0)
+    visibility = {side: np.where(f_cos > 0.0, facing[side], 0.0) for side in SIDES}
+    return {side: f_cos * visibility[side] for side in SIDES}, visibility
+
+
+def measurement_from_response(response: GarmentResponse, yarn: YarnLookup,
+                              threads: int = DEFAULT_THREADS) -> ClothMeasurement:
+    """The cloth measurement of the yarn ``yarn`` on ``response``'s weave: what
+    ``clothlight.blender.garment.measure.measure_cloth`` renders, from the response's samples.
+    Its ``render_seconds`` are the response's, rendered once for every yarn."""
+    rho = response_rho(response, yarn, threads)
+    specular, visibility = response_specular(response, **yarn.specular)
+    return ClothMeasurement({side: rho[side] + specular[side][..., None] for side in SIDES}, specular, visibility,
+                            dict(yarn.specular), response.coverage(), float(response.shape["patch_mm"]),
+                            tuple(float(v) for v in response.shape["sample_size_mm"]),
+                            float(response.shape["half_thickness_mm"]),
+                            float(response.metadata.get("render_seconds", 0.0)))

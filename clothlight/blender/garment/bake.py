@@ -3,25 +3,23 @@
 Two ways to measure, the same quantity (:mod:`clothlight.garment.response_measurement`):
 
 * ``response`` (the default): the weave's cloth response (``cloth_response/<key>``: ``response.npz``,
-  what every camera sample of every view sees in the yarn's frame, and the weave detail texture),
-  rendered once per weave and gonioreflectometer settings and keyed by them and the code that
-  renders it, whatever the yarn; a yarn's measurement is then read off it in seconds, inside the
-  tables' entry.
+  what every camera sample of every view sees in the yarn's frame), rendered once per weave and
+  gonioreflectometer settings and keyed by them and the code that renders it, whatever the yarn; a
+  yarn's measurement is then read off it in seconds, inside the tables' entry.
 * ``render``: the measurement rendered with the yarn itself (``cloth_measurement/<key>``:
   ``measurement.npz``, ρ per side and coverage), keyed by the yarn's ρ, host index and specular term,
   the gonioreflectometer's settings (weave included) and the code that measures (the yarn shader
   included: the measurement renders it): the response's check.
 
 The tables (``cloth_tables/<key>``) are keyed by what they were measured from (the measurement's
-key, or the response's and the yarn's tables) and the code that fits and writes them.  Changing
-the fit re-renders nothing.
+key, or the response's and the yarn's tables) and the code that fits and writes them (and renders
+the weave detail texture, :mod:`.detail`).  Changing the fit re-renders nothing.
 """
 
 from __future__ import annotations
 
 import json
 import pathlib
-import shutil
 import tempfile
 import time
 from collections.abc import Callable
@@ -46,25 +44,20 @@ RESPONSE_NAMESPACE = "cloth_response"
 TABLES_NAMESPACE = "cloth_tables"
 MEASUREMENT_FILE = "measurement.npz"
 RESPONSE_FILE = "response.npz"
-#: The weave detail texture's description (:func:`.detail.render_weave_detail`) beside it in a response.
-DETAIL_DESCRIPTION_FILE = "weave_detail.json"
-#: Camera samples along a patch's side in the response (one per pixel, at pixel centres, each a
-#: square on the cloth).  The regular grid's error against 96² samples a patch (paper's red cotton
-#: and the same ρ without its unscattered light, N_i = 3, N_o = 3): 15: 1.9 % / 7.3 %, 21: 1.8 % /
-#: 2.5 %, 24: 4.2 % / 6.3 %, 31: 1.2 % / 2.9 %; the render-based measurement at its defaults
-#: (4 random samples per pixel): 1.5 % / 5.5–6.4 % (docs/garment.md, "Cloth tables in seconds").
+#: Camera samples along a patch's side in the response (one per pixel, at its centre, each pixel a
+#: square on the cloth): as close to many more samples as the render-based measurement's random
+#: ones, for fewer (docs/garment.md, "Cloth tables in seconds").
 RESPONSE_SAMPLES_PER_SIDE = 21
 _ROOT = pathlib.Path(__file__).resolve().parents[3]
 #: The code of each stage, digested into its key (``precompute.cache.sources``): the modules it runs and
 #: every project module they import, transitively, with the OSL shaders they compile.  The
 #: measurement runs :mod:`.measure` on the yarn tables :mod:`clothlight.yarn_tables` finds, and of
 #: this file what stores it, without the fit this file imports (tests/test_sources.py checks that
-#: what it calls here comes from those modules).  The response is rendered by :mod:`.measure` and
-#: :mod:`.detail`: not by what reads it.
+#: what it calls here comes from those modules).  The response is rendered and stored by
+#: :mod:`.measure` alone (tests/test_garment_response_render.py checks it), not by what reads it.
 MEASUREMENT_SOURCES = {"entries": ("clothlight.blender.garment.measure", "clothlight.yarn_tables"),
                        "files": ("clothlight/blender/garment/bake.py",)}
-RESPONSE_SOURCES = {"entries": ("clothlight.blender.garment.measure", "clothlight.blender.garment.detail"),
-                    "files": ("clothlight/blender/garment/bake.py",)}
+RESPONSE_SOURCES = {"entries": ("clothlight.blender.garment.measure",)}
 TABLE_SOURCES = {"entries": ("clothlight.blender.garment.bake",)}
 
 
@@ -124,8 +117,8 @@ def cloth_response(settings: GoniometerSettings, tables, *, cache_dir,
                    samples_per_side: int = RESPONSE_SAMPLES_PER_SIDE,
                    progress: Callable[[int, int, str], None] | None = None, scheduler: str | None = None,
                    table_folder=None) -> tuple[pathlib.Path, str, bool]:
-    """The cache folder of the cloth response of ``settings`` (``response.npz`` and the weave detail
-    texture), its key, and whether this call rendered it.  ``tables`` (and ``table_folder``, their
+    """The cache folder of the cloth response of ``settings`` (``response.npz``), its key, and
+    whether this call rendered it.  ``tables`` (and ``table_folder``, their
     bake folder, for a ``scheduler``): any yarn's, to render the lookups with."""
     inputs = response_inputs(settings, samples_per_side)
     key = cache.cache_key(inputs)
@@ -135,11 +128,9 @@ def cloth_response(settings: GoniometerSettings, tables, *, cache_dir,
 
     def render(target: pathlib.Path) -> None:
         with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
-            response = measure_response(tables, settings, samples_per_side=samples_per_side, render_dir=renders,
-                                        progress=progress, scheduler=scheduler, table_folder=table_folder)
-        response.save(target / RESPONSE_FILE)
-        detail = render_weave_detail(_sample_weave(settings), target / DETAIL_FILE)
-        (target / DETAIL_DESCRIPTION_FILE).write_text(json.dumps(detail))
+            measure_response(tables, settings, samples_per_side=samples_per_side, render_dir=renders,
+                             progress=progress, scheduler=scheduler, table_folder=table_folder
+                             ).save(target / RESPONSE_FILE)
 
     folder, _ = cache.store(cache_dir, RESPONSE_NAMESPACE, key, inputs, render)
     return folder, key, True
@@ -149,9 +140,10 @@ def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(
                progress: Callable[[int, int, str], None] | None = None,
                scheduler: str | None = None, method: str = MEASUREMENT_METHODS[0]) -> tuple[pathlib.Path, bool]:
     """The folder of the cloth tables for the yarn bake ``yarn_bake_dir`` and ``settings``; and
-    whether this call rendered (False: what it measures from was in the cache).  ``method``: one of
-    :data:`~clothlight.garment.goniometry.MEASUREMENT_METHODS` (module docstring).  ``scheduler``: where the renders run
-    (:func:`.measure.measure_cloth`); the tables do not depend on it."""
+    whether this call rendered the measurement or the response (False: it was in the cache).
+    ``method``: one of :data:`~clothlight.garment.goniometry.MEASUREMENT_METHODS` (module docstring).
+    ``scheduler``: where the renders run (:func:`.measure.measure_cloth`); the tables do not depend
+    on it."""
     if method not in MEASUREMENT_METHODS:
         raise ParameterError("method", method, f"one of {MEASUREMENT_METHODS}")
     tables = yarn_tables_from_bake(yarn_bake_dir)
@@ -173,20 +165,17 @@ def bake_cloth(yarn_bake_dir, settings: GoniometerSettings = GoniometerSettings(
             if method == "render":
                 measurement = load_measurement(measured_folder / MEASUREMENT_FILE)
                 how = {"method": method, "measurement_key": measured_key}
-                detail = render_weave_detail(_sample_weave(settings), target / DETAIL_FILE)
             else:
                 start = time.perf_counter()
-                measurement = measurement_from_response(GarmentResponse.load(response_folder / RESPONSE_FILE),
-                                                        yarn_lookup(tables))
-                how = {"method": method, "response_key": response_key,
-                       "samples_per_side": RESPONSE_SAMPLES_PER_SIDE,
+                response = GarmentResponse.load(response_folder / RESPONSE_FILE)
+                measurement = measurement_from_response(response, yarn_lookup(tables))
+                how = {"method": method, "response_key": response_key, **response.metadata,
                        "seconds": time.perf_counter() - start}
-                shutil.copyfile(response_folder / DETAIL_FILE, target / DETAIL_FILE)
-                detail = json.loads((response_folder / DETAIL_DESCRIPTION_FILE).read_text())
             summary = write_cloth_tables(target, measurement, settings, tables, cache_key=key,
                                          code_digest=tables_in["code_digest"])
             summary["measurement"] = how
-            summary["weave_detail"] = {"file": DETAIL_FILE, **detail}
+            summary["weave_detail"] = {"file": DETAIL_FILE,
+                                       **render_weave_detail(_sample_weave(settings), target / DETAIL_FILE)}
             write_cloth_summary(target, summary)
 
         folder, _ = cache.store(cache_dir, TABLES_NAMESPACE, key, tables_in, write)

@@ -276,11 +276,11 @@ class _GoniometerScene:
         for output in LOOKUP_OUTPUTS:
             _emit_lookup(self._material, output)
             lookup[output] = render_to_array(self.scene, path.with_name(f"{path.stem}_{output}{path.suffix}"))
-        # A pixel of one camera sample (Cycles takes it at the pixel's centre) is a point of its patch
-        # or not: the weights of a one-point lattice.
-        index, weight = patch_weights(view, self.layout, subsamples=1)
+        # A pixel of one camera sample (Cycles takes it at the pixel's centre) is a point of a patch
+        # or of none: the patches of a one-point lattice.
+        patch, _ = patch_weights(view, self.layout, subsamples=1)
         return view_samples(side, exit_cell, lookup["LookupIncidence"], lookup["LookupExit"],
-                            lookup["LookupIncidence"][..., 3], index, weight, self.n_i * self.n_i)
+                            lookup["LookupIncidence"][..., 3], patch, self.n_i * self.n_i)
 
     def close(self) -> None:
         remove_data_blocks(self._created)

@@ -42,10 +42,10 @@ def random_view(rng, side, cell, samples=400):
     near = slice(0, samples // 3)
     incidence[near] = unit(paths[near, 0] + 0.1 * rng.normal(size=(samples // 3, 3)))
     patches = N_I * N_I
-    counted = rng.integers(samples // patches + 5, samples, patches).astype(float)
+    counted = rng.uniform(samples / patches + 5, samples, patches)
     return ResponseView(side, cell, rng.integers(0, patches, samples).astype(np.uint16),
-                        incidence.astype(np.float32), exits.astype(np.float32), counted,
-                        np.floor(counted * rng.uniform(0.5, 1.0, patches)))
+                        rng.choice([0.25, 0.5, 1.0], samples).astype(np.float32), incidence.astype(np.float32),
+                        exits.astype(np.float32), counted, counted * rng.uniform(0.5, 1.0, patches))
 
 
 @pytest.fixture
@@ -71,7 +71,8 @@ def test_each_patch_holds_the_mean_of_what_the_shader_reads_at_its_samples(respo
         wi, wo = view.incidence.astype(float), view.exit.astype(float)
         unscattered = interpolate_unscattered_rho(yarn.attenuation, LAYOUT.index, wi, wo, LAYOUT.unscattered_spread)
         reached += np.count_nonzero(unscattered[:, 0] > 0.0)
-        per_sample = interpolate_rho(yarn.atlas, LAYOUT.incidence_resolution, wi, wo) + unscattered
+        per_sample = view.weight[:, None] * (interpolate_rho(yarn.atlas, LAYOUT.incidence_resolution, wi, wo)
+                                             + unscattered)
         expected = np.stack([np.bincount(view.patch, per_sample[:, c], N_I * N_I) for c in range(3)], axis=-1)
         side, cell = SIDES[k // (N_O * N_O)], k % (N_O * N_O)
         np.testing.assert_allclose(rho[side][:, cell], expected / view.counted[:, None], rtol=1e-12, atol=1e-15)
@@ -84,7 +85,7 @@ def test_the_specular_term_is_cook_torrance_times_the_lit_yarn_facing_the_sun(re
     toward_camera = AngularGrid("hemisphere", N_O).cell_centers()
     for k, view in enumerate(response.views):
         side, cell = SIDES[k // (N_O * N_O)], k % (N_O * N_O)
-        facing = np.bincount(view.patch, view.incidence[:, 2] > 0.0, N_I * N_I) / view.counted
+        facing = np.bincount(view.patch, view.weight * (view.incidence[:, 2] > 0.0), N_I * N_I) / view.counted
         for i, sun in enumerate(toward_sun):
             f = 0.7 * cook_torrance(sun, toward_camera[cell], 0.5, 1.45) * max(sun[2], 0.0)
             if sun[2] > 0.0:
@@ -131,21 +132,23 @@ def test_a_response_is_refused_with_views_missing_or_of_another_format(response,
 
 def test_a_view_keeps_the_lit_yarn_samples_of_its_patches():
     """From lookups as the shader writes them (0.5 + 0.5 ω, the incidence black where shadowed): a
-    sample counts in its patch whatever it sees, covers it when it sees yarn, and is kept with its
-    decoded directions only when it is lit yarn."""
+    sample counts in its patch by its pixel's weight whatever it sees, covers it when it sees yarn,
+    and is kept with its weight and decoded directions only when it is lit yarn."""
     wi, wo = unit(np.array([0.3, -0.2, 0.9])), unit(np.array([-0.1, 0.4, 0.8]))
     incidence = np.tile(0.5 + 0.5 * wi, (2, 3, 1))
     exits = np.tile(0.5 + 0.5 * wo, (2, 3, 1))
     incidence[0, 1] = 0.0  # shadowed by another yarn
     seen = np.array([[1.0, 1.0, 0.0], [1.0, 1.0, 1.0]])  # (0, 2): a gap
-    patch = np.array([[0, 0, 0], [1, -1, 4]])  # (1, 1): between patches; patch 4 is beyond N_i² = 4
-    view = view_samples("back", 3, incidence, exits, seen, patch, patches=4)
+    index = np.array([[0, 0, 0], [1, -1, 4]])  # (1, 1): between patches; patch 4 is beyond N_i² = 4
+    weight = np.array([[1.0, 0.5, 0.25], [0.75, 0.0, 1.0]])
+    view = view_samples("back", 3, incidence, exits, seen, index, weight, patches=4)
     assert (view.side, view.exit_cell) == ("back", 3)
     np.testing.assert_array_equal(view.patch, [0, 1])
+    np.testing.assert_array_equal(view.weight, [1.0, 0.75])
     np.testing.assert_allclose(view.incidence, [wi, wi], atol=1e-7)
     np.testing.assert_allclose(view.exit, [wo, wo], atol=1e-7)
-    np.testing.assert_array_equal(view.counted, [3, 1, 0, 0])
-    np.testing.assert_array_equal(view.covered, [2, 1, 0, 0])
+    np.testing.assert_array_equal(view.counted, [1.75, 0.75, 0, 0])
+    np.testing.assert_array_equal(view.covered, [1.5, 0.75, 0, 0])
 
 
 def test_the_yarn_lookup_is_what_the_sun_mode_material_reads():

@@ -4,13 +4,13 @@ own frame, rendered once per weave and gonioreflectometer settings (issue 44).
 The cloth gonioreflectometer (:mod:`.goniometry`) renders the woven sample in sun mode: a camera
 sample on a yarn emits ``(ρ(ω_i, ω_o) + ρ_u(ω_i, ω_o) + w f_s) E`` where the sun reaches it
 (``osl/cloth_yarn.osl``), ω_i and ω_o the directions toward the sun and the camera in the yarn's
-frame, and a patch's ρ is the mean over its projection (:func:`.goniometry.patch_rho`).
+frame, and a patch's ρ is the weighted mean over its projection (:func:`.goniometry.patch_rho`).
 What the measurement takes of the weave is geometry: for each camera sample, those two directions
 and whether the sun reaches it.  A :class:`GarmentResponse` records it
 (``clothlight.blender.garment.measure.measure_response``: the shader's ``LookupIncidence`` and
 ``LookupExit`` outputs, one camera sample per pixel, so that no pixel blends two lookups): per view
-(side, exit cell), the lit samples' patch and directions, and per patch its samples and those that
-see yarn.  :mod:`.response_measurement` turns it and any yarn's tables
+(side, exit cell), the lit samples' patch, weight and directions, and per patch the summed weight
+and the summed weight of yarn seen.  :mod:`.response_measurement` turns it and any yarn's tables
 into the cloth measurement in seconds, without a render.
 
 It is the validation sweep's cloth response (:mod:`clothlight.validation.response`, one patch per
@@ -33,23 +33,24 @@ from .goniometry import SIDES
 #: Format tag of a stored response (``.npz``).
 SCHEMA = "clothlight-garment-response/1"
 #: A :class:`ResponseView`'s per-sample arrays, as a response stores them (views one after another).
-SAMPLE_ARRAYS = ("patch", "incidence", "exit")
+SAMPLE_ARRAYS = ("patch", "weight", "incidence", "exit")
 
 
 @dataclass(frozen=True)
 class ResponseView:
     """One view of the response: exit cell ``exit_cell`` of ``side``, seen under every sun.
 
-    Camera samples at pixel centres, each a point of one patch or of none
-    (:func:`.goniometry.patch_weights` on a one-point lattice).  ``patch`` (S,) the incidence cell
-    (region) of each sample the sun reaches on a yarn; ``incidence`` and ``exit`` (S, 3) float32 the
-    yarn-frame directions toward the sun and the camera there, as the shader looks ρ up;
-    ``counted`` (N_i²,) every patch's samples (lit, shadowed and gap alike) and ``covered`` (N_i²,)
-    those that see yarn (coverage = covered / counted)."""
+    ``patch`` (S,) the incidence cell (region) of each camera sample the sun reaches on a yarn and
+    ``weight`` (S,) the fraction of its pixel inside that patch (:func:`.goniometry.patch_weights`:
+    a sample anywhere in its pixel stands for the pixel's mean); ``incidence`` and ``exit`` (S, 3)
+    float32 the yarn-frame directions toward the sun and the camera there, as the shader looks ρ
+    up; ``counted`` (N_i²,) every patch's summed pixel weight (lit, shadowed and gap alike) and
+    ``covered`` (N_i²,) the summed weight of the samples that see yarn (coverage = covered / counted)."""
 
     side: str
     exit_cell: int
     patch: np.ndarray
+    weight: np.ndarray
     incidence: np.ndarray
     exit: np.ndarray
     counted: np.ndarray
@@ -57,22 +58,23 @@ class ResponseView:
 
 
 def view_samples(side: str, exit_cell: int, incidence_lookup: np.ndarray, exit_lookup: np.ndarray,
-                 seen: np.ndarray, patch: np.ndarray, patches: int) -> ResponseView:
+                 seen: np.ndarray, index: np.ndarray, weight: np.ndarray, patches: int) -> ResponseView:
     """A :class:`ResponseView` from one render of the shader's lookups, one camera sample a pixel.
 
     ``incidence_lookup``, ``exit_lookup`` (H, W, ≥3): the ``LookupIncidence`` and ``LookupExit``
     outputs, 0.5 + 0.5 ω per pixel, the incidence black where another yarn shadows the sample;
-    ``seen`` (H, W): the film alpha, 1 where the sample met yarn; ``patch`` (H, W): the patch of each
-    pixel's sample, −1 for none; ``patches``: N_i²."""
-    in_patch = (patch >= 0) & (patch < patches)
+    ``seen`` (H, W): the film alpha, 1 where the sample met yarn; ``index`` and ``weight`` (H, W):
+    :func:`.goniometry.patch_weights` of the view; ``patches``: N_i²."""
+    in_patch = (index >= 0) & (index < patches)
     lit = in_patch & (seen > 0.0) & (np.sum(incidence_lookup[..., :3], axis=-1) > 0.0)
 
     def directions(lookup):
         return (2.0 * lookup[..., :3][lit] - 1.0).astype(np.float32)
 
-    return ResponseView(side, int(exit_cell), patch[lit].astype(np.uint16), directions(incidence_lookup),
-                        directions(exit_lookup), np.bincount(patch[in_patch], minlength=patches),
-                        np.bincount(patch[in_patch], seen[in_patch], patches))
+    return ResponseView(side, int(exit_cell), index[lit].astype(np.uint16), weight[lit].astype(np.float32),
+                        directions(incidence_lookup), directions(exit_lookup),
+                        np.bincount(index[in_patch], weight[in_patch], patches),
+                        np.bincount(index[in_patch], (weight * seen)[in_patch], patches))
 
 
 class GarmentResponse:

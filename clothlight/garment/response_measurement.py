@@ -5,10 +5,10 @@ A patch's ρ is the weighted mean of what its camera samples emit (:func:`.gonio
 and a sample emits what the sun-mode shader reads of the yarn tables at its yarn-frame directions
 (:mod:`.response`)::
 
-    ρ_patch(ω_i, ω_o) = Σ_q (ρ(ω_i,q, ω_o,q) + ρ_u(ω_i,q, ω_o,q)) / n + w f_CT(ω_i, ω_o) cos θ_i V
+    ρ_patch(ω_i, ω_o) = Σ_q w_q (ρ(ω_i,q, ω_o,q) + ρ_u(ω_i,q, ω_o,q)) / Σ_p w_p + w f_CT(ω_i, ω_o) cos θ_i V
 
-over the patch's lit samples q, n its samples (lit, shadowed or in a gap).  The shader reads ρ as
-a fixed blend of 16 atlas pixels (:func:`precompute.tables.layout.rho_taps`) and ρ_u as a fixed
+over the patch's lit samples q, p all its samples (lit, shadowed or in a gap), w a sample's weight.
+The shader reads ρ as a fixed blend of 16 atlas pixels (:func:`precompute.tables.layout.rho_taps`) and ρ_u as a fixed
 blend of attenuation-table pixels (:func:`precompute.optics.ballistic.unscattered_cone_weights`,
 :func:`precompute.tables.layout.attenuation_taps`); the specular term is the Cook–Torrance lobe
 about the cloth normal on the viewer's side (§5.2, the shader's ``cl_cloth_specular``), the same at
@@ -99,8 +99,8 @@ def response_rho(response: GarmentResponse, yarn: YarnLookup, threads: int = DEF
 def _patch_rho(view: ResponseView, pixels: np.ndarray, attenuation: np.ndarray, layout: TableLayout,
                patches: int) -> np.ndarray:
     """ρ + ρ_u (N_i², C) of every patch of one view: each lit sample's lookups (``cl_yarn_rho`` and
-    ``cl_unscattered_rho`` through their NumPy twins' taps), summed per patch over the patch's
-    samples."""
+    ``cl_unscattered_rho`` through their NumPy twins' taps), weighted and summed per patch over the
+    patch's summed weight."""
     wi, wo = view.incidence.astype(float), view.exit.astype(float)
     index, taps = table_layout.rho_taps(layout.incidence_resolution, layout.exit_resolution, wi, wo)
     values = np.einsum("sk,skc->sc", taps, pixels[index])
@@ -112,7 +112,9 @@ def _patch_rho(view: ResponseView, pixels: np.ndarray, attenuation: np.ndarray, 
     blend = (1.0 - fraction)[:, None] * attenuation[lower] + fraction[:, None] * attenuation[lower + 1]
     unscattered = cone[sample, path][:, None] * blend
     values += np.stack([np.bincount(sample, unscattered[:, c], len(wi)) for c in range(values.shape[1])], axis=-1)
-    summed = np.stack([np.bincount(view.patch, values[:, c], patches) for c in range(values.shape[1])], axis=-1)
+    weight = view.weight.astype(float)
+    summed = np.stack([np.bincount(view.patch, weight * values[:, c], patches) for c in range(values.shape[1])],
+                      axis=-1)
     return summed / view.counted[:, None]
 
 
@@ -122,7 +124,7 @@ def response_specular(response: GarmentResponse, weight: float, slope: float, io
     V the share of the patch that is lit yarn facing the sun (ω_i·z > 0 in the yarn frame), and none
     where the term itself is 0 (the sun on the other side: the shader marks nothing there)."""
     patches = response.incidence_resolution**2
-    facing = response.per_side([np.bincount(v.patch, v.incidence[:, 2] > 0.0, patches) / v.counted
+    facing = response.per_side([np.bincount(v.patch, v.weight * (v.incidence[:, 2] > 0.0), patches) / v.counted
                                 for v in response.views])
     # Each side's cells in its own frame, where the viewer's cloth normal is +z.
     toward_sun = AngularGrid("sphere", response.incidence_resolution).cell_centers()[:, None, :]

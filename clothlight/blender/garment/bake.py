@@ -44,8 +44,8 @@ RESPONSE_NAMESPACE = "cloth_response"
 TABLES_NAMESPACE = "cloth_tables"
 MEASUREMENT_FILE = "measurement.npz"
 RESPONSE_FILE = "response.npz"
-#: Camera samples along a patch's side in the response (one per pixel, at its centre, each pixel a
-#: square on the cloth): as close to many more samples as the render-based measurement's random
+#: Camera samples along a patch's side in the response (one per pixel, at a random place in it, each
+#: pixel a square on the cloth): as close to many more samples as the render-based measurement's random
 #: ones, for fewer (docs/garment.md, "Cloth tables in seconds").
 RESPONSE_SAMPLES_PER_SIDE = 21
 _ROOT = pathlib.Path(__file__).resolve().parents[3]

@@ -42,3 +42,19 @@ def test_a_cluster_needs_the_yarn_bake_folder(tmp_path):
 
     with pytest.raises(ParameterError, match="table_folder"):
         measure_cloth(yarn_tables_from_bake(YARN_BAKE), SETTINGS, render_dir=tmp_path, scheduler="local")
+
+
+def test_a_response_on_two_local_workers_is_the_one_rendered_here(tmp_path):
+    """The cloth response's lookups (clothlight/garment/response.py) render on the cluster too: each
+    worker in a response scene of its own, the samples the same bit for bit."""
+    from clothlight.blender.garment.measure import measure_response
+
+    tables = yarn_tables_from_bake(YARN_BAKE)
+    here = measure_response(tables, SETTINGS, samples_per_side=9, render_dir=tmp_path)
+    spread = measure_response(tables, SETTINGS, samples_per_side=9, render_dir=tmp_path, scheduler="local",
+                              table_folder=YARN_BAKE)
+    assert here.sample_count > 0 and here.shape == spread.shape
+    for mine, theirs in zip(here.views, spread.views):
+        assert (mine.side, mine.exit_cell) == (theirs.side, theirs.exit_cell)
+        for name in ("patch", "weight", "incidence", "exit", "counted", "covered"):
+            assert np.array_equal(getattr(mine, name), getattr(theirs, name)), name

@@ -348,7 +348,9 @@ def test_bake_command_copies_a_cached_bake_and_names_bad_input(tmp_path, red_cot
     folder, settings, cache = red_cotton_cloth
     common = ["--exit-resolution", "3", "--incidence-resolution", "3", "--pixels-per-patch",
               str(settings.pixels_per_patch), "--samples", str(settings.samples), "--cache-dir", str(cache)]
-    assert main(["bake", "--tables", str(YARN_BAKE), "--out", str(tmp_path / "cloth"), *common]) == 0
+    # The fixture measured by rendering: the command finds that measurement and its tables cached.
+    assert main(["bake", "--tables", str(YARN_BAKE), "--out", str(tmp_path / "cloth"), "--method", "render",
+                 *common]) == 0
     assert "from the cache" in capsys.readouterr().out
     assert sorted(p.name for p in (tmp_path / "cloth").iterdir()) == sorted(
         p.name for p in folder.iterdir() if p.name != "entry.json")

@@ -5,13 +5,14 @@ A patch's ρ is the weighted mean of what its camera samples emit (:func:`.gonio
 and a sample emits what the sun-mode shader reads of the yarn tables at its yarn-frame directions
 (:mod:`.response`)::
 
-    ρ_patch(ω_i, ω_o) = Σ_q w_q (ρ(ω_i,q, ω_o,q) + ρ_u(ω_i,q, ω_o,q)) / Σ_p w_p + w f_CT(ω_i, ω_o) cos θ_i V
+    ρ_patch(ω_i, ω_o) = Σ_q w_q (ρ(ω_i,q, ω_o,q) + ρ_u(ω_i,q, ω_o,q)) / Σ_p w_p + w_s f_CT(ω_i, ω_o) cos θ_i V
 
 over the patch's lit samples q, p all its samples (lit, shadowed or in a gap), w a sample's weight.
-The shader reads ρ as a fixed blend of 16 atlas pixels (:func:`precompute.tables.layout.rho_taps`) and ρ_u as a fixed
-blend of attenuation-table pixels (:func:`precompute.optics.ballistic.unscattered_cone_weights`,
+The shader reads ρ as a fixed blend of 16 atlas pixels (:func:`precompute.tables.layout.rho_taps`)
+and ρ_u as a fixed blend of attenuation-table pixels
+(:func:`precompute.optics.ballistic.unscattered_cone_weights`,
 :func:`precompute.tables.layout.attenuation_taps`); the specular term is the Cook–Torrance lobe
-about the cloth normal on the viewer's side (§5.2, the shader's ``cl_cloth_specular``), the same at
+(weight w_s) about the cloth normal on the viewer's side (§5.2, ``cl_cloth_specular``), the same at
 every point of a patch, times V, the share of the patch where it shines (lit yarn facing the sun).
 All three are linear in the tables and are evaluated here on the response's samples as the shader
 evaluates them on a render's (``tests/test_garment_response_render.py`` holds the two together

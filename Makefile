@@ -58,7 +58,7 @@ bench: setup
 	$(PY) -m benchmarks
 
 extension: setup
-	$(PY) scripts/build_extension.py --output-dir dist
+	$(PY) scripts/build_extension.py --output-dir dist --prebake-cloth
 
 clean:
 	rm -rf $(OUT) dist .pytest_cache

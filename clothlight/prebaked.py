@@ -1,9 +1,11 @@
 """The pre-baked tables shipped inside the extension, and the copies of them materials read.
 
 ``scripts/build_extension.py`` ships the tables of each shipped preset in ``prebaked/<preset>/``
-with the request they were baked from.  A material never points into that folder: Blender replaces
-the extension's folder on every update and removes it with the extension, and a saved .blend would
-then render magenta.  Apply Material copies the folder, once and whole, into the bake cache
+with the request they were baked from, and the preset's cloth tables (the garment's BSDF measured
+on the default woven sample, ``python -m clothlight.garment bake``) in ``prebaked_cloth/<preset>/``.
+A material never points into those folders: Blender replaces the extension's folder on every
+update and removes it with the extension, and a saved .blend would then render magenta.  Apply
+Material and Apply Garment Material copy the folder, once and whole, into the bake cache
 (:func:`user_copy`), named by a digest of its content: an update that ships other tables makes
 another copy and leaves the one saved files use in place.
 
@@ -23,15 +25,19 @@ from .medium_settings import BakeRequest
 
 #: Tables baked when the extension was built, one folder per shipped preset (scripts/build_extension.py).
 PREBAKED_DIR = PACKAGE_ROOT / "prebaked"
+#: Cloth tables baked when the extension was built from each pre-baked preset's tables.
+PREBAKED_CLOTH_DIR = PACKAGE_ROOT / "prebaked_cloth"
 #: File of a pre-baked folder holding the BakeRequest it was baked from.
 REQUEST_FILE = "request.json"
-#: Folder of the bake cache holding the copies.
+#: Folders of the bake cache holding the copies of yarn and of cloth tables.
 COPIES_FOLDER = "prebaked"
+CLOTH_COPIES_FOLDER = "prebaked_cloth"
 
 
-def prebaked_tables(request: BakeRequest) -> pathlib.Path | None:
-    """The shipped tables baked from exactly ``request``, or None."""
-    folder = PREBAKED_DIR / request.preset
+def prebaked_tables(request: BakeRequest, shipped_dir: pathlib.Path | None = None) -> pathlib.Path | None:
+    """The shipped tables baked from exactly ``request`` (in ``shipped_dir``, default
+    :data:`PREBAKED_DIR`), or None."""
+    folder = (shipped_dir or PREBAKED_DIR) / request.preset
     try:
         if BakeRequest.from_json((folder / REQUEST_FILE).read_text()) == request:
             return folder
@@ -51,23 +57,36 @@ def content_key(hashes: dict[str, str]) -> str:
     return hashlib.sha256(json.dumps(hashes, sort_keys=True).encode()).hexdigest()
 
 
-def user_copy(folder: str | pathlib.Path, cache_dir: str | pathlib.Path) -> pathlib.Path:
-    """The copy of the pre-baked ``folder`` in ``cache_dir``, made if it is missing or differs.
+def prebaked_cloth_tables(request: BakeRequest) -> pathlib.Path | None:
+    """The shipped cloth tables measured with the shipped yarn tables of exactly ``request``, or None."""
+    return prebaked_tables(request, PREBAKED_CLOTH_DIR)
 
-    The copy is ``<cache_dir>/prebaked/<folder name>-<content digest>``: the same shipped tables always
-    map to the same copy, other tables (another version of the extension) to another.  An existing
-    copy is reused when its files are byte for byte the shipped ones; otherwise the shipped folder is
-    checked as a whole (``precompute.tables.folder.check_yarn_table_folder``, a ``TableError`` naming
-    the shipped file) and written in one step (``replace_folder``: a reader, or a second Blender
+
+def user_copy(folder: str | pathlib.Path, cache_dir: str | pathlib.Path, *, cloth: bool = False) -> pathlib.Path:
+    """The copy of the pre-baked ``folder`` (cloth tables if ``cloth``) in ``cache_dir``, made if it
+    is missing or differs.
+
+    The copy is ``<cache_dir>/prebaked/<folder name>-<content digest>`` (``prebaked_cloth/`` for
+    cloth tables): the same shipped tables always map to the same copy, other tables (another version
+    of the extension) to another.  An existing copy is reused when its files are byte for byte the
+    shipped ones; otherwise the shipped folder is checked as a whole
+    (``precompute.tables.folder.check_yarn_table_folder``, or
+    ``clothlight.garment.tables.check_cloth_table_folder``: a ``TableError`` naming the shipped
+    file) and written in one step (``replace_folder``: a reader, or a second Blender
     copying at the same time, finds the complete folder or none).
     """
     folder = pathlib.Path(folder)
     hashes = _file_hashes(folder)
-    copy = pathlib.Path(cache_dir) / COPIES_FOLDER / f"{folder.name}-{content_key(hashes)[:16]}"
+    copies = CLOTH_COPIES_FOLDER if cloth else COPIES_FOLDER
+    copy = pathlib.Path(cache_dir) / copies / f"{folder.name}-{content_key(hashes)[:16]}"
     if copy.is_dir() and _file_hashes(copy) == hashes:
         return copy
     from precompute.tables import folder as table_folder
-    table_folder.check_yarn_table_folder(folder)
+    if cloth:
+        from .garment.tables import check_cloth_table_folder
+        check_cloth_table_folder(folder)
+    else:
+        table_folder.check_yarn_table_folder(folder)
 
     def write(staging: pathlib.Path) -> None:
         for name in hashes:

@@ -1,6 +1,6 @@
 """Build the ClothLight extension zip(s) with Blender's own extension tool, then validate them.
 
-    python scripts/build_extension.py --output-dir dist                       # linux-x64, wheels, pre-baked tables
+    python scripts/build_extension.py --output-dir dist --prebake-cloth       # linux-x64, wheels, pre-baked tables
     python scripts/build_extension.py --platforms linux-x64 windows-x64 macos-arm64 macos-x64
     python scripts/build_extension.py --no-wheels --prebake none              # add-on only, any platform
 
@@ -20,7 +20,12 @@ What a zip holds, and why:
   platform's zip bundles none of them and the add-on there bakes nothing but uses the pre-baked
   tables (the panel says why);
 * **pre-baked tables** of the shipped medium presets (``prebaked/<preset>/``), baked here by
-  the same worker the add-on runs (cached in the bake's user cache, so only the first build bakes).
+  the same worker the add-on runs (cached in the bake's user cache, so only the first build bakes);
+* **pre-baked cloth tables** of the same presets (``prebaked_cloth/<preset>/``): the garment's
+  cloth BSDF measured with those yarn tables on the default woven sample by the add-on's Bake Cloth
+  worker (:class:`clothlight.jobs.ClothBakeJob`), so that Apply Garment Material needs no bake.  The
+  first build renders the weave's cloth response (docs/garment.md, cached); every preset after it
+  takes seconds.
 
 Each platform gets its own zip (``clothlight-<version>-<platform>.zip``), its staged manifest
 listing that platform and its wheels, and ``blender_version_max = "5.1.0"`` whenever binary
@@ -46,7 +51,8 @@ REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(REPO_ROOT) not in sys.path:  # a script in scripts/: make the repository's packages importable
     sys.path.insert(0, str(REPO_ROOT))
 
-from clothlight.jobs import BUNDLED_DEPENDENCIES, BakeCancelled, BakeFailed, BakeJob  # noqa: E402
+from clothlight.jobs import (BUNDLED_DEPENDENCIES, BakeCancelled, BakeFailed, BakeJob, ClothBakeJob,  # noqa: E402
+                             JobCancelled, JobFailed)
 from clothlight.medium_settings import preset_request  # noqa: E402
 
 #: pip's platform tags for each Blender platform: Blender 5.0 needs glibc 2.28 on Linux and
@@ -64,7 +70,9 @@ BLENDER_VERSION_MAX = "5.1.0"
 #: What the stage copy of the source leaves out (the manifest's [build] table filters the rest).
 STAGE_IGNORE = shutil.ignore_patterns(".git", ".venv", "dist", "out", "__pycache__", ".pytest_cache", ".hypothesis",
                                       "*.oso", "*.pyc", "*.nbi", "*.nbc", "example_blends", "benchmarks", "tests",
-                                      "prebaked", "wheels")
+                                      "prebaked", "prebaked_cloth", "wheels")
+#: Goniometer settings a cloth pre-bake may set (:class:`clothlight.jobs.ClothBakeJob`).
+CLOTH_SETTING_KEYS = ("incidence_resolution", "exit_resolution", "pixels_per_patch", "samples")
 #: Files of a bake folder the add-on reads (spectral.npz stays behind: it is large and only the bake uses it).
 PREBAKED_FILES = ("brdf.exr", "lobes.exr", "unscattered.exr", "brdf_stderr.exr", "albedo.exr", "summary.json")
 
@@ -155,9 +163,10 @@ def platform_wheels(platform: str, versions: dict[str, str],
 
 
 def prebake(presets: list[str], stage: pathlib.Path, cache_dir: pathlib.Path | None,
-            transport: dict | None = None) -> None:
+            transport: dict | None = None, cloth_settings: dict | None = None) -> None:
     """Bake each preset's tables (or find them in the cache) into ``stage/prebaked/<preset>``: the
-    untouched preset's bake, or with ``transport`` settings replacing its own (tests use tiny ones)."""
+    untouched preset's bake, or with ``transport`` settings replacing its own (tests use tiny ones);
+    then its cloth tables (:func:`prebake_cloth`) unless ``cloth_settings`` is None."""
     from precompute.cache import entries as cache
 
     cache_dir = cache_dir or cache.default_cache_dir()
@@ -184,6 +193,31 @@ def prebake(presets: list[str], stage: pathlib.Path, cache_dir: pathlib.Path | N
         (folder / "request.json").write_text(request.to_json())
         print(f"pre-baked {name} in {time.perf_counter() - started:.0f} s "
               f"({'cache hit' if outcome.cache_hit else 'baked'})", file=sys.stderr)
+        if cloth_settings is not None:
+            prebake_cloth(name, folder, stage, cache_dir, cloth_settings)
+
+
+def prebake_cloth(name: str, yarn: pathlib.Path, stage: pathlib.Path, cache_dir: pathlib.Path,
+                  settings: dict) -> None:
+    """The cloth tables of the pre-baked yarn tables ``yarn`` (goniometer ``settings`` by name, {}:
+    the defaults) into ``stage/prebaked_cloth/<name>``, with the yarn's request beside them."""
+    from clothlight.garment.tables import CLOTH_FOLDER_FILES
+
+    started = time.perf_counter()
+    job = ClothBakeJob(yarn, cache_dir=cache_dir, settings=settings)
+    try:
+        outcome = job.wait(on_progress=lambda fraction: None)
+    except (JobFailed, JobCancelled, OSError) as error:
+        print(job.log, file=sys.stderr)
+        raise SystemExit(f"pre-baking {name}'s cloth failed: {error}") from None
+    folder = stage / "prebaked_cloth" / name
+    folder.mkdir(parents=True, exist_ok=True)
+    for file_name in CLOTH_FOLDER_FILES:
+        if (outcome.folder / file_name).is_file():
+            shutil.copy2(outcome.folder / file_name, folder / file_name)
+    shutil.copy2(yarn / "request.json", folder / "request.json")
+    print(f"pre-baked {name}'s cloth in {time.perf_counter() - started:.0f} s "
+          f"({'measured' if outcome.rendered else 'cache hit'})", file=sys.stderr)
 
 
 # -- manifest and build --------------------------------------------------------------------------
@@ -216,6 +250,7 @@ def _run_tool(tool: pathlib.Path, *args: str) -> None:
 
 def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = ("linux-x64",),
                     prebake_presets: list[str] = (), prebake_transport: dict | None = None,
+                    prebake_cloth_settings: dict | None = None,
                     wheelhouse: pathlib.Path | None = None,
                     cache_dir: pathlib.Path | None = None) -> list[pathlib.Path]:
     """Build and validate one zip per platform (one universal zip without wheels when ``platforms``
@@ -228,7 +263,7 @@ def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = (
         stage = pathlib.Path(scratch) / "clothlight"
         shutil.copytree(REPO_ROOT, stage, ignore=STAGE_IGNORE)
         if prebake_presets:
-            prebake(list(prebake_presets), stage, cache_dir, prebake_transport)
+            prebake(list(prebake_presets), stage, cache_dir, prebake_transport, prebake_cloth_settings)
         version = re.search(r'^version\s*=\s*"([^"]+)"', manifest_source, re.MULTILINE).group(1)
         if platforms is None:
             (stage / "blender_manifest.toml").write_text(staged_manifest(manifest_source, None, [], False))
@@ -276,6 +311,10 @@ def main(argv=None) -> None:
     parser.add_argument("--prebake-transport", nargs="+", default=[], metavar="KEY=VALUE",
                         help="transport settings of the pre-bakes instead of each preset's, e.g. paths_per_cell=64 "
                              "angular_resolution=4 (tests); the add-on uses them for exactly those settings")
+    parser.add_argument("--prebake-cloth", nargs="*", default=None, metavar="KEY=VALUE",
+                        help="ship each pre-baked preset's cloth tables too: with no value at the defaults of "
+                             "python -m clothlight.garment bake, or with these goniometer settings, e.g. "
+                             "incidence_resolution=3 exit_resolution=2 (tests); absent: no cloth tables")
     parser.add_argument("--wheelhouse", type=pathlib.Path,
                         default=pathlib.Path.home() / ".cache" / "clothlight" / "wheels",
                         help="folder keeping downloaded wheels between builds (default ~/.cache/clothlight/wheels)")
@@ -298,9 +337,19 @@ def main(argv=None) -> None:
             transport[key] = value if (key, value) == ("incidence_resolution", "auto") else int(value)
     if "paths_per_cell" in transport:
         transport.setdefault("target_rel_stderr", None)
+    cloth_settings = None
+    if args.prebake_cloth is not None:
+        cloth_settings = {}
+        for item in args.prebake_cloth:
+            key, _, value = item.partition("=")
+            if key not in CLOTH_SETTING_KEYS or not value.isdigit():
+                parser.error(f"--prebake-cloth: {item!r} is not KEY=VALUE with an integer value and a key of "
+                             + ", ".join(CLOTH_SETTING_KEYS))
+            cloth_settings[key] = int(value)
     platforms = None if args.no_wheels else (list(PLATFORM_TAGS) if "all" in args.platforms else args.platforms)
     for zip_path in build_extension(args.output_dir.resolve(), platforms=platforms, prebake_presets=chosen,
-                                    prebake_transport=transport, wheelhouse=args.wheelhouse,
+                                    prebake_transport=transport, prebake_cloth_settings=cloth_settings,
+                                    wheelhouse=args.wheelhouse,
                                     cache_dir=args.cache_dir):
         print(zip_path)
 

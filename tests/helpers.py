@@ -183,6 +183,8 @@ def add_sun_and_camera(scene, toward_sun, toward_camera, irradiance: float):
 PREBAKED_PRESET = "red_cotton"
 PREBAKED_TRANSPORT = {"paths_per_cell": 64, "n_around": 4, "n_along": 2, "angular_resolution": 4,
                       "incidence_resolution": 5}
+#: The goniometer settings of its cloth pre-bake: small, to test the mechanism.
+PREBAKED_CLOTH_SETTINGS = {"incidence_resolution": 3, "exit_resolution": 2, "pixels_per_patch": 6, "samples": 1}
 
 
 def build_extension_zip(out: pathlib.Path) -> pathlib.Path:
@@ -193,7 +195,8 @@ def build_extension_zip(out: pathlib.Path) -> pathlib.Path:
     result = subprocess.run(
         [sys.executable, str(REPO / "scripts" / "build_extension.py"), "--output-dir", str(out),
          "--platforms", "linux-x64", "--prebake", PREBAKED_PRESET,
-         "--prebake-transport", *(f"{key}={value}" for key, value in PREBAKED_TRANSPORT.items())],
+         "--prebake-transport", *(f"{key}={value}" for key, value in PREBAKED_TRANSPORT.items()),
+         "--prebake-cloth", *(f"{key}={value}" for key, value in PREBAKED_CLOTH_SETTINGS.items())],
         capture_output=True, text=True,
     )
     assert result.returncode == 0, result.stdout + result.stderr

@@ -64,3 +64,35 @@ def test_a_bake_job_sends_the_preferences_scheduler_to_its_child(tmp_path):
     assert "--threads" not in on_cluster  # the cluster's workers have their own threads
     here = jobs.BakeJob(request, cache_dir=tmp_path, threads=4, scheduler="").command()
     assert "--scheduler" not in here and here[here.index("--threads") + 1] == "4"
+
+
+def test_an_unchanged_shipped_preset_finds_its_shipped_cloth_tables_copied_whole_and_checked(tmp_path, monkeypatch):
+    """Apply Garment Material's shipped cloth tables (``prebaked_cloth/<preset>/``): only for the
+    request their yarn tables were baked from, read through a checked copy in the cache."""
+    import shutil
+
+    from precompute.tables.exr import TableError
+
+    cloth_bake = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008_cloth"
+    request = BakeRequest(preset="paper_2008")
+    shipped = tmp_path / "prebaked_cloth"
+    shutil.copytree(cloth_bake, shipped / "paper_2008")
+    (shipped / "paper_2008" / prebaked.REQUEST_FILE).write_text(request.to_json())
+    monkeypatch.setattr(prebaked, "PREBAKED_CLOTH_DIR", shipped)
+    assert prebaked.prebaked_cloth_tables(request) == shipped / "paper_2008"
+    assert prebaked.prebaked_cloth_tables(BakeRequest(preset="paper_2008", seed=1)) is None
+    assert prebaked.prebaked_cloth_tables(BakeRequest(preset="red_cotton")) is None
+
+    cache = tmp_path / "cache"
+    copy = prebaked.user_copy(shipped / "paper_2008", cache, cloth=True)
+    assert copy.parent == cache / prebaked.CLOTH_COPIES_FOLDER
+    assert {p.name: p.read_bytes() for p in copy.iterdir()} == {
+        p.name: p.read_bytes() for p in (shipped / "paper_2008").iterdir()}
+    assert prebaked.user_copy(shipped / "paper_2008", cache, cloth=True) == copy
+    # Shipped tables that are not a whole cloth bake are refused, naming the file; nothing is copied.
+    broken = shipped / "broken"
+    shutil.copytree(shipped / "paper_2008", broken)
+    (broken / "lobes.exr").write_bytes((broken / "lobes.exr").read_bytes()[:100])
+    with pytest.raises(TableError, match="lobes.exr"):
+        prebaked.user_copy(broken, cache, cloth=True)
+    assert sorted(p.name for p in (cache / prebaked.CLOTH_COPIES_FOLDER).iterdir()) == [copy.name]

@@ -133,6 +133,18 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
         assert bpy.ops.clothlight.apply_material() == {{"FINISHED"}}  # again: the same copy
         assert table_paths(sample.active_material) == prebaked
 
+        # A garment from the shipped preset: its shipped cloth tables, copied out like the yarn's.
+        bpy.ops.mesh.primitive_grid_add(size=1.0)
+        garment = bpy.context.active_object
+        assert scene.clothlight.cloth_tables_dir == ""
+        assert bpy.ops.clothlight.apply_garment_material() == {{"FINISHED"}}
+        cloth_copy = scene.clothlight.cloth_tables_dir
+        assert garment.active_material["clothlight_garment"] == "GENERAL"
+        bpy.data.objects.remove(garment)
+        scene.clothlight.cloth_tables_dir = ""
+        sample.select_set(True)
+        bpy.context.view_layer.objects.active = sample
+
         medium.seed = 7  # no longer the shipped tables: bake them (a child process)
         assert bpy.ops.clothlight.bake_tables() == {{"FINISHED"}}
         assert bpy.ops.clothlight.apply_material() == {{"FINISHED"}}
@@ -150,6 +162,7 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
         bpy.ops.wm.save_as_mainfile(filepath={str(saved)!r})
         print(json.dumps({{"enable_seconds": enable_seconds, "heavy_at_enable": heavy_at_enable,
                           "prebaked": [str(p) for p in prebaked], "baked": [str(p) for p in baked],
+                          "cloth_copy": cloth_copy,
                           "numba_cache": numba.config.CACHE_DIR}}))
     """, env, cwd=tmp_path)
     print(f"\nfirst enable of the installed extension (unpacks the wheels): {used['enable_seconds']:.2f} s")
@@ -159,6 +172,12 @@ def test_a_round_of_use_leaves_the_extension_folder_as_installed_and_materials_o
     copy = pathlib.Path(used["prebaked"][0]).parent
     assert {path.name for path in copy.iterdir()} == {path.rpartition("/")[2] for path in before
                                                       if path.startswith(f"prebaked/{PREBAKED_PRESET}/")}
+    cloth_copy = pathlib.Path(used["cloth_copy"])
+    assert cloth_copy.is_dir() and not cloth_copy.is_relative_to(root)
+    shipped_cloth = {path.rpartition("/")[2]: digest for path, digest in before.items()
+                     if path.startswith(f"prebaked_cloth/{PREBAKED_PRESET}/")}
+    assert "lobes.exr" in shipped_cloth and "request.json" in shipped_cloth
+    assert {path.name: hashlib.sha256(path.read_bytes()).hexdigest() for path in cloth_copy.iterdir()} == shipped_cloth
     # The kernels compiled in Blender's process were cached in the user folder.
     assert used["numba_cache"] and not pathlib.Path(used["numba_cache"]).is_relative_to(root)
     assert list(pathlib.Path(used["numba_cache"]).rglob("grids.*.nbi"))

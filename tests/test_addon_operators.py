@@ -237,6 +237,46 @@ def test_apply_garment_material_puts_a_cloth_bake_on_meshes_with_uvs_only(addon,
     assert closures == {"ShaderNodeBsdfDiffuse", "ShaderNodeBsdfAnisotropic"}
 
 
+def weave_repeats(material) -> float | None:
+    """The weave detail's repeats per UV unit in a garment material (the node scaling the UVs), or None."""
+    scales = [link.to_node.inputs["Scale"].default_value for link in material.node_tree.links
+              if link.from_node.bl_idname == "ShaderNodeUVMap" and link.to_node.bl_idname == "ShaderNodeVectorMath"
+              and link.to_node.operation == "SCALE"]
+    assert len(scales) <= 1
+    return scales[0] if scales else None
+
+
+def test_yarn_detail_takes_the_weave_scale_from_the_mesh_size_and_the_scene_units(addon, scene, tmp_path_factory):
+    """1 m of grid in metres is 1000 mm of cloth along its UV map's unit: 1000 / repeat_mm weave repeats;
+    the object's scale and the scene's unit scale count, a typed value wins."""
+    from clothlight.blender.garment.bake import bake_cloth
+    from clothlight.blender.garment.material import cloth_tables_from_bake
+    from clothlight.blender.garment.measure import GoniometerSettings
+
+    yarn = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
+    cloth, _ = bake_cloth(yarn, GoniometerSettings(incidence_resolution=3, exit_resolution=2, pixels_per_patch=6,
+                                                   samples=1), cache_dir=tmp_path_factory.mktemp("cloth"))
+    repeat_mm = cloth_tables_from_bake(cloth).detail_repeat_mm
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.clothlight.cloth_tables_dir = str(cloth)
+    bpy.ops.mesh.primitive_grid_add(size=1.0)  # 1 × 1 units, its UV map the unit square
+    garment = bpy.context.active_object
+    assert bpy.ops.clothlight.apply_garment_material() == {"FINISHED"}
+    assert weave_repeats(garment.active_material) is None  # Yarn Detail off
+    scene.clothlight.garment_yarn_detail = True
+    assert bpy.ops.clothlight.apply_garment_material() == {"FINISHED"}
+    assert weave_repeats(garment.active_material) == pytest.approx(1000.0 / repeat_mm, rel=1e-5)
+    garment.scale = (2.0, 3.0, 1.0)  # u along x
+    scene.unit_settings.scale_length = 0.01  # a unit is a centimetre
+    bpy.context.view_layer.update()
+    assert bpy.ops.clothlight.apply_garment_material() == {"FINISHED"}
+    assert weave_repeats(garment.active_material) == pytest.approx(20.0 / repeat_mm, rel=1e-5)
+    scene.clothlight.garment_weave_repeats = 7.0
+    assert bpy.ops.clothlight.apply_garment_material() == {"FINISHED"}
+    assert weave_repeats(garment.active_material) == pytest.approx(7.0)
+
+
 def test_apply_material_refuses_objects_that_are_not_samples(addon, scene):
     bpy.ops.mesh.primitive_cube_add()
     assert not bpy.ops.clothlight.apply_material.poll()

@@ -40,6 +40,7 @@ from .materials import (
 )
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from ..prebaked import tables_for_request
+from .garment.operator import NAME_SEPARATOR, apply_to_meshes, report_applied
 from .properties import ParameterError, millimetre_scale
 from .running_jobs import RunningBake, RunningClothBake, RunningFit
 from .render_setup import use_cycles, use_cycles_osl_on_cpu
@@ -490,6 +491,11 @@ class CLOTHLIGHT_OT_bake_cloth(_ChildJobOperator, bpy.types.Operator):
     bl_label = "Bake Cloth"
     bl_options = {"REGISTER", "UNDO"}
 
+    apply_to: bpy.props.StringProperty(
+        name="Apply To", options={"HIDDEN", "SKIP_SAVE"},
+        description="Meshes to give the garment material once the cloth is baked (Apply Garment Material), "
+                    "one name a line")
+
     def _start(self, context) -> ClothBakeJob | None:
         try:
             folder, warning = tables_for(context.scene.clothlight.medium)
@@ -514,6 +520,13 @@ class CLOTHLIGHT_OT_bake_cloth(_ChildJobOperator, bpy.types.Operator):
         scene.clothlight.cloth_tables_dir = str(job.outcome.folder)
         how = "measured" if job.outcome.rendered else "found in the cache"
         self.report({"INFO"}, f"Cloth tables {how}: {job.outcome.folder}")
+        meshes = [scene.objects[name] for name in self.apply_to.split(NAME_SEPARATOR) if name in scene.objects]
+        if meshes:
+            try:
+                return report_applied(self, *apply_to_meshes(bpy.context, meshes, job.outcome.folder))
+            except (FileNotFoundError, ValueError, KeyError) as error:
+                self.report({"ERROR"}, f"Cloth bake: {error}")
+                return {"CANCELLED"}
         return {"FINISHED"}
 
     _running = RunningClothBake

@@ -561,10 +561,14 @@ class ClothLightSceneSettings(bpy.types.PropertyGroup):
         description="Let light through the yarns (translucent and fibre-transmission closures): back-lit fabric "
                     "glows. Off: the cloth passes no light and renders at about a Principled BSDF's cost, for "
                     "garments lit from the viewer's side")
+    garment_yarn_detail: BoolProperty(
+        name="Yarn Detail", default=False,
+        description="Show the yarns for close-ups with the cloth bake's weave detail texture (their normals and "
+                    "the gaps between them), at the weave's real size on each mesh")
     garment_weave_repeats: FloatProperty(
         name="Weave Repeats per UV", default=0.0, min=0.0, soft_max=5000.0,
-        description="Show the yarns for close-ups with the cloth bake's weave detail texture: weave repeats per "
-                    "UV unit (the garment's length along u over the weave's repeat, both in mm). 0: off")
+        description="Yarn Detail's weave repeats per UV unit (the garment's length along u over the weave's "
+                    "repeat, both in mm). 0: from each mesh's size in the scene's units and its UV map")
 
 
 CLASSES = (ClothLightWeaveSettings, ClothLightMediumSettings, ClothLightFitSettings, ClothLightSceneSettings)

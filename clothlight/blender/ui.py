@@ -298,7 +298,9 @@ class CLOTHLIGHT_PT_garment(_SidebarPanel, bpy.types.Panel):
         layout.prop(settings, "cloth_tables_dir")
         layout.prop(settings, "garment_open_weave")
         layout.prop(settings, "garment_transmission")
-        layout.prop(settings, "garment_weave_repeats")
+        layout.prop(settings, "garment_yarn_detail")
+        if settings.garment_yarn_detail:
+            layout.prop(settings, "garment_weave_repeats")
         layout.operator("clothlight.apply_garment_material", icon="MOD_CLOTH")
         column = layout.column(align=True)
         column.label(text="Or from a terminal:", icon="CONSOLE")

@@ -50,9 +50,11 @@ class ClothTableFiles:
     lobe_resolution: int
     lobe_shape: dict
     specular: dict
-    #: The weave detail texture (:mod:`.detail`) and its mean coverage; None in bakes without one.
+    #: The weave detail texture (:mod:`.detail`), its mean coverage and the weave repeat it holds
+    #: (mm); None in bakes without one.
     detail_path: pathlib.Path | None = None
     detail_mean_coverage: float | None = None
+    detail_repeat_mm: float | None = None
 
 
 def cloth_tables_from_bake(folder) -> ClothTableFiles:
@@ -69,7 +71,8 @@ def cloth_tables_from_bake(folder) -> ClothTableFiles:
                            {key: float(value) for key, value in summary["lobe_shape"].items()},
                            {key: float(summary["specular"][key]) for key in SPECULAR_KEYS},
                            folder / detail["file"] if detail else None,
-                           float(detail["mean_coverage"]) if detail else None)
+                           float(detail["mean_coverage"]) if detail else None,
+                           float(detail["repeat_mm"]) if detail else None)
 
 
 def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garment", *, mode: str = GENERAL_MODE,

@@ -30,7 +30,7 @@ from clothlight.blender.sample_object import build_sample_object
 from clothlight.mesh_attributes import YARN_UV
 from clothlight.weave import build_woven_mesh
 from clothlight.weave.closeup import sheeting_weave
-from clothlight.weave.twist_highlight import measure_highlights, predicted_highlights
+from clothlight.weave.twist_highlight import LIGHTINGS, measure_highlights, predicted_highlights
 from precompute.optics.medium import load_preset
 
 
@@ -44,8 +44,7 @@ out = pathlib.Path(option("--out", "") or tempfile.mkdtemp(prefix="clothlight-tw
 out.mkdir(parents=True, exist_ok=True)
 PRESET = "red_cotton"
 ELEVATION_DEG = 15.0
-LIGHT = np.array([0.0, -math.cos(math.radians(ELEVATION_DEG)), math.sin(math.radians(ELEVATION_DEG))])
-VIEW = np.array([0.0, 0.0, 1.0])
+LIGHT, VIEW = LIGHTINGS["light 15° from −y, view from above"]     # the sun's and the camera's below
 
 
 def streak_tilts_in_image(rgba: np.ndarray) -> np.ndarray:

@@ -15,6 +15,7 @@ from clothlight.weave import build_woven_mesh
 from clothlight.weave.closeup import sheeting_weave
 from clothlight.weave.plies import twist_rate
 from clothlight.weave.twist_highlight import (
+    LIGHTINGS,
     fibre_tangent,
     highlight_arc_mm,
     highlight_phase,
@@ -29,17 +30,6 @@ from precompute.optics.medium import load_preset
 pytestmark = pytest.mark.filterwarnings("error")
 
 
-def direction(elevation_deg, azimuth_deg):
-    """Unit vector at an elevation above the cloth (x-y plane) and an azimuth from +x, degrees."""
-    elevation, azimuth = math.radians(elevation_deg), math.radians(azimuth_deg)
-    return np.array([math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),
-                     math.sin(elevation)])
-
-
-#: (light, view): grazing light across the warp seen from straight above (docs/twist.md's renders),
-#: and grazing light from an oblique azimuth seen at 60°, which moves the highlight along the yarns.
-LIGHTINGS = {"grazing across, seen from above": (direction(15.0, -90.0), direction(90.0, 0.0)),
-             "grazing oblique, seen at 60°": (direction(15.0, -60.0), direction(60.0, 90.0))}
 PRESET_TWIST = load_preset("red_cotton").yarn.twist_angle_deg      # 24°, two plies
 
 
@@ -165,7 +155,7 @@ def test_an_untwisted_sample_streaks_along_its_yarns(lighting):
 def test_the_tilt_grows_with_the_twist_angle():
     """The sample's mean streak tilt grows steadily with the twist, as tan τ ∝ tan α predicts for a
     fixed place on the yarn: the ratio of the tangents stays within a few per cent."""
-    lighting = LIGHTINGS["grazing across, seen from above"]
+    lighting = LIGHTINGS["light 15° from −y, view from above"]
     means = {}
     for angle in (0.0, 8.0, 16.0, PRESET_TWIST, 32.0, 40.0):
         params, mesh = sample(angle)
@@ -190,7 +180,7 @@ def mirrored(mesh):
 @pytest.mark.parametrize("wrong", ["left-handed", "untwisted", "half the angle"])
 def test_the_checks_see_a_wrong_twist(wrong):
     """The comparison above fails on a sample whose twist is wrong-handed, ignored or wrong."""
-    lighting = LIGHTINGS["grazing across, seen from above"]
+    lighting = LIGHTINGS["light 15° from −y, view from above"]
     params, mesh = sample(PRESET_TWIST)
     if wrong == "left-handed":
         mesh = mirrored(mesh)

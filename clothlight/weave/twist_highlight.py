@@ -235,3 +235,59 @@ def predicted_highlights(found: dict[str, np.ndarray], light_direction, view_dir
         phases.append(phase)
         tilts.append(streak_tilt_deg(phase, r, twist_angle_deg, semi_axes_mm, curvature))
     return np.array(phases), np.array(tilts)
+
+
+def _direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
+    elevation, azimuth = math.radians(elevation_deg), math.radians(azimuth_deg)
+    return np.array([math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),
+                     math.sin(elevation)])
+
+
+#: name → (ω_i, ω_o): the renders' grazing light (15° above the cloth from −y, across the warps)
+#: seen from straight above, and a grazing light from an oblique azimuth seen at 60°, which moves
+#: the highlight along the yarns (elevation above the cloth, azimuth from +x, degrees).
+LIGHTINGS = {"light 15° from −y, view from above": (_direction(15.0, -90.0), _direction(90.0, 0.0)),
+             "light 15° from azimuth −60°, view 60° from +y": (_direction(15.0, -60.0), _direction(60.0, 90.0))}
+
+
+def tilt_table(preset: str = "red_cotton", angles_deg=(0.0, 12.0, 24.0, 40.0), lightings=None) -> list[dict]:
+    """The prediction against the measurement on the preset's close-up sample (8 × 8 yarns, swept at
+    12.5 µm along the yarn and 24 lines around each ply) at each twist angle (degrees) under each
+    lighting (name → (ω_i, ω_o), unit vectors away from the cloth; default :data:`LIGHTINGS`): one row
+    each with the crossings' count, the share with a predicted highlight, the mean measured and
+    predicted tilts there (degrees), the median |difference| of tilt and of the angle about the axis
+    (degrees).  ``python -m clothlight.weave.twist_highlight [preset]`` prints it (docs/twist.md)."""
+    from .closeup import sheeting_weave
+    from .geometry import build_woven_mesh
+
+    lightings = lightings or LIGHTINGS
+    rows = []
+    for name, (light, view) in lightings.items():
+        for angle in angles_deg:
+            params = sheeting_weave(preset, twist_angle_deg=angle, warp_count=8, weft_count=8,
+                                    segments_per_crossing=32, segments_around=24)
+            found = measure_highlights(build_woven_mesh(params), params, light, view)
+            phase, predicted = predicted_highlights(found, light, view, angle, params.cross_section_mm)
+            has = ~np.isnan(phase)
+            measured = found["tilt_deg"]
+            phase_error = np.degrees(np.abs(np.angle(np.exp(1j * (found["phase_rad"][has] - phase[has])))))
+            rows.append(dict(lighting=name, twist_deg=angle, crossings=len(measured), predicted_share=has.mean(),
+                             measured_deg=(measured[has] if has.any() else measured).mean(),
+                             predicted_deg=predicted[has].mean() if has.any() else 0.0,
+                             tilt_error_deg=np.median(np.abs(measured - predicted)[has]) if has.any() else
+                             np.median(np.abs(measured)),
+                             phase_error_deg=np.median(phase_error) if has.any() else math.nan))
+    return rows
+
+
+if __name__ == "__main__":
+    import sys
+
+    preset = sys.argv[1] if len(sys.argv) > 1 else "red_cotton"
+    print("| lighting | twist | crossings | with a prediction | tilt predicted | tilt measured "
+          "| median abs. difference | across: median abs. difference |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    for row in tilt_table(preset):
+        across = "—" if math.isnan(row["phase_error_deg"]) else f"{row['phase_error_deg']:.2f}°"
+        print(f"| {row['lighting']} | {row['twist_deg']:g}° | {row['crossings']} | {row['predicted_share']:.1%} | "
+              f"{row['predicted_deg']:.2f}° | {row['measured_deg']:.2f}° | {row['tilt_error_deg']:.2f}° | {across} |")

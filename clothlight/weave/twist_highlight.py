@@ -237,6 +237,29 @@ def predicted_highlights(found: dict[str, np.ndarray], light_direction, view_dir
     return np.array(phases), np.array(tilts)
 
 
+def streak_tilts_in_image(rgba: np.ndarray, threshold: float = 0.35) -> np.ndarray:
+    """The tilts of the highlight streaks on the warps of a render of the sample seen from above, the
+    warps running along the image's rows (degrees from the image's x axis, counter-clockwise, within
+    ±45°; ``rgba`` (H, W, ≥ 2) bottom row first, as Blender stores it, display values in [0, 1]):
+    each connected patch of pixels whose green exceeds ``threshold`` (a white highlight, not the red
+    yarn), of at least 12 pixels and at least twice as long as wide, its principal axis."""
+    from scipy import ndimage
+
+    labels, count = ndimage.label(np.asarray(rgba)[..., 1] > threshold)
+    tilts = []
+    for label in range(1, count + 1):
+        rows, columns = np.nonzero(labels == label)
+        if len(rows) < 12:
+            continue
+        spread, axes = np.linalg.eigh(np.cov(np.stack([columns - columns.mean(), rows - rows.mean()])))
+        if spread[1] < 4.0 * spread[0]:
+            continue
+        tilt = (math.degrees(math.atan2(axes[1, 1], axes[0, 1])) + 90.0) % 180.0 - 90.0
+        if abs(tilt) < 45.0:
+            tilts.append(tilt)
+    return np.array(tilts)
+
+
 def _direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
     elevation, azimuth = math.radians(elevation_deg), math.radians(azimuth_deg)
     return np.array([math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),

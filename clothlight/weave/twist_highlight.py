@@ -11,7 +11,8 @@ a fibre can send light from ω_i to ω_o only where
 its reflecting normal then being h itself.  The highlight of a twisted yarn therefore lies where the
 helix's tangent turns perpendicular to h, and each fibre's glint is a streak along that fibre: the
 streak makes the fibre's angle with the yarn axis.  Irawan and Marschner use this condition to place
-the highlight across the yarn; what follows writes it out for ClothLight's yarns (:mod:`.plies`).
+the highlight across the yarn; what follows writes it out for ClothLight's yarns (:mod:`.plies`),
+crimp included (the equations are numbered here, not as in the paper).
 
 The helix.  A yarn's centreline c(u) (u its arc length, mm) carries the sweep frame of
 :mod:`.geometry`: tangent T, a binormal B in the cloth plane and N = T × B; its cross-section is the
@@ -32,9 +33,11 @@ The highlight's place across the yarn.  With (1), t·h = 0 reads
     (−ω·r·a·h_B − κ·r·b·h_T)·sin φ + ω·r·b·h_N·cos φ = −h_T,                               (2)
 
 (h_T = h·T and so on), that is A·sin(φ + γ) = −h_T with A = √(p² + q²), γ = atan2(q, p) for the
-coefficients p, q of sin φ and cos φ.  Of its two roots the highlight is the one where the fibre's
-reflecting normal h faces out of the yarn (the envelope's outward normal ∝ b·cos φ·B + a·sin φ·N has
-a positive component along h); where |h_T| > A no fibre at that radius reflects.  An untwisted yarn
+coefficients p, q of sin φ and cos φ.  Of its two roots the highlight is chiefly the one where the
+fibre's reflecting normal h faces out of the yarn (the envelope's outward normal ∝ b·cos φ·B + a·sin φ·N
+has the larger component along h; the other can still show on a ply's flank); where |h_T| > A no
+fibre at that radius reflects.  Along a straight yarn a fibre starting at φ₀ passes φ* at
+u = (φ* − φ₀)/ω, once a turn.  An untwisted yarn
 (ω = 0) on a straight centreline lights up only where h ⊥ T, all round at once.
 
 The streak's tilt.  Seen along N (from above, for a yarn lying in the cloth), the fibre at the

@@ -203,13 +203,21 @@ def test_apply_material_uses_the_prebaked_tables_follows_the_sun_and_leaves_no_o
     assert not unused_blocks()
 
 
-def test_apply_garment_material_puts_a_cloth_bake_on_meshes_with_uvs_only(addon, scene, tmp_path_factory):
+@pytest.fixture(scope="module")
+def small_cloth_bake(addon, tmp_path_factory):
+    """A small cloth bake of the paper's yarn tables (a cloth response of 3 × 2 cells, seconds)."""
     from clothlight.blender.garment.bake import bake_cloth
     from clothlight.blender.garment.measure import GoniometerSettings
 
     yarn = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
     cloth, _ = bake_cloth(yarn, GoniometerSettings(incidence_resolution=3, exit_resolution=2, pixels_per_patch=6,
                                                    samples=1), cache_dir=tmp_path_factory.mktemp("cloth"))
+    return cloth
+
+
+def test_apply_garment_material_puts_a_cloth_bake_on_meshes_with_uvs_only(scene, small_cloth_bake,
+                                                                           tmp_path_factory):
+    cloth = small_cloth_bake
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     bpy.ops.mesh.primitive_grid_add(size=1.0)
@@ -246,16 +254,12 @@ def weave_repeats(material) -> float | None:
     return scales[0] if scales else None
 
 
-def test_yarn_detail_takes_the_weave_scale_from_the_mesh_size_and_the_scene_units(addon, scene, tmp_path_factory):
+def test_yarn_detail_takes_the_weave_scale_from_the_mesh_size_and_the_scene_units(scene, small_cloth_bake):
     """1 m of grid in metres is 1000 mm of cloth along its UV map's unit: 1000 / repeat_mm weave repeats;
     the object's scale and the scene's unit scale count, a typed value wins."""
-    from clothlight.blender.garment.bake import bake_cloth
     from clothlight.blender.garment.material import cloth_tables_from_bake
-    from clothlight.blender.garment.measure import GoniometerSettings
 
-    yarn = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables" / "paper_2008"
-    cloth, _ = bake_cloth(yarn, GoniometerSettings(incidence_resolution=3, exit_resolution=2, pixels_per_patch=6,
-                                                   samples=1), cache_dir=tmp_path_factory.mktemp("cloth"))
+    cloth = small_cloth_bake
     repeat_mm = cloth_tables_from_bake(cloth).detail_repeat_mm
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
@@ -275,6 +279,26 @@ def test_yarn_detail_takes_the_weave_scale_from_the_mesh_size_and_the_scene_unit
     scene.clothlight.garment_weave_repeats = 7.0
     assert bpy.ops.clothlight.apply_garment_material() == {"FINISHED"}
     assert weave_repeats(garment.active_material) == pytest.approx(7.0)
+
+
+def test_a_cloth_bake_started_by_apply_garment_material_applies_it_when_done(addon, scene, small_cloth_bake):
+    """Apply Garment Material without cloth tables starts Bake Cloth with the meshes to apply to;
+    the bake's end puts the material on those of them still there, and sets the Cloth Bake folder."""
+    from clothlight.jobs import ClothBakeOutcome
+
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    bpy.ops.mesh.primitive_grid_add(size=1.0)
+    garment = bpy.context.active_object
+    bpy.ops.mesh.primitive_grid_add(size=1.0, location=(2.0, 0.0, 0.0))
+    other = bpy.context.active_object
+    operator, _ = interactive_operator(addon["operators"].CLOTHLIGHT_OT_bake_cloth, scene)
+    operator.apply_to = "\n".join([garment.name, "removed since"])
+    job = SimpleNamespace(error=None, outcome=ClothBakeOutcome(folder=small_cloth_bake, rendered=True))
+    assert operator._finish(scene, job) == {"FINISHED"}
+    assert scene.clothlight.cloth_tables_dir == str(small_cloth_bake)
+    assert garment.active_material["clothlight_garment"] == "GENERAL" and not other.data.materials
+    assert operator.reports[-1] == ("INFO", f"Garment material on {garment.name}")
 
 
 def test_apply_material_refuses_objects_that_are_not_samples(addon, scene):

@@ -132,6 +132,10 @@ class CLOTHLIGHT_OT_apply_garment_material(bpy.types.Operator):
                 self.report({"ERROR"}, f"Shipped cloth tables: {error}")
                 return {"CANCELLED"}
             if folder is None:
+                if not bpy.ops.clothlight.bake_cloth.poll():  # a bake running, or none possible here
+                    self.report({"ERROR"}, "No cloth tables for this medium yet, and Bake Cloth cannot start: "
+                                           "see the Garment panel")
+                    return {"CANCELLED"}
                 self.report({"INFO"}, "No cloth tables for this medium yet: baking them (Garment panel), then "
                                       "applying the material")
                 return bpy.ops.clothlight.bake_cloth(

@@ -27,6 +27,8 @@ threads as the kernels' threads.
 
 Faults: a worker that dies mid-task has its tasks, and the results it held, recomputed elsewhere
 from their inputs (dask keeps the lineage of every result a job still holds), with the same result;
+a finished result that dask gives up fetching from a dead worker (its future left cancelled) is
+submitted again, up to MAX_RESUBMITS times;
 a scheduler that does not answer within ``connect_timeout_s`` or is lost during the job raises
 :class:`~precompute.errors.SchedulerUnreachable` naming its address; an exception in a task, or a
 KeyboardInterrupt (Ctrl-C) or ``cancel()`` while waiting, cancels every future of the map before it
@@ -59,6 +61,8 @@ NO_SCHEDULER = "none"
 CONNECT_TIMEOUT_S = 10.0
 #: Seconds between looks at ``cancel()`` while waiting for tasks.
 POLL_S = 0.25
+#: Times a task whose finished result was lost with its worker is run again before the job fails.
+MAX_RESUBMITS = 3
 #: A scheduler address: protocol, host (a name, IPv4, or IPv6 in brackets) and port.
 _ADDRESS = re.compile(r"^(tcp|tls)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):\d{1,5}$")
 PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -165,17 +169,26 @@ class ClusterExecutor:
         with KeyboardInterrupt.  Every future of the map is cancelled before an exception leaves.
         """
         from distributed import wait
-        from distributed.client import FuturesCancelledError
+        from distributed.client import FutureCancelledError, FuturesCancelledError
 
         client = self.client
         items = [tuple(item) for item in items]
         self.bytes_sent += sum(_nbytes(item) for item in items)
-        tasks = [client.submit(_run_task, self._digest, self._code, function, item, pure=False)
-                 for item in items]
-        kept = [client.submit(operator.itemgetter(0), task, pure=False) for task in tasks] if keep else []
-        returned = [client.submit(operator.itemgetter(1), task, pure=False) for task in tasks] if keep else tasks
-        position = {future.key: i for i, future in enumerate(returned)}
-        results = [None] * len(returned)
+        tasks, kept, returned = [None] * len(items), [None] * len(items), [None] * len(items)
+        position, resubmitted = {}, [0] * len(items)
+
+        def submit(i: int) -> None:
+            tasks[i] = client.submit(_run_task, self._digest, self._code, function, items[i], pure=False)
+            if keep:
+                kept[i] = client.submit(operator.itemgetter(0), tasks[i], pure=False)
+                returned[i] = client.submit(operator.itemgetter(1), tasks[i], pure=False)
+            else:
+                returned[i] = tasks[i]
+            position[returned[i].key] = i
+
+        for i in range(len(items)):
+            submit(i)
+        results = [None] * len(items)
         try:
             pending = set(returned)
             while pending:
@@ -188,15 +201,27 @@ class ClusterExecutor:
                 except FuturesCancelledError as error:
                     self._raise_cancelled(error)
                 for future in done:
-                    if future.status == "cancelled":
-                        self._raise_cancelled(None)
                     i = position[future.key]
-                    results[i] = future.result()
+                    try:
+                        if future.status == "cancelled":
+                            raise FutureCancelledError(future.key, "cancelled before its result was read")
+                        results[i] = future.result()
+                    except FutureCancelledError as error:
+                        # A worker that dies between finishing a task and handing over its result
+                        # can leave the finished future cancelled (dask's gather gives up on it):
+                        # the task is run again from its inputs, with the same result.
+                        if self.client.status not in ("running", "connecting") or \
+                                resubmitted[i] >= MAX_RESUBMITS:
+                            self._raise_cancelled(error)
+                        resubmitted[i] += 1
+                        submit(i)
+                        pending.add(returned[i])
+                        continue
                     self.bytes_received += _nbytes(results[i])
                     if progress is not None:
                         progress(i)
         except BaseException:
-            client.cancel([*tasks, *kept, *returned], force=True)
+            client.cancel([future for future in (*tasks, *kept, *returned) if future is not None], force=True)
             raise
         return list(zip(kept, results)) if keep else results
 

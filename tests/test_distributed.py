@@ -161,6 +161,43 @@ def test_a_worker_killed_mid_job_changes_nothing(single_process, tmp_path):
         assert len([p for p in (tmp_path / "cache" / "spectral").iterdir() if p.name.endswith(".partial")]) == 0
 
 
+def _losing_results(monkeypatch, times: int) -> list:
+    """Make the first ``times`` results the client reads raise FutureCancelledError, as dask's gather
+    does when the worker holding a finished task's result dies before handing it over (a worker
+    killed at that moment makes it happen only by chance); returns the list of the keys lost."""
+    from distributed import Future
+    from distributed.client import FutureCancelledError
+
+    original, lost = Future.result, []
+
+    def result(self, *args, **kwargs):
+        if len(lost) < times:
+            lost.append(self.key)
+            raise FutureCancelledError(self.key, "lost with its worker")
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(Future, "result", result)
+    return lost
+
+
+def test_a_result_lost_with_its_worker_after_the_task_finished_is_computed_again(cluster, single_process, tmp_path,
+                                                                                 monkeypatch):
+    lost = _losing_results(monkeypatch, times=1)
+    assert_same_bake(small_bake(tmp_path / "cache", scheduler=cluster), single_process)
+    assert len(lost) == 1
+
+
+def test_a_result_lost_again_and_again_is_a_cluster_error_and_writes_nothing(cluster, tmp_path, monkeypatch):
+    from precompute.errors import ClusterError
+
+    lost = _losing_results(monkeypatch, times=10 ** 6)
+    with pytest.raises(ClusterError, match="cancelled"):
+        small_bake(tmp_path / "cache", scheduler=cluster)
+    # Each task is run again up to MAX_RESUBMITS times (new futures, new keys), then the job ends.
+    assert len(lost) >= layer.MAX_RESUBMITS + 1
+    assert not [path for path in files_under(tmp_path / "cache") if path.suffix == ".exr"]
+
+
 def test_ctrl_c_cancels_the_tasks_and_leaves_nothing(cluster, tmp_path):
     from distributed import Client
 

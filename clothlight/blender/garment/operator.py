@@ -83,15 +83,20 @@ def apply_to_meshes(context, objects, folder) -> tuple[list[str], list[str]]:
             repeats = None
             if settings.garment_yarn_detail:
                 if tables.detail_repeat_mm is None:
-                    raise ValueError("this cloth bake has no weave detail texture: bake the cloth again")
+                    raise ValueError(f"{obj.name!r}: this cloth bake has no weave detail texture, bake the cloth "
+                                     "again for Yarn Detail")
                 repeats = settings.garment_weave_repeats or None
                 if repeats is None and obj.data.uv_layers:  # without one, the material names what is missing
-                    repeats = weave_repeats_per_uv(*mesh_triangles_mm(obj, context.scene), tables.detail_repeat_mm)
+                    try:
+                        repeats = weave_repeats_per_uv(*mesh_triangles_mm(obj, context.scene),
+                                                       tables.detail_repeat_mm)
+                    except ValueError as error:
+                        raise ValueError(f"{obj.name!r}: {error}") from None
             apply_garment_material(obj, tables, mode=GENERAL_MODE, open_weave=settings.garment_open_weave,
                                    transmission=settings.garment_transmission, weave_repeats_per_uv=repeats)
             done.append(obj.name)
-        except ValueError as error:
-            skipped.append(f"{obj.name}: {error}")
+        except ValueError as error:  # each message names its object
+            skipped.append(str(error))
     return done, skipped
 
 

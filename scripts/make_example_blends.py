@@ -17,6 +17,12 @@
 * ``twill_closeup_general.blend`` — a 2/2 twill of the same yarn close up, in general-lighting
   mode (the closure mixture, §5, lit by everything Cycles has) under a physical sky: sun and
   sky light from every direction, as an HDRI would give.
+* ``closeup_red_cotton.blend`` — the default close-up (``sheeting_weave("red_cotton")``: 2-ply
+  yarns twisted at the preset's 24°, seeded irregularity, sheeting density, flyaway fibres in the
+  hair BSDF of the preset's dye) in the fitted ``red_cotton`` yarn material, general mode (plain
+  nodes, its lobe table packed), beside a Principled BSDF with sheen on the same geometry; scene
+  "Front-Lit" (sun and sky from the front) and scene "Back-Lit" (a window-sized area light behind
+  the cloth), sharing the cloth's collection.  8 × 8 yarns, so that the file stays small.
 
 Both read the paper's red-cotton tables from ``example_blends/tables/paper_2008/`` through ``//``-relative
 paths, so the folder can be moved as a whole; the OSL shaders are embedded with their compiled
@@ -62,14 +68,14 @@ TWILL_WEAVE = WeaveParameters(interlacing="twill_2_2", warp_count=16, weft_count
                               yarn_radius_mm=0.1)
 
 
-def example_tables(out_dir: pathlib.Path) -> pathlib.Path:
-    """The red-cotton tables copied next to the blends (baked, or found in the bake cache)."""
+def example_tables(out_dir: pathlib.Path, preset: str = PRESET) -> pathlib.Path:
+    """The ``preset``'s yarn tables copied next to the blends (baked, or found in the bake cache)."""
     from precompute.cache import entries as cache
 
-    job = BakeJob(preset_request(PRESET), cache_dir=cache.default_cache_dir())
-    outcome = job.wait(on_progress=lambda f: print(f"\rbaking {PRESET}: {f:.0%}", end="", file=sys.stderr))
+    job = BakeJob(preset_request(preset), cache_dir=cache.default_cache_dir())
+    outcome = job.wait(on_progress=lambda f: print(f"\rbaking {preset}: {f:.0%}", end="", file=sys.stderr))
     print(file=sys.stderr)
-    folder = out_dir / "tables" / PRESET
+    folder = out_dir / "tables" / preset
     folder.mkdir(parents=True, exist_ok=True)
     for name in TABLE_FILES:
         shutil.copy2(outcome.folder / name, folder / name)
@@ -242,12 +248,107 @@ def draped_garment_general(out_dir: pathlib.Path, cloth_dir: pathlib.Path) -> pa
     return path
 
 
+CLOSEUP_PRESET = "red_cotton"
+#: Yarns each way in the close-up example: half the default's 16, so the .blend stays small.
+CLOSEUP_YARNS = 8
+#: Names of the close-up example's scenes (tests and scripts/render_closeup_example.py read them).
+FRONT_LIT, BACK_LIT = "Front-Lit", "Back-Lit"
+#: The Principled copy's offset along x (mm): the 8 × 8 sample at 0.40 mm is 3.2 mm wide.
+CLOSEUP_OFFSET_MM = 3.6
+
+
+def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
+    """The default red-cotton close-up with flyaway fibres, in ClothLight's general mode (left) and
+    in a Principled BSDF with sheen (right, the same mesh and fibres), front-lit and back-lit."""
+    from clothlight.blender.flyaway_object import build_flyaway_object
+    from clothlight.weave.closeup import closeup_settings, sheeting_weave
+    from precompute.optics.medium import load_preset_config
+
+    fresh_file()
+    front = bpy.context.scene
+    front.name = FRONT_LIT
+    millimetre_scene(front)
+    front.cycles.shading_system = False  # the general mode is plain nodes: SVM, GPUs welcome
+    front.cycles.samples = 64
+    front.cycles.use_denoising = True
+    front.render.resolution_x, front.render.resolution_y = 640, 320
+    cloth = bpy.data.collections.new("Cloth")
+    front.collection.children.link(cloth)
+
+    params = sheeting_weave(CLOSEUP_PRESET, warp_count=CLOSEUP_YARNS, weft_count=CLOSEUP_YARNS)
+    sample = build_sample_object(params, collection=cloth)
+    sample.name = "ClothLight Sample"
+    fibres = build_flyaway_object(sample, params, closeup_settings(load_preset_config(CLOSEUP_PRESET)[0]),
+                                  CLOSEUP_PRESET, collection=cloth)
+    # The general mode packs its lobe table in the file: no table folder travels with this blend.
+    from precompute.cache import entries as cache
+
+    baked = BakeJob(preset_request(CLOSEUP_PRESET), cache_dir=cache.default_cache_dir()).wait()
+    yarn = build_yarn_material(yarn_tables_from_bake(baked.folder),
+                               "ClothLight Red Cotton", mode=GENERAL_MODE)
+    sample.data.materials.clear()
+    sample.data.materials.append(yarn)
+    sample.location.x = -CLOSEUP_OFFSET_MM / 2
+
+    # The reference shares the mesh data; its materials are the objects' own.
+    principled = bpy.data.materials.new("Principled BSDF + Sheen")
+    node = principled.node_tree.nodes["Principled BSDF"]
+    node.inputs["Base Color"].default_value = (0.5, 0.02, 0.03, 1.0)  # benchmarks/render_cost.py's reference
+    node.inputs["Sheen Weight"].default_value = 1.0
+    node.inputs["Roughness"].default_value = 0.8
+    for original in (sample, fibres):
+        twin = original.copy()
+        twin.name = original.name.replace("ClothLight", "Principled") if "ClothLight" in original.name \
+            else f"{original.name} Principled"
+        cloth.objects.link(twin)
+        twin.material_slots[0].link = "OBJECT"
+        twin.material_slots[0].material = principled
+        if original is sample:
+            sample_twin = twin
+        else:
+            twin.parent = sample_twin
+    sample_twin.location.x = CLOSEUP_OFFSET_MM / 2
+
+    add_sun(front, "Sun", (0.3, -0.8, 0.6), irradiance=3.0)
+    add_camera(front, "Camera", (0.0, -6.0, 5.0), (0.0, 0.0, 0.0), lens_mm=50.0)
+    sky_world = bpy.data.worlds.new("Sky")
+    sky_world.color = (0.25, 0.3, 0.4)  # a blue-grey sky from every direction
+    front.world = sky_world
+
+    back = bpy.data.scenes.new(BACK_LIT)
+    millimetre_scene(back)
+    back.cycles.shading_system = False
+    back.cycles.samples = 64
+    back.cycles.use_denoising = True
+    back.render.resolution_x, back.render.resolution_y = 640, 320
+    back.collection.children.link(cloth)
+    # A window behind the cloth (below it, facing the camera through it): the yarns glow.
+    window = bpy.data.objects.new("Window", bpy.data.lights.new("Window", "AREA"))
+    window.data.energy = 2.0
+    window.data.shape = "RECTANGLE"
+    window.data.size, window.data.size_y = 12.0, 8.0
+    window.location = (0.0, 3.0, -3.0)
+    window.rotation_euler = (Vector((0.0, 0.0, 0.0)) - window.location).to_track_quat("-Z", "Y").to_euler()
+    back.collection.objects.link(window)
+    add_camera(back, "Camera Back-Lit", (0.0, -6.0, 5.0), (0.0, 0.0, 0.0), lens_mm=50.0)
+    dark = bpy.data.worlds.new("Dark Room")
+    dark.color = (0.01, 0.01, 0.012)
+    back.world = dark
+    path = out_dir / "closeup_red_cotton.blend"
+    save(path)
+    return path
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=pathlib.Path, default=REPO_ROOT / "example_blends")
+    parser.add_argument("--closeup-only", action="store_true", help="write closeup_red_cotton.blend alone")
     args = parser.parse_args(argv)
     out_dir = args.out.resolve()
     out_dir.mkdir(parents=True, exist_ok=True)
+    closeup_red_cotton(out_dir)
+    if args.closeup_only:
+        return
     tables_dir = example_tables(out_dir)
     paper_sample_validation(out_dir, tables_dir)
     twill_closeup_general(out_dir, tables_dir)

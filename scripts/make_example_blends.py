@@ -257,6 +257,18 @@ FRONT_LIT, BACK_LIT = "Front-Lit", "Back-Lit"
 CLOSEUP_OFFSET_MM = 3.6
 
 
+def uniform_world(name: str, color) -> bpy.types.World:
+    """A world of one linear ``color`` (radiance, W/(m²·sr) per unit strength) from every direction:
+    set on its Background node, since Blender 5's worlds render their node tree, not ``World.color``."""
+    world = bpy.data.worlds.new(name)
+    world.color = color
+    if world.node_tree is None:
+        world.use_nodes = True
+    background = next(node for node in world.node_tree.nodes if node.type == "BACKGROUND")
+    background.inputs["Color"].default_value = (*color, 1.0)
+    return world
+
+
 def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
     """The default red-cotton close-up with flyaway fibres, in ClothLight's general mode (left) and
     in a Principled BSDF with sheen (right, the same mesh and fibres), front-lit and back-lit."""
@@ -311,9 +323,7 @@ def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
 
     add_sun(front, "Sun", (0.3, -0.8, 0.6), irradiance=3.0)
     add_camera(front, "Camera", (0.0, -6.0, 5.0), (0.0, 0.0, 0.0), lens_mm=50.0)
-    sky_world = bpy.data.worlds.new("Sky")
-    sky_world.color = (0.25, 0.3, 0.4)  # a blue-grey sky from every direction
-    front.world = sky_world
+    front.world = uniform_world("Sky", (0.25, 0.3, 0.4))  # a blue-grey sky from every direction
 
     back = bpy.data.scenes.new(BACK_LIT)
     millimetre_scene(back)
@@ -324,29 +334,54 @@ def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
     back.collection.children.link(cloth)
     # A window behind the cloth (below it, facing the camera through it): the yarns glow.
     window = bpy.data.objects.new("Window", bpy.data.lights.new("Window", "AREA"))
-    window.data.energy = 2.0
+    window.data.energy = 600.0  # W over 96 mm² about 4 mm behind the cloth: what gets through glows
     window.data.shape = "RECTANGLE"
     window.data.size, window.data.size_y = 12.0, 8.0
     window.location = (0.0, 3.0, -3.0)
     window.rotation_euler = (Vector((0.0, 0.0, 0.0)) - window.location).to_track_quat("-Z", "Y").to_euler()
     back.collection.objects.link(window)
     add_camera(back, "Camera Back-Lit", (0.0, -6.0, 5.0), (0.0, 0.0, 0.0), lens_mm=50.0)
-    dark = bpy.data.worlds.new("Dark Room")
-    dark.color = (0.01, 0.01, 0.012)
-    back.world = dark
+    back.world = uniform_world("Dark Room", (0.01, 0.01, 0.012))
     path = out_dir / "closeup_red_cotton.blend"
     save(path)
     return path
+
+
+#: The docs pictures of the close-up example: small, since they render on a shared 2-core machine.
+PICTURE_SIZE, PICTURE_SAMPLES = (320, 160), 64
+
+
+def render_closeup(blend: pathlib.Path, out_dir: pathlib.Path) -> list[pathlib.Path]:
+    """Render each scene of the close-up example (ClothLight left, Principled+sheen right) at
+    PICTURE_SIZE pixels, PICTURE_SAMPLES samples, no denoising, into ``out_dir``; returns the PNGs."""
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    pictures = []
+    for name in (FRONT_LIT, BACK_LIT):
+        scene = bpy.data.scenes[name]
+        scene.render.resolution_x, scene.render.resolution_y = PICTURE_SIZE
+        scene.cycles.samples = PICTURE_SAMPLES
+        scene.cycles.use_denoising = False
+        scene.render.image_settings.file_format = "PNG"
+        scene.render.filepath = str(out_dir / f"closeup_red_cotton_{name.lower()}.png")
+        bpy.ops.render.render(write_still=True, scene=name)
+        pictures.append(pathlib.Path(scene.render.filepath))
+        print(scene.render.filepath)
+    return pictures
 
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=pathlib.Path, default=REPO_ROOT / "example_blends")
     parser.add_argument("--closeup-only", action="store_true", help="write closeup_red_cotton.blend alone")
+    parser.add_argument("--render-closeup", type=pathlib.Path, metavar="DIR",
+                        help="then render its front-lit and back-lit scenes into DIR (PNG)")
     args = parser.parse_args(argv)
     out_dir = args.out.resolve()
     out_dir.mkdir(parents=True, exist_ok=True)
-    closeup_red_cotton(out_dir)
+    closeup = closeup_red_cotton(out_dir)
+    if args.render_closeup:
+        render_closeup(closeup, args.render_closeup.resolve())
     if args.closeup_only:
         return
     tables_dir = example_tables(out_dir)

@@ -300,6 +300,9 @@ def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
                                "ClothLight Red Cotton", mode=GENERAL_MODE)
     sample.data.materials.clear()
     sample.data.materials.append(yarn)
+    for node in yarn.node_tree.nodes:  # packed: its path in this machine's bake cache means nothing elsewhere
+        if node.type == "TEX_IMAGE" and node.image is not None and node.image.packed_file is not None:
+            node.image.filepath_raw = "//lobes.exr"
     sample.location.x = -CLOSEUP_OFFSET_MM / 2
 
     # The reference shares the mesh data; its materials are the objects' own.

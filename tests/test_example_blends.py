@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 bpy = pytest.importorskip("bpy")
+from mathutils import Vector  # noqa: E402
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "example_blends"
 BLENDS = sorted(EXAMPLES.glob("*.blend"))
@@ -16,7 +17,35 @@ pytestmark = [pytest.mark.blender, pytest.mark.render]
 
 def test_the_examples_are_there():
     assert {p.name for p in BLENDS} >= {"paper_sample_validation.blend", "twill_closeup_general.blend",
-                                        "draped_garment_general.blend"}
+                                        "draped_garment_general.blend", "closeup_red_cotton.blend"}
+
+
+def test_the_closeup_example_holds_the_sample_fibres_both_materials_and_both_lightings():
+    """closeup_red_cotton.blend: the woven sample and its flyaway fibres in ClothLight's yarn
+    material and the hair BSDF, the same mesh and fibres again in Principled+sheen, a sun and sky
+    in front and a window behind the cloth."""
+    bpy.ops.wm.open_mainfile(filepath=str(EXAMPLES / "closeup_red_cotton.blend"))
+    meshes = [obj for obj in bpy.data.objects if obj.type == "MESH"]
+    fibres = [obj for obj in bpy.data.objects if obj.type == "CURVES"]
+    assert len(meshes) == 2 and len(fibres) == 2
+    assert meshes[0].data == meshes[1].data and fibres[0].data == fibres[1].data  # the same geometry
+    assert all(len(obj.data.curves) > 100 for obj in fibres)
+    assert all(obj.parent in meshes for obj in fibres)
+    materials = {obj.name: obj.material_slots[0].material for obj in meshes + fibres}
+    principled = [name for name, material in materials.items() if material.name.startswith("Principled")]
+    assert len(principled) == 2 and {m.name for m in materials.values()} >= {"ClothLight Red Cotton"}
+    yarn = bpy.data.materials["ClothLight Red Cotton"]
+    assert any(node.type == "TEX_IMAGE" and node.image.packed_file for node in yarn.node_tree.nodes)
+    front, back = bpy.data.scenes["Front-Lit"], bpy.data.scenes["Back-Lit"]
+    for scene in (front, back):
+        assert set(meshes + fibres) <= set(scene.objects)
+    assert [obj.data.type for obj in front.objects if obj.type == "LIGHT"] == ["SUN"]
+    window = [obj for obj in back.objects if obj.type == "LIGHT"]
+    assert [obj.data.type for obj in window] == ["AREA"]
+    # behind the cloth (z < 0) and facing up through it toward the camera above
+    assert window[0].location.z < 0 < back.camera.location.z
+    assert (window[0].rotation_euler.to_matrix() @ Vector((0, 0, -1))).z > 0
+    bpy.ops.wm.read_homefile(use_empty=True)
 
 
 def _table_paths():
@@ -28,7 +57,8 @@ def _table_paths():
                 for socket in node.inputs:
                     if socket.name.endswith("Table"):
                         yield socket.default_value
-            elif node.type == "TEX_IMAGE" and node.image is not None:  # the garment's node-based mixture
+            elif node.type == "TEX_IMAGE" and node.image is not None and node.image.packed_file is None:
+                # the garment's node-based mixture (the yarn's general mode packs its lobe table)
                 yield node.image.filepath
 
 
@@ -53,7 +83,8 @@ def render_pixels(scene, path: pathlib.Path) -> np.ndarray:
 def test_example_opens_and_renders_its_cloth(blend, tmp_path):
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     tables = list(_table_paths())
-    assert tables and all(path.startswith("//") for path in tables)  # the folder can move as a whole
+    packed = any(image.packed_file is not None for image in bpy.data.images)  # the yarn's general mode
+    assert (tables or packed) and all(path.startswith("//") for path in tables)  # the folder can move as a whole
     assert all(pathlib.Path(bpy.path.abspath(path)).is_file() for path in tables)
     scenes = [scene for scene in bpy.data.scenes if scene.camera is not None]
     assert scenes

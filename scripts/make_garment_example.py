@@ -44,6 +44,7 @@ from clothlight.blender.garment.material import apply_garment_material, cloth_ta
 from clothlight.blender.materials import GENERAL_MODE  # noqa: E402
 from clothlight.jobs import BakeJob  # noqa: E402
 from clothlight.medium_settings import preset_request  # noqa: E402
+from make_example_blends import uniform_world  # noqa: E402  (this script's folder is on the path)
 
 #: Where the Principled copy stands: this far along x from the garment (m).
 SIDE_BY_SIDE_M = 1.5
@@ -182,9 +183,7 @@ def garment_example(preset: str, out_dir: pathlib.Path, cloth_dir: pathlib.Path)
     window.location = (SIDE_BY_SIDE_M / 2.0, 1.6, 0.9)
     aim(window, centre)
     back.collection.objects.link(window)
-    room = bpy.data.worlds.new("Dim Room")
-    room.color = (0.01, 0.01, 0.012)
-    back.world = room
+    back.world = uniform_world("Dim Room", (0.01, 0.01, 0.012))
 
     path = out_dir / f"garment_{preset}.blend"
     bpy.context.preferences.filepaths.save_version = 0

@@ -711,3 +711,22 @@ def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come
                               material=sample.active_material)
     labels = _draw_panels(context)
     assert any(label.startswith("B/R ") for label in labels) and any("General lighting" in label for label in labels)
+
+
+@pytest.mark.parametrize("name, holder", [("cancel_bake", "RunningBake"), ("cancel_cloth_bake", "RunningClothBake"),
+                                          ("cancel_fit", "RunningFit")])
+def test_each_cancel_button_cancels_only_its_own_running_job(addon, scene, name, holder):
+    running = getattr(addon["running_jobs"], holder)
+    others = [getattr(addon["running_jobs"], other) for other in ("RunningBake", "RunningClothBake", "RunningFit")
+              if other != holder]
+    operator = getattr(bpy.ops.clothlight, name)
+    assert not operator.poll()  # nothing running: the button is greyed out
+    cancelled = []
+    job = SimpleNamespace(cancel=lambda: cancelled.append(name))
+    running.job = job
+    try:
+        assert all(other.job is None for other in others)
+        assert operator.poll() and operator() == {"FINISHED"}
+        assert cancelled == [name]
+    finally:
+        running.job = None

@@ -419,6 +419,21 @@ class _ChildJobOperator:
         _end_job(self, self._running)
 
 
+class _CancelJobOperator:
+    """Cancel the one running job that ``_running`` holds (its Cancel button)."""
+
+    _running: type
+    bl_options = {"INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return cls._running.job is not None
+
+    def execute(self, context):
+        self._running.job.cancel()
+        return {"FINISHED"}
+
+
 class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
     """Bake the yarn's BRDF tables from the medium settings (Monte-Carlo light transport in a background
     process; cached, so an unchanged medium is instant). Esc cancels"""
@@ -464,20 +479,12 @@ class CLOTHLIGHT_OT_bake_tables(_ChildJobOperator, bpy.types.Operator):
         return "Baking ClothLight tables"
 
 
-class CLOTHLIGHT_OT_cancel_bake(bpy.types.Operator):
+class CLOTHLIGHT_OT_cancel_bake(_CancelJobOperator, bpy.types.Operator):
     """Stop the running bake; no table is written"""
 
     bl_idname = "clothlight.cancel_bake"
     bl_label = "Cancel Bake"
-    bl_options = {"INTERNAL"}
-
-    @classmethod
-    def poll(cls, context):
-        return RunningBake.job is not None
-
-    def execute(self, context):
-        RunningBake.job.cancel()
-        return {"FINISHED"}
+    _running = RunningBake
 
 
 # -- Bake Cloth ----------------------------------------------------------------------------------
@@ -537,20 +544,12 @@ class CLOTHLIGHT_OT_bake_cloth(_ChildJobOperator, bpy.types.Operator):
         return "Baking the ClothLight cloth" + (f", {job.stage}" if job.stage else "")
 
 
-class CLOTHLIGHT_OT_cancel_cloth_bake(bpy.types.Operator):
+class CLOTHLIGHT_OT_cancel_cloth_bake(_CancelJobOperator, bpy.types.Operator):
     """Stop the running cloth bake; no cloth table is written"""
 
     bl_idname = "clothlight.cancel_cloth_bake"
     bl_label = "Cancel Cloth Bake"
-    bl_options = {"INTERNAL"}
-
-    @classmethod
-    def poll(cls, context):
-        return RunningClothBake.job is not None
-
-    def execute(self, context):
-        RunningClothBake.job.cancel()
-        return {"FINISHED"}
+    _running = RunningClothBake
 
 
 # -- Fit to Measurement --------------------------------------------------------------------------
@@ -628,20 +627,12 @@ class CLOTHLIGHT_OT_fit_medium(_ChildJobOperator, bpy.types.Operator):
         return "Fitting the ClothLight medium" + (f", {job.stage}" if job.stage else "")
 
 
-class CLOTHLIGHT_OT_cancel_fit(bpy.types.Operator):
+class CLOTHLIGHT_OT_cancel_fit(_CancelJobOperator, bpy.types.Operator):
     """Stop the running fit; nothing is written"""
 
     bl_idname = "clothlight.cancel_fit"
     bl_label = "Cancel Fit"
-    bl_options = {"INTERNAL"}
-
-    @classmethod
-    def poll(cls, context):
-        return RunningFit.job is not None
-
-    def execute(self, context):
-        RunningFit.job.cancel()
-        return {"FINISHED"}
+    _running = RunningFit
 
 
 class CLOTHLIGHT_OT_load_fit(bpy.types.Operator):

@@ -194,21 +194,7 @@ def twill_closeup_general(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pa
     camera.data.dof.focus_distance = (camera.location - Vector((0.0, 0.0, 0.0))).length
     camera.data.dof.aperture_fstop = 0.6  # f-number of a macro shot at this scale: a shallow focus band
 
-    world = bpy.data.worlds.new("Sky")
-    tree = world.node_tree
-    tree.nodes.clear()
-    sky = tree.nodes.new("ShaderNodeTexSky")
-    sky.sky_type = "MULTIPLE_SCATTERING"
-    sky.sun_elevation = math.radians(35.0)
-    sky.sun_rotation = math.radians(120.0)
-    background = tree.nodes.new("ShaderNodeBackground")
-    # The physical sky is in absolute units (the sun is tens of thousands of W/m²): scaled to a
-    # daylight exposure where the cloth's linear values sit in the display range.
-    background.inputs["Strength"].default_value = 0.1
-    output = tree.nodes.new("ShaderNodeOutputWorld")
-    tree.links.new(sky.outputs["Color"], background.inputs["Color"])
-    tree.links.new(background.outputs["Background"], output.inputs["Surface"])
-    scene.world = world
+    scene.world = physical_sky_world("Sky", sun_elevation_deg=35.0, sun_rotation_deg=120.0, strength=0.1)
     path = out_dir / "twill_closeup_general.blend"
     save(path)
     return path
@@ -255,6 +241,26 @@ CLOSEUP_YARNS = 8
 FRONT_LIT, BACK_LIT = "Front-Lit", "Back-Lit"
 #: The Principled copy's offset along x (mm): the 8 × 8 sample at 0.40 mm is 3.2 mm wide.
 CLOSEUP_OFFSET_MM = 3.6
+
+
+def physical_sky_world(name: str, *, sun_elevation_deg: float, sun_rotation_deg: float,
+                       strength: float) -> bpy.types.World:
+    """A world of Blender's physical sky (multiple scattering) with its sun at these angles (degrees).
+    The sky is in absolute units (the sun is tens of thousands of W/m²): ``strength`` scales it to a
+    daylight exposure where the cloth's linear values sit in the display range."""
+    world = bpy.data.worlds.new(name)
+    tree = world.node_tree
+    tree.nodes.clear()
+    sky = tree.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = "MULTIPLE_SCATTERING"
+    sky.sun_elevation = math.radians(sun_elevation_deg)
+    sky.sun_rotation = math.radians(sun_rotation_deg)
+    background = tree.nodes.new("ShaderNodeBackground")
+    background.inputs["Strength"].default_value = strength
+    output = tree.nodes.new("ShaderNodeOutputWorld")
+    tree.links.new(sky.outputs["Color"], background.inputs["Color"])
+    tree.links.new(background.outputs["Background"], output.inputs["Surface"])
+    return world
 
 
 def uniform_world(name: str, color) -> bpy.types.World:

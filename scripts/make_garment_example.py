@@ -25,7 +25,6 @@ colour.  Scenes are in metres; denoised, as an artist renders.
 from __future__ import annotations
 
 import argparse
-import math
 import pathlib
 import shutil
 import sys
@@ -44,7 +43,7 @@ from clothlight.blender.garment.material import apply_garment_material, cloth_ta
 from clothlight.blender.materials import GENERAL_MODE  # noqa: E402
 from clothlight.jobs import BakeJob  # noqa: E402
 from clothlight.medium_settings import preset_request  # noqa: E402
-from make_example_blends import uniform_world  # noqa: E402  (this script's folder is on the path)
+from make_example_blends import physical_sky_world, uniform_world  # noqa: E402  (this script's folder is on the path)
 
 #: Where the Principled copy stands: this far along x from the garment (m).
 SIDE_BY_SIDE_M = 1.5
@@ -155,21 +154,8 @@ def garment_example(preset: str, out_dir: pathlib.Path, cloth_dir: pathlib.Path)
     aim(camera, centre)
     front.collection.objects.link(camera)
     front.camera = camera
-    sky = bpy.data.worlds.new("Sky")
-    tree = sky.node_tree
-    tree.nodes.clear()
-    texture = tree.nodes.new("ShaderNodeTexSky")
-    texture.sky_type = "MULTIPLE_SCATTERING"
-    texture.sun_elevation = math.radians(40.0)
-    texture.sun_rotation = math.radians(-60.0)  # the sun behind the camera's left shoulder
-    background = tree.nodes.new("ShaderNodeBackground")
-    # The physical sky is in absolute units (the sun is tens of thousands of W/m²): scaled to a
-    # daylight exposure where the cloth's linear values sit in the display range.
-    background.inputs["Strength"].default_value = 0.08
-    output = tree.nodes.new("ShaderNodeOutputWorld")
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    tree.links.new(background.outputs["Background"], output.inputs["Surface"])
-    front.world = sky
+    # The sun behind the camera's left shoulder.
+    front.world = physical_sky_world("Sky", sun_elevation_deg=40.0, sun_rotation_deg=-60.0, strength=0.08)
 
     back = bpy.data.scenes.new("Back-lit")
     render_settings(back)

@@ -1,32 +1,36 @@
-"""Write precompute/data/congo_red.csv and precompute/data/evans_blue.csv from PhotochemCAD spectra.
+"""Write precompute/data/{congo_red,evans_blue,curcumin}.csv from PhotochemCAD spectra.
 
-Measured absorption spectra of two direct (cellulose) dyes, converted to the
-napierian mass absorption coefficient the dye model uses (precompute/optics/dye.py):
+Measured absorption spectra of three dyes that dye cotton directly (no mordant), converted to the
+napierian mass absorption coefficient the dye model uses (precompute/optics/dye.py), the red, blue
+and yellow of a dye mixture (a shade recipe, precompute/optics/medium.py):
 
 * C.I. Direct Red 28 (Congo red), PhotochemCAD compound J17;
-* C.I. Direct Blue 53 (Evans blue), PhotochemCAD compound J19.
+* C.I. Direct Blue 53 (Evans blue), PhotochemCAD compound J19;
+* C.I. Natural Yellow 3 (curcumin, turmeric's dye), PhotochemCAD compound D08.
 
 Source: M. Taniguchi and J. S. Lindsey, "Database of absorption and
 fluorescence spectra of >300 common compounds for use in PhotochemCAD",
-Photochem. Photobiol. 94, 290–327 (2018), doi:10.1111/php.12860.  Both spectra
-were measured in PBS (Agilent 8453, January 2017) and are tabulated as the
+Photochem. Photobiol. 94, 290–327 (2018), doi:10.1111/php.12860.  The spectra
+were measured in PBS (curcumin: ethanol; Agilent 8453, January 2017) and are tabulated as the
 decadic molar absorption coefficient ε (L mol⁻¹ cm⁻¹) at 1 nm steps, the
 spectrum's maximum scaled by the database to a literature ε (see
-precompute/data/congo_red.md and evans_blue.md).
+precompute/data/congo_red.md, evans_blue.md and curcumin.md).
 
 The raw tables are not redistributed here (the database states no licence).
 Pass the PhotochemCAD absorption files, two columns ``wavelength (nm)``,
 ``ε (L/mol/cm)`` after one header line — in the PhotochemCAD distribution and
 its web mirrors named ``J17.absorption.txt`` / ``J-17, 573-58-0, Congo Red,
 PBS.abs.txt`` and ``J19.absorption.txt`` / ``J-19, 314-13-6, Evans Blue,
-PBS.abs.txt``::
+PBS.abs.txt``, and ``D08.absorption.txt`` / ``D-8, 458-37-7, Curcumin, ETOH.abs.txt``::
 
-    python scripts/make_dye_spectra.py --congo-red J17.absorption.txt --evans-blue J19.absorption.txt
+    python scripts/make_dye_spectra.py --congo-red J17.absorption.txt --evans-blue J19.absorption.txt \
+        --curcumin D08.absorption.txt
 
 Conversion: ε_mass (cm²/g) = ln(10) · ε_molar (L mol⁻¹ cm⁻¹) · 1000 (cm³/L) / M (g/mol).
 Output grid: 380–740 nm in 1 nm steps, the source's own 1 nm samples (no
 interpolation, no smoothing).  Congo red is tabulated only to 700 nm; 701–740 nm
-hold the mean of its last eleven samples (690–700 nm), see congo_red.md.
+hold the mean of its last eleven samples (690–700 nm), see congo_red.md; curcumin only to
+600 nm, 601–740 nm the mean of 590–600 nm (0.15 % of its peak), see curcumin.md.
 """
 
 from __future__ import annotations
@@ -38,7 +42,6 @@ import pathlib
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "precompute" / "data"
 GRID_NM = tuple(range(380, 741))  # 380–740 nm, 1 nm
-TAIL_MEAN_NM = (690, 700)  # samples averaged to extend a table that stops short of 740 nm
 
 # IUPAC standard atomic weights (abridged, g/mol)
 ATOMIC_WEIGHT = {"C": 12.011, "H": 1.008, "N": 14.007, "Na": 22.98977, "O": 15.999, "S": 32.06}
@@ -59,6 +62,8 @@ class DyeSource:
     peak_nm: float  # λ of the tabulated maximum (PhotochemCAD "wavelength_abs")
     peak_molar: float  # decadic molar ε at that maximum, L/(mol·cm) (PhotochemCAD "epsilon_abs")
     epsilon_basis: str
+    solvent: str = "PBS"
+    tail_mean_nm: tuple[int, int] = (690, 700)  # samples averaged to extend a table that stops short of 740 nm
 
     @property
     def molar_mass(self) -> float:
@@ -92,6 +97,22 @@ EVANS_BLUE = DyeSource(
 )
 
 
+CURCUMIN = DyeSource(
+    key="curcumin",
+    name="C.I. Natural Yellow 3 (curcumin, C.I. 75300, CAS 458-37-7)",
+    photochemcad_id="D08",
+    formula={"C": 21, "H": 20, "O": 6},
+    formula_text="C21H20O6",
+    peak_nm=425.0,
+    peak_molar=55000.0,
+    epsilon_basis=(
+        "55000 L/(mol cm) at 422 nm in ethanol (Jasim 1989), applied by PhotochemCAD to the ethanol maximum at 425 nm"
+    ),
+    solvent="ethanol",
+    tail_mean_nm=(590, 600),
+)
+
+
 def molar_to_mass(epsilon_molar: float, molar_mass: float) -> float:
     """Decadic molar absorption coefficient L/(mol·cm) → napierian mass absorption coefficient cm²/g."""
     return math.log(10.0) * epsilon_molar * 1000.0 / molar_mass
@@ -120,7 +141,8 @@ def convert(source: DyeSource, path: pathlib.Path) -> tuple[list[tuple[int, floa
     if any(value < 0 for value in raw.values()):
         raise ValueError(f"{path}: negative ε")
     last = max(raw)
-    tail = [raw[wl] for wl in range(TAIL_MEAN_NM[0], TAIL_MEAN_NM[1] + 1)] if last < GRID_NM[-1] else []
+    low, high = source.tail_mean_nm
+    tail = [raw[wl] for wl in range(low, high + 1)] if last < GRID_NM[-1] else []
     fill = sum(tail) / len(tail) if tail else None
     rows = []
     for wavelength in GRID_NM:
@@ -129,7 +151,7 @@ def convert(source: DyeSource, path: pathlib.Path) -> tuple[list[tuple[int, floa
             raise ValueError(f"{path}: no value at {wavelength} nm")
         rows.append((wavelength, molar_to_mass(molar, source.molar_mass)))
     extension = (
-        f"# {last + 1}-{GRID_NM[-1]} nm: not measured; held at the mean of the {TAIL_MEAN_NM[0]}-{TAIL_MEAN_NM[1]} nm "
+        f"# {last + 1}-{GRID_NM[-1]} nm: not measured; held at the mean of the {low}-{high} nm "
         f"samples ({fill:.4g} L/(mol cm), {100 * fill / source.peak_molar:.2f} % of the peak)"
         if fill is not None
         else f"# {GRID_NM[0]}-{GRID_NM[-1]} nm: all measured (source table {min(raw)}-{last} nm)"
@@ -142,7 +164,7 @@ def write(source: DyeSource, path: pathlib.Path) -> pathlib.Path:
     mass = source.molar_mass
     peak = molar_to_mass(source.peak_molar, mass)
     lines = [
-        f"# {source.name}: napierian mass absorption coefficient, measured in solution (PBS).",
+        f"# {source.name}: napierian mass absorption coefficient, measured in solution ({source.solvent}).",
         f"# Source: PhotochemCAD compound {source.photochemcad_id}; {CITATION}.",
         f"# Source scale: {source.epsilon_basis}.",
         f"# Conversion: eps_mass (cm2/g) = ln(10) * eps_molar (L/(mol cm)) * 1000 (cm3/L) / M; "
@@ -163,8 +185,9 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--congo-red", type=pathlib.Path, required=True, help="PhotochemCAD J17 absorption file")
     parser.add_argument("--evans-blue", type=pathlib.Path, required=True, help="PhotochemCAD J19 absorption file")
+    parser.add_argument("--curcumin", type=pathlib.Path, required=True, help="PhotochemCAD D08 absorption file")
     args = parser.parse_args(argv)
-    for source, path in ((CONGO_RED, args.congo_red), (EVANS_BLUE, args.evans_blue)):
+    for source, path in ((CONGO_RED, args.congo_red), (EVANS_BLUE, args.evans_blue), (CURCUMIN, args.curcumin)):
         print(write(source, path))
 
 

@@ -1,7 +1,8 @@
-"""Measured dye spectra (precompute/data/congo_red.csv, evans_blue.csv): load, cover, peak, scale, colour.
+"""Measured dye spectra (precompute/data/congo_red.csv, evans_blue.csv, curcumin.csv): load, cover, peak,
+scale, colour.
 
-The documented values below are the source's (PhotochemCAD J17 / J19, Taniguchi & Lindsey,
-Photochem. Photobiol. 94, 290–327 (2018)); see precompute/data/congo_red.md and evans_blue.md.
+The documented values below are the source's (PhotochemCAD J17 / J19 / D08, Taniguchi & Lindsey,
+Photochem. Photobiol. 94, 290–327 (2018)); see precompute/data/congo_red.md, evans_blue.md and curcumin.md.
 """
 
 import math
@@ -19,6 +20,7 @@ RED_COTTON_WEIGHT_PERCENT, COTTON_DENSITY = 3.0, 1.52
 DOCUMENTED = {
     "congo_red": (483.0, 48000.0, 696.66),  # C.I. Direct Red 28, C32H22N6Na2O6S2, in PBS
     "evans_blue": (606.0, 86000.0, 960.79),  # C.I. Direct Blue 53, C34H24N6Na4O14S4, in PBS
+    "curcumin": (425.0, 55000.0, 368.38),  # C.I. Natural Yellow 3, C21H20O6, in ethanol
 }
 
 
@@ -82,3 +84,18 @@ def test_congo_red_extension_beyond_700_nm_is_flat_and_small():
 def test_blue_absorbs_orange_red_far_more_than_blue():
     mu_450, mu_606 = _mu_a("evans_blue", [450.0, 606.0])
     assert mu_606 / mu_450 >= 5.0  # measured ≈ 11
+
+
+def test_yellow_absorbs_blue_and_lets_green_and_red_through():
+    mu_425, mu_550, mu_650 = _mu_a("curcumin", [425.0, 550.0, 650.0])
+    assert mu_425 >= 300.0 * mu_550  # measured ≈ 580: a yellow, not an orange
+    assert mu_650 <= 0.005 * mu_425
+
+
+def test_curcumin_extension_beyond_600_nm_is_the_mean_of_its_last_measured_samples():
+    wavelengths, values = _load("curcumin")
+    tail = values[wavelengths > 600.0]
+    assert tail.size and np.all(tail == tail[0])
+    measured = values[(wavelengths >= 590.0) & (wavelengths <= 600.0)]
+    assert tail[0] == pytest.approx(measured.mean(), rel=1e-4)
+    assert tail[0] <= 0.002 * values.max()

@@ -219,6 +219,24 @@ def _yarn_and_grids(config: dict, medium, optics, seed: int, paths: int):
     return geometry, grids, settings
 
 
+def absorption_series(config: dict, medium, reference, largest_mu_a: np.ndarray, *, relative_error: float,
+                      seed: int, threads: int | None = None):
+    """One transport of ``medium`` at the ``reference`` optics (the least absorbing), its exits tallied at
+    the absorption steps up to ``largest_mu_a`` (L,), 1/mm (:mod:`precompute.transport.absorption`),
+    and eq. (5) at every step on the fit's incidence grid: (reference μa, steps (K, L), ρ (N_i², N_o²,
+    L, K) float32, yarn geometry), from which any absorption in between is read in about a second."""
+    from precompute.transport import simulate_yarn, yarn_brdf
+    from precompute.transport.absorption import absorption_steps, step_transport
+
+    geometry, grids, settings = _yarn_and_grids(config, medium, reference, seed, paths_per_cell(relative_error))
+    steps = absorption_steps(reference.mu_a, largest_mu_a)
+    transport = simulate_yarn(reference, geometry, grids, paths_per_cell=settings["paths_per_cell"],
+                              seed=settings["seed"], threads=threads, extra_absorption_per_mm=steps)
+    rho_steps = np.stack([yarn_brdf(step_transport(transport, k), FIT_INCIDENCE_RESOLUTION).rho
+                          for k in range(len(steps))], axis=-1).astype(np.float32)
+    return reference.mu_a, steps, rho_steps, geometry
+
+
 def _candidate_tables(config: dict, optics, geometry, rho: np.ndarray):
     """Eq. (5)'s spectral ρ (N_i², N_o², L) on the fit's incidence grid → the BRDF atlas, the
     attenuation table (RGB, clipped to the gamut as the bake's tables) and their layout."""
@@ -257,22 +275,13 @@ class DyeSeriesForwardModel(ForwardModel):
         self._series = None
 
     def _series_for(self, config: dict, medium):
-        from precompute.transport import simulate_yarn, yarn_brdf
-        from precompute.transport.absorption import absorption_steps, step_transport
-
         undyed = {**config, "dye": {**config["dye"], "weight_percent": None}}
         identity = canonical_json(undyed)
         if self._series is not None and self._series[0] == identity:
             return self._series[1]
         low, high = (medium_optics(medium.with_dye(w)) for w in self.dye_range)
-        geometry, grids, settings = _yarn_and_grids(config, medium, low, self.seed,
-                                                    paths_per_cell(self.relative_error))
-        steps = absorption_steps(low.mu_a, high.mu_a)
-        transport = simulate_yarn(low, geometry, grids, paths_per_cell=settings["paths_per_cell"],
-                                  seed=settings["seed"], threads=self.threads, extra_absorption_per_mm=steps)
-        rho_steps = np.stack([yarn_brdf(step_transport(transport, k), FIT_INCIDENCE_RESOLUTION).rho
-                              for k in range(len(steps))], axis=-1).astype(np.float32)
-        series = (low.mu_a, steps, rho_steps, geometry)
+        series = absorption_series(config, medium, low, high.mu_a, relative_error=self.relative_error,
+                                   seed=self.seed, threads=self.threads)
         self._series = (identity, series)
         return series
 

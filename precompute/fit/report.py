@@ -99,14 +99,20 @@ def fitted_preset_config(result: FitResult, measured_name: str = "") -> dict:
 
 
 def _absolute_data_files(config: dict, base_dir: pathlib.Path) -> None:
+    def absolute(value: str) -> str:
+        beside = pathlib.Path(base_dir) / value
+        shipped = medium_module.DATA_DIR / value
+        if not pathlib.Path(value).is_absolute() and beside.is_file() and beside.resolve() != shipped.resolve():
+            return str(beside.resolve())
+        return value
+
     def visit(node):
         if isinstance(node, dict):
             for key, value in node.items():
-                if key in ("csv", "spectrum_csv") and isinstance(value, str) and not pathlib.Path(value).is_absolute():
-                    beside = pathlib.Path(base_dir) / value
-                    shipped = medium_module.DATA_DIR / value
-                    if beside.is_file() and beside.resolve() != shipped.resolve():
-                        node[key] = str(beside.resolve())
+                if key in ("csv", "spectrum_csv") and isinstance(value, str):
+                    node[key] = absolute(value)
+                elif key == "spectrum_csv" and isinstance(value, list):  # a shade recipe's dyes
+                    node[key] = [absolute(item) if isinstance(item, str) else item for item in value]
                 else:
                     visit(value)
         elif isinstance(node, list):

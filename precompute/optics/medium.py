@@ -581,6 +581,46 @@ def _index(spec, name: str, base_dir: pathlib.Path) -> RefractiveIndex:
     raise ParameterError(name, spec, "a number n, [n, k], or a table {wavelengths_nm, n, k} or {csv}")
 
 
+def dye_mixture_spectrum(spectrum_csv, shares, base_dir: pathlib.Path = PRESET_DIR):
+    """A ``[dye]`` table's spectrum: one CSV, or a shade recipe — several dyes in the same fibre.
+
+    ``spectrum_csv`` a CSV file (``shares`` None), or a list of K of them with ``shares`` the K
+    fractions of the dye weight each dye makes up (≥ 0, summing to 1).  Absorption adds (Beer–Lambert
+    for dyes that do not interact), so K dyes at weight shares s_k of w % absorb as one dye of w % with
+    ε(λ) = Σ s_k ε_k(λ).  Returns (wavelengths nm, ε cm²/g, a source naming the CSVs and their shares):
+    the first table's wavelengths within the range every table covers."""
+    if isinstance(spectrum_csv, str):
+        if shares is not None:
+            raise ParameterError("dye.shares", shares, "absent for one dye (a list of shares goes with a list of "
+                                                       "spectrum_csv files)")
+        path = _resolve(spectrum_csv, "dye.spectrum_csv", base_dir)
+        wavelengths_nm, epsilon = read_spectrum_csv(path, "dye.spectrum_csv")
+        return wavelengths_nm, epsilon, path.name
+    if not isinstance(spectrum_csv, list) or not spectrum_csv:
+        raise ParameterError("dye.spectrum_csv", spectrum_csv, "a CSV file, or a list of them with dye.shares")
+    count = len(spectrum_csv)
+    if (not isinstance(shares, list) or len(shares) != count
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0
+                       for v in shares)):
+        raise ParameterError("dye.shares", shares, f"{count} numbers ≥ 0, one per dye.spectrum_csv file")
+    if not math.isclose(sum(shares), 1.0, abs_tol=1e-6):
+        raise ParameterError("dye.shares", shares, "fractions of the dye weight that sum to 1")
+    tables = []
+    for number, text in enumerate(spectrum_csv):
+        name = f"dye.spectrum_csv[{number}]"
+        path = _resolve(text, name, base_dir)
+        tables.append((path.name, *(np.asarray(v, float) for v in read_spectrum_csv(path, name))))
+    low = max(table[1][0] for table in tables)
+    high = min(table[1][-1] for table in tables)
+    grid = tables[0][1][(tables[0][1] >= low) & (tables[0][1] <= high)]
+    if grid.size < 2:
+        raise ParameterError("dye.spectrum_csv", spectrum_csv, "spectra that share a wavelength range")
+    epsilon = sum(share * np.interp(grid, wavelengths, values)
+                  for share, (_, wavelengths, values) in zip(shares, tables))
+    source = " + ".join(f"{share:.4g} {name}" for share, (name, _, _) in zip(shares, tables))
+    return tuple(float(v) for v in grid), tuple(float(v) for v in epsilon), source
+
+
 def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> MediumParameters:
     """Build :class:`MediumParameters` from a preset's TOML content; relative file paths resolve in ``base_dir``."""
     _check_keys(
@@ -625,20 +665,19 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
     dye = None
     if "dye" in config:
         spec = _table(config, "dye", "")
-        _check_keys(spec, {"weight_percent", "fiber_density_g_per_cm3", "spectrum_csv"}, "dye")
+        _check_keys(spec, {"weight_percent", "fiber_density_g_per_cm3", "spectrum_csv", "shares"}, "dye")
         for key in ("weight_percent", "fiber_density_g_per_cm3"):
             if key not in spec:
                 raise ParameterError(f"dye.{key}", None, "a number")
         if "spectrum_csv" not in spec:
             raise ParameterError("dye.spectrum_csv", None, "a CSV of wavelength_nm, napierian mass absorption cm²/g")
-        path = _resolve(spec["spectrum_csv"], "dye.spectrum_csv", base_dir)
-        wavelengths_nm, epsilon = read_spectrum_csv(path, "dye.spectrum_csv")
+        wavelengths_nm, epsilon, source = dye_mixture_spectrum(spec["spectrum_csv"], spec.get("shares"), base_dir)
         dye = Dye(
             weight_percent=spec["weight_percent"],
             fiber_density_g_per_cm3=spec["fiber_density_g_per_cm3"],
             wavelengths_nm=wavelengths_nm,
             mass_absorption_cm2_per_g=epsilon,
-            source=path.name,
+            source=source,
         )
     fibres = None
     if "fibres" in config:

@@ -174,3 +174,31 @@ def green_red_ratio(rgb) -> float:
 def channel_ratios(rgb) -> dict[str, float]:
     """``{"B/R": …, "G/R": …}`` of one RGB triple: the paper's Table 1 quantities."""
     return {"B/R": blue_red_ratio(rgb), "G/R": green_red_ratio(rgb)}
+
+
+def srgb_to_linear_rgb(srgb) -> np.ndarray:
+    """sRGB-encoded values in [0, 1] (…, 3) → linear Rec.709 RGB: the colour a picker or a ``#rrggbb``
+    names, as Blender's scene-linear space holds it (IEC 61966-2-1: the same primaries and white)."""
+    srgb = np.asarray(srgb, float)
+    if srgb.shape[-1:] != (3,) or not np.all(np.isfinite(srgb)) or np.any(srgb < 0) or np.any(srgb > 1):
+        raise ParameterError("sRGB colour", srgb.tolist(), "three values in [0, 1]")
+    return colour.cctf_decoding(srgb, function="sRGB")
+
+
+def linear_rgb_to_lab(rgb) -> np.ndarray:
+    """Linear Rec.709 RGB (…, 3), white (1, 1, 1) → CIELAB (…, 3) under D65, CIE 1931 2° (L* of white 100)."""
+    space = colour.RGB_COLOURSPACES[RGB_SPACE]
+    xyz = np.asarray(rgb, float) @ np.asarray(space.matrix_RGB_to_XYZ).T
+    return colour.XYZ_to_Lab(xyz, space.whitepoint)
+
+
+def delta_e_2000(lab_a, lab_b) -> np.ndarray:
+    """CIEDE2000 colour difference (Sharma, Wu & Dalal 2005) of two CIELAB colours (…, 3): about 1 is
+    the smallest difference seen side by side, 2 a close match."""
+    return colour.delta_E(np.asarray(lab_a, float), np.asarray(lab_b, float), method="CIE 2000")
+
+
+def linear_to_srgb(rgb) -> np.ndarray:
+    """Linear Rec.709 RGB (…, 3) → sRGB-encoded values, clipped to [0, 1] (the inverse of
+    :func:`srgb_to_linear_rgb` inside the gamut)."""
+    return colour.cctf_encoding(np.clip(np.asarray(rgb, float), 0.0, 1.0), function="sRGB")

@@ -1,0 +1,71 @@
+"""Target colour → shade recipe (issue 44: ΔE2000 ≤ 2 in ≤ 30 s): the colours of real fabrics, matched.
+
+The targets are the colours of the raw-data MERL fabrics (../shared/data/real_fabrics/neural): each
+one's reflectance factor π f at normal light and views 15–30° off the normal (the mirror's glint
+left out, as the match leaves it out), linear RGB → sRGB.  Each is matched on ``--preset``'s yarn
+(default red_cotton) with the shipped red, blue and yellow dyes (clothlight/fit/colour_match.py).
+Printed per fabric: the recipe, CIEDE2000 of the cloth to the target, evaluations and wall seconds
+of the solve; and once, the time to get the model ready (the response and the series from the cache,
+or made: minutes the first time).
+
+    python benchmarks/bench_colour_match.py [--preset red_cotton] [--fabrics red-fabric2,blue-fabric]
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+
+import numpy as np
+
+FABRICS = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data" / "real_fabrics" / "neural"
+#: Views of the fabric's colour: normal light, views this far off the normal, degrees.
+COLOUR_VIEWS_DEG = (15.0, 30.0)
+
+
+def fabric_srgb(path: pathlib.Path) -> np.ndarray:
+    """sRGB (3,) of a raw-data curves CSV: π f at θi = 0 and 15° ≤ |θo| ≤ 30°, averaged, encoded."""
+    from precompute.fit.measured_data import read_measurement
+    from precompute.tables.color import linear_to_srgb
+
+    measurement = read_measurement(path)
+    theta_i, theta_o = measurement.angles_deg[:, 0], np.abs(measurement.angles_deg[:, 2])
+    select = (theta_i == 0.0) & (theta_o >= COLOUR_VIEWS_DEG[0]) & (theta_o <= COLOUR_VIEWS_DEG[1])
+    return linear_to_srgb(np.pi * measurement.rgb[select].mean(axis=0))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--preset", default="red_cotton")
+    parser.add_argument("--fabrics", help="comma-separated fabric names (default: every CSV in the folder)")
+    args = parser.parse_args()
+
+    from clothlight.fit.colour_match import MATCH_DELTA_E, ShadeModel, match_colour
+    from precompute.optics.medium import load_preset_config
+
+    start = time.perf_counter()
+    base, base_dir = load_preset_config(args.preset)
+    model = ShadeModel(base, base_dir, progress=lambda text: print(f"  … {text}", flush=True))
+    print(f"{args.preset}: model ready in {time.perf_counter() - start:.1f} s "
+          f"(clear cloth: linear RGB {np.round(model([1e-4] * len(model.dyes) + [0.0]), 3).tolist()})")
+    names = args.fabrics.split(",") if args.fabrics else sorted(p.stem for p in FABRICS.glob("*.csv"))
+    print(f"{'fabric':22s} {'target':8s} {'recipe: ' + ', '.join(d.removesuffix('.csv') for d in model.dyes):42s} "
+          f"{'fibre/mm':>8s} {'ΔE2000':>7s} {'evals':>5s} {'s':>5s}")
+    reached = 0
+    for name in names:
+        target = fabric_srgb(FABRICS / f"{name}.csv")
+        result = match_colour(target, model)
+        reached += result.reached
+        hex_target = "#" + "".join(f"{round(255 * v):02x}" for v in target)
+        recipe = ", ".join(f"{p:.3g} %" for p in result.recipe[:-1])
+        print(f"{name:22s} {hex_target:8s} {recipe:42s} {result.recipe[-1]:8.3g} {result.delta_e:7.2f} "
+              f"{result.evaluations:5d} {result.seconds:5.1f}", flush=True)
+    print(f"reached (ΔE2000 ≤ {MATCH_DELTA_E:g}): {reached} of {len(names)}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,101 @@
+"""A target colour → a shade recipe (clothlight.fit.colour_match, ``python -m clothlight.fit.match_colour``).
+
+The round trip: a recipe's own cloth colour, asked for, gives back a recipe of that colour (ΔE2000 ≤ 2);
+a colour no recipe reaches is reported as not reached.  At small transport settings, with the swatches'
+response rendered into a temporary cache."""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+
+import numpy as np
+import pytest
+
+from clothlight.fit import match_colour as command
+from clothlight.fit.colour_match import MATCH_DELTA_E, ShadeModel, match_colour
+from precompute.optics.medium import PRESET_DIR, load_preset_config, medium_from_dict
+from precompute.tables.color import delta_e_2000, linear_rgb_to_lab, linear_to_srgb
+
+SMALL = {"n_around": 8, "n_along": 4, "angular_resolution": 4}
+
+
+def small_red_cotton() -> dict:
+    config = copy.deepcopy(load_preset_config("red_cotton")[0])
+    config["transport"] = dict(SMALL)
+    return config
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory):
+    return ShadeModel(small_red_cotton(), PRESET_DIR, cache_dir=tmp_path_factory.mktemp("cache"), seed=1)
+
+
+@pytest.mark.slow
+@pytest.mark.render
+def test_a_recipes_own_colour_is_matched_within_two_cie2000(model):
+    shortcut = model([0.15, 0.01, 0.04, 0.5])
+    np.testing.assert_allclose(shortcut, model([0.15, 0.01, 0.04, 0.5], exact=True), rtol=1e-6)
+    assert shortcut[0] > 3 * shortcut[1]  # Congo red with a little blue and yellow: a red
+    more_red = model([0.6, 0.01, 0.04, 0.5])
+    assert more_red[1] < shortcut[1] and more_red[2] < shortcut[2]  # more red dye absorbs more green and blue
+
+    target = linear_to_srgb(shortcut)
+    result = match_colour(target, model)
+    assert result.reached and result.delta_e <= MATCH_DELTA_E
+    assert float(delta_e_2000(linear_rgb_to_lab(result.cloth_rgb), linear_rgb_to_lab(shortcut))) <= MATCH_DELTA_E
+    medium = medium_from_dict(result.config, PRESET_DIR)  # the preset content reads back as its recipe
+    assert medium.dye.weight_percent == pytest.approx(result.recipe[:-1].sum())
+    assert medium.host.absorption_per_mm == pytest.approx(result.recipe[-1])
+
+
+@pytest.mark.slow
+@pytest.mark.render
+def test_a_colour_lighter_than_the_undyed_cloth_is_not_reached(model):
+    clear = model([1e-4, 1e-4, 1e-4, 0.0])
+    assert np.all(clear < 0.9)
+    result = match_colour([1.0, 1.0, 1.0], model)
+    assert not result.reached and result.delta_e > MATCH_DELTA_E
+
+
+@pytest.mark.slow
+@pytest.mark.render
+def test_the_command_writes_a_preset_and_refuses_an_unreachable_colour(model, tmp_path, capsys):
+    cache = model.cache_dir
+    config = tmp_path / "start.toml"
+    from precompute.fit.report import to_toml
+
+    config.write_text(to_toml(small_red_cotton()), encoding="utf-8")
+    target = "#" + "".join(f"{round(255 * v):02x}" for v in linear_to_srgb(model([0.3, 0.0, 0.02, 0.8])))
+    out = tmp_path / "my_red.toml"
+    assert command.main(["--target", target, "--config", str(config), "--out", str(out), "--seed", "1",
+                         "--cache-dir", str(cache), "--json"]) == 0
+    text = out.read_text(encoding="utf-8")
+    assert text.startswith(f"# Shade recipe for sRGB {target}")
+    written = tomllib.loads(text)
+    assert written["name"] == "my_red" and written["dye"]["spectrum_csv"]
+    medium_from_dict(written, tmp_path)
+
+    white = tmp_path / "white.toml"
+    assert command.main(["--target", "#ffffff", "--config", str(config), "--out", str(white), "--seed", "1",
+                         "--cache-dir", str(cache)]) == 2
+    assert "--target" in capsys.readouterr().err and not white.exists()
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["--target", "#12345"], "--target"),
+    (["--target", "1.5,0,0"], "--target"),
+    (["--target", "#aa0000", "--preset", "no_such_preset"], "preset"),
+])
+def test_the_command_refuses_bad_input_before_any_work(argv, option, tmp_path, capsys, monkeypatch):
+    def no_model(*args, **kwargs):
+        raise AssertionError("the model was built before the input was checked")
+
+    monkeypatch.setattr("clothlight.fit.colour_match.ShadeModel", no_model)
+    assert command.main([*argv, "--out", str(tmp_path / "x.toml")]) == 2
+    assert option in capsys.readouterr().err
+
+
+def test_an_unwritable_output_is_refused_naming_the_option(tmp_path, capsys):
+    assert command.main(["--target", "#aa0000", "--out", "/sys/x.toml"]) == 2
+    assert "--out" in capsys.readouterr().err

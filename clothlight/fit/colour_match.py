@@ -56,8 +56,8 @@ MATCH_DELTA_E = 2.0
 SERIES_RELATIVE_ERROR = 0.02
 SERIES_NAMESPACE = "shade_series"
 SERIES_FILE = "series.npz"
-#: The coarse grid the solve starts from, % of each dye: none, pale, mid, deep (a decade apart).
-GRID_PERCENT = (MIN_DYE_PERCENT, 0.03, 0.3, 3.0)
+#: The coarse grid the solve starts from, % of each dye: none, pale, deep (a decade apart).
+GRID_PERCENT = (MIN_DYE_PERCENT, 0.05, 0.5)
 #: The least-squares refinement's residual evaluations at most (each Jacobian takes K more).
 REFINE_EVALUATIONS = 25
 #: Grid recipes the refinement starts from, nearest first, until one reaches half :data:`MATCH_DELTA_E`.

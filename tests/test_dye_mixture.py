@@ -88,3 +88,16 @@ def test_ciede2000_reproduces_sharma_wu_dalal_test_data():
              ([50.0, 2.5, 0.0], [73.0, 25.0, -18.0], 27.1492)]
     for lab_a, lab_b, expected in pairs:
         assert float(delta_e_2000(lab_a, lab_b)) == pytest.approx(expected, abs=1e-4)
+
+
+def test_atlas_pixel_cells_names_the_cell_each_atlas_pixel_holds():
+    from precompute.tables.layout import atlas_pixel_cells, brdf_atlas
+
+    n_i, n_o = 3, 4
+    incidence, exit = np.meshgrid(np.arange(n_i**2), np.arange(n_o**2), indexing="ij")
+    rho = np.stack([incidence, exit], axis=-1).astype(float)  # each cell holds its own indices
+    atlas = brdf_atlas(rho)
+    pixels = np.arange(atlas.shape[0] * atlas.shape[1])
+    cells = atlas_pixel_cells(pixels, n_i, n_o)
+    np.testing.assert_array_equal(cells[0], atlas[..., 0].ravel())
+    np.testing.assert_array_equal(cells[1], atlas[..., 1].ravel())

@@ -40,6 +40,7 @@ from precompute.optics.coefficients import medium_optics
 from precompute.optics.dye import dye_absorption_coefficient
 from precompute.optics.medium import Dye, PRESET_DIR, dye_mixture_spectrum, medium_from_dict
 from precompute.tables.color import delta_e_2000, linear_rgb_to_lab, srgb_to_linear_rgb
+from precompute.tables.layout import atlas_pixel_cells
 
 from . import forward
 
@@ -173,6 +174,7 @@ class ShadeModel:
         say("absorption series of the clear yarn (simulated once per medium, then cached)")
         self.series = self._series(threads)
         self.evaluations = 0
+        self._cells_read = None  # the (incidence, exit) cells of ρ the swatches read, from the first evaluation
 
     def _series(self, threads):
         largest = np.array([MAX_DYE_PERCENT] * len(self.dyes) + [self.max_fibre_absorption])
@@ -195,9 +197,15 @@ class ShadeModel:
             return arrays["reference_mu_a"], arrays["steps"], arrays["rho_steps"]
 
     def __call__(self, recipe: Sequence[float], *, exact: bool = False) -> np.ndarray:
-        """The swatch of a recipe; ``exact``: its optics from the recipe's preset content as a bake
-        reads it (the mixed spectrum, Mie included), not from the clear yarn's cached optics (the
-        same to rounding; a check of the shortcut)."""
+        """The front swatch of a recipe (:meth:`swatches`)."""
+        return self.swatches(recipe, exact=exact)[0]
+
+    def swatches(self, recipe: Sequence[float], *, exact: bool = False) -> np.ndarray:
+        """The §6.1 swatches of a recipe, (2, 3) linear Rec.709 reflectance factors π f, specular
+        excluded: lit from the front, and from straight behind (what the cloth transmits), both seen
+        along the normal.  ``exact``: the optics from the recipe's preset content as a bake reads it
+        (the mixed spectrum, Mie included), not from the clear yarn's cached optics (the same to
+        rounding; a check of the shortcut)."""
         from precompute.transport import YarnGeometry
         from precompute.transport.absorption import interpolate_absorption
 
@@ -208,12 +216,21 @@ class ShadeModel:
             optics = dataclasses.replace(self.clear,
                                          mu_a=self.clear.mu_a + np.asarray(recipe, float) @ self.mu_a_per_unit)
         reference_mu_a, steps, rho_steps = self.series
-        rho = interpolate_absorption(rho_steps, reference_mu_a, steps, optics.mu_a, optics.wavelengths_nm)
+        if exact or self._cells_read is None:
+            rho = interpolate_absorption(rho_steps, reference_mu_a, steps, optics.mu_a, optics.wavelengths_nm)
+        else:  # the swatches read a few cells of ρ: reweight only those (the rest stay 0, unread)
+            incidence, exit = self._cells_read
+            rho = np.zeros(rho_steps.shape[:-1], rho_steps.dtype)
+            rho[incidence, exit] = interpolate_absorption(rho_steps[incidence, exit], reference_mu_a, steps,
+                                                          optics.mu_a, optics.wavelengths_nm)
         geometry = YarnGeometry(self.medium.yarn.radius_mm, optics.boundary_index)
         atlas, attenuation, layout = forward._candidate_tables(config, optics, geometry, rho)
+        if self._cells_read is None:
+            self._cells_read = atlas_pixel_cells(self.forward.response.atlas_pixels_read(layout),
+                                                 layout.incidence_resolution, layout.exit_resolution)
         swatches = self.forward.cloth_brdf(atlas, attenuation, layout, specular_weight=0.0, specular_slope=1.0)
         self.evaluations += 1
-        return math.pi * swatches[-self.forward.swatch_count]  # the front-lit swatch: R = π f
+        return math.pi * swatches[-self.forward.swatch_count:]
 
 
 def match_colour(target_srgb, model: ShadeModel) -> ShadeMatch:

@@ -125,6 +125,12 @@ class ClothResponse:
             self._maps[layout] = (scipy.sparse.csr_matrix(np.array(rho_rows)), np.array(unscattered_rows))
         return self._maps[layout]
 
+    def atlas_pixels_read(self, layout: TableLayout) -> np.ndarray:
+        """The flat indices (row-major) of the BRDF atlas pixels the views read, ascending: their cloth
+        BRDF depends on no other pixel, so tables needed only here need only these."""
+        rho_map, _ = self._maps_for(layout)
+        return np.unique(rho_map.indices)
+
     def specular_brdf(self, weight: float, slope: float, index: float) -> np.ndarray:
         """The Cook–Torrance term's share of each view's cloth BRDF (n_views,), 1/sr: w f_CT (n_c·l) s."""
         from precompute.optics import cook_torrance

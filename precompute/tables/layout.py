@@ -49,6 +49,14 @@ def brdf_atlas(rho: np.ndarray) -> np.ndarray:
     return tiles.transpose(0, 2, 1, 3, 4).reshape(n_i * n_o, n_i * n_o, channels)
 
 
+def atlas_pixel_cells(pixels, incidence_resolution: int, exit_resolution: int) -> tuple[np.ndarray, np.ndarray]:
+    """The (incidence cell, exit cell) of ρ each flat atlas pixel index holds (:func:`brdf_atlas`'s layout)."""
+    side = incidence_resolution * exit_resolution
+    row, column = np.divmod(np.asarray(pixels, np.int64), side)
+    (j, q), (i, p) = np.divmod(row, exit_resolution), np.divmod(column, exit_resolution)
+    return j * incidence_resolution + i, q * exit_resolution + p
+
+
 def rho_from_brdf_atlas(atlas: np.ndarray, incidence_resolution: int) -> np.ndarray:
     """Inverse of :func:`brdf_atlas`."""
     atlas = np.asarray(atlas)

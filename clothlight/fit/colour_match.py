@@ -277,3 +277,37 @@ def match_colour(target_srgb, model: ShadeModel) -> ShadeMatch:
                       evaluations=model.evaluations - start_evaluations,
                       seconds=time.perf_counter() - start_time,
                       config=recipe_config(model.base, recipe, model.dyes))
+
+
+def recipe_for_ratios(blue_red: float, green_red: float, model: ShadeModel) -> np.ndarray:
+    """The lightest recipe of ``model``'s dyes whose front swatch has the channel ratios B/R and G/R
+    asked for (the paper's Table 1 gives a cloth's colour so, at normal light and view): the ratios
+    met (weighted ten to one), and of the recipes that meet them the one whose red stays nearest
+    the clear cloth's, i.e. the least dye and fibre absorption."""
+    from scipy.optimize import least_squares
+
+    for name, value in (("B/R", blue_red), ("G/R", green_red)):
+        if not (isinstance(value, (int, float)) and 0.0 < value < 1.0):
+            raise ParameterError(name, value, "a ratio in (0, 1)")
+    count = len(model.dyes)
+    floor = FIBRE_ABSORPTION_FLOOR_PER_MM
+    target = np.log([blue_red, green_red])
+    clear_red = math.log(model([MIN_DYE_PERCENT] * count + [0.0])[0])
+
+    def recipe_of(x):
+        return np.array([*np.exp(x[:count]), max(math.exp(x[count]) - floor, 0.0)])
+
+    def residual(x):
+        front = model(recipe_of(x))
+        ratios = np.log(np.maximum(front[[2, 1]], 1e-12) / front[0])
+        return np.append(10.0 * (ratios - target), 0.3 * (math.log(front[0]) - clear_red))
+
+    low = [math.log(MIN_DYE_PERCENT)] * count + [math.log(floor)]
+    high = [math.log(MAX_DYE_PERCENT)] * count + [math.log(model.max_fibre_absorption + floor)]
+    best = None
+    for start in itertools.product((0.05, 0.5, 3.0), repeat=count):
+        x0 = np.clip([*np.log(start), math.log(model.base_fibre_absorption + floor)], low, high)
+        fit = least_squares(residual, x0, bounds=(low, high), max_nfev=REFINE_EVALUATIONS)
+        if best is None or fit.cost < best.cost:
+            best = fit
+    return recipe_of(best.x)

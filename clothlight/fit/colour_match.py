@@ -8,17 +8,18 @@ in SCE mode, e.g. AATCC EP6, ISO 105-J01): the sheen, white and the same for eve
 glint that only this exact geometry shows.  A picker's sRGB colour is compared with it in CIELAB by
 CIEDE2000.
 
-Dyes only absorb (:func:`precompute.optics.medium.dye_mixture_spectrum`: K dyes at w_k % absorb
-μa = μa,host + Σ_k ε_k w_k ρ_f / 10), so one transport of the undyed yarn, its exits tallied at
-absorption steps up to every dye at :data:`MAX_DYE_PERCENT` at once, reads any recipe's ρ in about a
-second (:mod:`precompute.transport.absorption`; :func:`.forward.absorption_series`).  The series is
-cached per base medium; the response that maps ρ to the swatch is the forward model's (a few renders,
-cached).  The recipe minimises the CIELAB difference over w_k ∈ [:data:`MIN_DYE_PERCENT`,
-:data:`MAX_DYE_PERCENT`] (trust-region least squares in log w from the nearest recipe of a coarse
-grid) and is reported with its CIEDE2000.
+A recipe is K dye amounts w_k (% of fibre weight) and the fibre's own grey absorption a (1/mm, greige
+to bleached).  Both only absorb (:func:`precompute.optics.medium.dye_mixture_spectrum`: μa = μa,clear
++ a + Σ_k ε_k w_k ρ_f / 10), so one transport of the clear yarn (no dye, no absorption of its own),
+its exits tallied at absorption steps up to every dye at :data:`MAX_DYE_PERCENT` and a at its most
+at once, reads any recipe's ρ (:mod:`precompute.transport.absorption`;
+:func:`.forward.absorption_series`), in milliseconds for the few cells of ρ the swatches read.  The
+series is cached per base medium; the response that maps ρ to the swatch is the forward model's (a
+few renders, cached).  The recipe minimises the CIELAB difference (trust-region least squares in
+log w and log a from the nearest recipes of a coarse grid) and is reported with its CIEDE2000.
 
-A colour the dyes cannot reach (lighter than the undyed cloth, or more saturated than a dye's
-own colour) gets the nearest recipe, and the caller is told how far it stays
+A colour the recipes cannot reach (lighter than the clear yarn's cloth, or more saturated than the
+dyes make it) gets the nearest recipe, and the caller is told how far it stays
 (:attr:`ShadeMatch.reached`).
 """
 
@@ -70,6 +71,10 @@ FIBRE_ABSORPTION_FLOOR_PER_MM = 0.01
 #: CIELAB units per e-fold of the fibre's absorption away from the preset's: a pull weak enough to
 #: yield where the colour needs a lighter (bleached) or greyer fibre, strong enough to keep it otherwise.
 FIBRE_PULL = 0.3
+#: :func:`recipe_for_ratios`: CIELAB-like weight of a ratio's log error, and of the red's log distance
+#: from the clear cloth's (the pull towards the lightest recipe that meets the ratios).
+RATIO_WEIGHT = 10.0
+LIGHTNESS_PULL = 0.3
 #: Fibre density of a recipe on a preset without a [dye] table, g/cm³ (cotton, as the presets).
 COTTON_DENSITY_G_PER_CM3 = 1.52
 
@@ -233,6 +238,25 @@ class ShadeModel:
         return math.pi * swatches[-self.forward.swatch_count:]
 
 
+class _LogRecipe:
+    """A recipe as the solves vary it: x = (log w_k, log(a + :data:`FIBRE_ABSORPTION_FLOOR_PER_MM`)),
+    within the recipes ``model`` can read (``low``, ``high``)."""
+
+    def __init__(self, model: ShadeModel):
+        self.count = len(model.dyes)
+        floor = FIBRE_ABSORPTION_FLOOR_PER_MM
+        self.low = np.array([math.log(MIN_DYE_PERCENT)] * self.count + [math.log(floor)])
+        self.high = np.array([math.log(MAX_DYE_PERCENT)] * self.count + [math.log(model.max_fibre_absorption + floor)])
+
+    def recipe(self, x) -> np.ndarray:
+        return np.array([*np.exp(x[:self.count]), max(math.exp(x[self.count]) - FIBRE_ABSORPTION_FLOOR_PER_MM, 0.0)])
+
+    def point(self, recipe) -> np.ndarray:
+        recipe = np.asarray(recipe, float)
+        x = np.append(np.log(recipe[:self.count]), math.log(recipe[self.count] + FIBRE_ABSORPTION_FLOOR_PER_MM))
+        return np.clip(x, self.low, self.high)
+
+
 def match_colour(target_srgb, model: ShadeModel) -> ShadeMatch:
     """The recipe of ``model``'s dyes whose swatch is nearest ``target_srgb`` (sRGB, (3,) in [0, 1]):
     the nearest of a coarse grid of recipes (:data:`GRID_PERCENT` per dye, the fibre's absorption as
@@ -248,25 +272,19 @@ def match_colour(target_srgb, model: ShadeModel) -> ShadeMatch:
     grid = np.array([(*dyes, fibre) for fibre in sorted({model.base_fibre_absorption, 0.0})
                      for dyes in itertools.product(GRID_PERCENT, repeat=count)])
     labs = linear_rgb_to_lab(np.array([model(recipe) for recipe in grid]))
-    floor = FIBRE_ABSORPTION_FLOOR_PER_MM
-    own = math.log(model.base_fibre_absorption + floor)
-
-    def recipe_of(x):
-        return np.array([*np.exp(x[:count]), max(math.exp(x[count]) - floor, 0.0)])
+    space = _LogRecipe(model)
+    own = space.point([MIN_DYE_PERCENT] * count + [model.base_fibre_absorption])[count]
 
     def residual(x):
-        return np.append(linear_rgb_to_lab(model(recipe_of(x))) - target_lab, FIBRE_PULL * (x[count] - own))
+        return np.append(linear_rgb_to_lab(model(space.recipe(x))) - target_lab, FIBRE_PULL * (x[count] - own))
 
-    low = [math.log(MIN_DYE_PERCENT)] * count + [math.log(floor)]
-    high = [math.log(MAX_DYE_PERCENT)] * count + [math.log(model.max_fibre_absorption + floor)]
     best = None
     for start in grid[np.argsort(delta_e_2000(labs, target_lab))[:REFINE_STARTS]]:
-        x0 = np.clip(np.append(np.log(start[:count]), math.log(start[count] + floor)), low, high)
-        fit = least_squares(residual, x0, bounds=(low, high), diff_step=1e-3, xtol=1e-4, ftol=1e-6,
-                            max_nfev=REFINE_EVALUATIONS)
-        delta = float(delta_e_2000(linear_rgb_to_lab(model(recipe_of(fit.x))), target_lab))
+        fit = least_squares(residual, space.point(start), bounds=(space.low, space.high), diff_step=1e-3, xtol=1e-4,
+                            ftol=1e-6, max_nfev=REFINE_EVALUATIONS)
+        delta = float(delta_e_2000(linear_rgb_to_lab(model(space.recipe(fit.x))), target_lab))
         if best is None or delta < best[1]:
-            best = (recipe_of(fit.x), delta)
+            best = (space.recipe(fit.x), delta)
         if best[1] <= 0.5 * MATCH_DELTA_E:
             break
     recipe = best[0]
@@ -282,32 +300,27 @@ def match_colour(target_srgb, model: ShadeModel) -> ShadeMatch:
 def recipe_for_ratios(blue_red: float, green_red: float, model: ShadeModel) -> np.ndarray:
     """The lightest recipe of ``model``'s dyes whose front swatch has the channel ratios B/R and G/R
     asked for (the paper's Table 1 gives a cloth's colour so, at normal light and view): the ratios
-    met (weighted ten to one), and of the recipes that meet them the one whose red stays nearest
-    the clear cloth's, i.e. the least dye and fibre absorption."""
+    met (:data:`RATIO_WEIGHT`), and of the recipes that meet them the one whose red stays nearest
+    the clear cloth's (:data:`LIGHTNESS_PULL`), i.e. the least dye and fibre absorption."""
     from scipy.optimize import least_squares
 
     for name, value in (("B/R", blue_red), ("G/R", green_red)):
         if not (isinstance(value, (int, float)) and 0.0 < value < 1.0):
             raise ParameterError(name, value, "a ratio in (0, 1)")
     count = len(model.dyes)
-    floor = FIBRE_ABSORPTION_FLOOR_PER_MM
+    space = _LogRecipe(model)
     target = np.log([blue_red, green_red])
     clear_red = math.log(model([MIN_DYE_PERCENT] * count + [0.0])[0])
 
-    def recipe_of(x):
-        return np.array([*np.exp(x[:count]), max(math.exp(x[count]) - floor, 0.0)])
-
     def residual(x):
-        front = model(recipe_of(x))
+        front = model(space.recipe(x))
         ratios = np.log(np.maximum(front[[2, 1]], 1e-12) / front[0])
-        return np.append(10.0 * (ratios - target), 0.3 * (math.log(front[0]) - clear_red))
+        return np.append(RATIO_WEIGHT * (ratios - target), LIGHTNESS_PULL * (math.log(front[0]) - clear_red))
 
-    low = [math.log(MIN_DYE_PERCENT)] * count + [math.log(floor)]
-    high = [math.log(MAX_DYE_PERCENT)] * count + [math.log(model.max_fibre_absorption + floor)]
     best = None
     for start in itertools.product((0.05, 0.5, 3.0), repeat=count):
-        x0 = np.clip([*np.log(start), math.log(model.base_fibre_absorption + floor)], low, high)
-        fit = least_squares(residual, x0, bounds=(low, high), max_nfev=REFINE_EVALUATIONS)
+        fit = least_squares(residual, space.point([*start, model.base_fibre_absorption]),
+                            bounds=(space.low, space.high), max_nfev=REFINE_EVALUATIONS)
         if best is None or fit.cost < best.cost:
             best = fit
-    return recipe_of(best.x)
+    return space.recipe(best.x)

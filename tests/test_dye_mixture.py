@@ -101,3 +101,13 @@ def test_atlas_pixel_cells_names_the_cell_each_atlas_pixel_holds():
     cells = atlas_pixel_cells(pixels, n_i, n_o)
     np.testing.assert_array_equal(cells[0], atlas[..., 0].ravel())
     np.testing.assert_array_equal(cells[1], atlas[..., 1].ravel())
+
+
+def test_a_recipes_own_spectrum_beside_its_toml_is_written_absolute_and_a_shipped_one_by_name(tmp_path):
+    from precompute.fit.report import absolute_data_files
+
+    (tmp_path / "my_dye.csv").write_text((DATA_DIR / "curcumin.csv").read_text())
+    config = with_dye(spectrum_csv=["congo_red.csv", "my_dye.csv"], shares=[0.5, 0.5])
+    absolute_data_files(config, tmp_path)
+    assert config["dye"]["spectrum_csv"] == ["congo_red.csv", str((tmp_path / "my_dye.csv").resolve())]
+    medium_from_dict(config, tmp_path / "elsewhere")  # reads the same from any folder

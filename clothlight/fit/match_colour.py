@@ -67,7 +67,7 @@ def _main(argv) -> int:
     from precompute import outputs
     from precompute.cli.arguments import parse_arguments
     from precompute.errors import ParameterError
-    from precompute.fit.report import to_toml
+    from precompute.fit.report import absolute_data_files, to_toml
     from precompute.optics.medium import load_preset_config
 
     args = parse_arguments(build_parser(), argv)
@@ -97,6 +97,7 @@ def _main(argv) -> int:
               f"# {recipe}; the cloth lit and seen along its normal (specular excluded) is CIEDE2000 "
               f"{result.delta_e:.2f} from the colour asked for (clothlight/fit/colour_match.py)."]
     config = dict(result.config)
+    absolute_data_files(config, base_dir)
     config["name"] = out.stem
     config["description"] = f"{base.get('description', 'a yarn')}; dyed to sRGB {hex_target} ({recipe})"
     out.parent.mkdir(parents=True, exist_ok=True)

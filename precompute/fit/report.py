@@ -93,12 +93,14 @@ def fitted_preset_config(result: FitResult, measured_name: str = "") -> dict:
     values = ", ".join(f"{p.name} = {result.parameters[p.name]:.4g}" for p in result.free)
     config["description"] = (f"{name} fitted to {measured_name or 'a measurement'} by python -m clothlight.fit "
                              f"({values})")
-    _absolute_data_files(config, result.base_dir)
+    absolute_data_files(config, result.base_dir)
     config[FIT_TABLE] = {key: float(value) for key, value in result.specular.items()}
     return config
 
 
-def _absolute_data_files(config: dict, base_dir: pathlib.Path) -> None:
+def absolute_data_files(config: dict, base_dir: pathlib.Path) -> None:
+    """Point ``config``'s data files (``csv``, ``spectrum_csv``) that sit beside its TOML in ``base_dir``
+    at their absolute paths, so that the preset reads the same written anywhere; shipped ones stay named."""
     def absolute(value: str) -> str:
         beside = pathlib.Path(base_dir) / value
         shipped = medium_module.DATA_DIR / value

@@ -8,7 +8,9 @@ Printed per fabric: the recipe, CIEDE2000 of the cloth to the target, evaluation
 of the solve; and once, the time to get the model ready (the response and the series from the cache,
 or made: minutes the first time).
 
-    python benchmarks/bench_colour_match.py [--preset red_cotton] [--fabrics red-fabric2,blue-fabric]
+    python benchmarks/bench_colour_match.py [--preset red_cotton] [--fabrics red-fabric2,blue-fabric] [--plot PNG]
+
+``--plot`` draws each fabric's colour beside its recipe's (sRGB patches, ΔE2000 under them).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", default="red_cotton")
     parser.add_argument("--fabrics", help="comma-separated fabric names (default: every CSV in the folder)")
+    parser.add_argument("--plot", type=pathlib.Path, help="PNG of each target beside its recipe's colour")
     args = parser.parse_args()
 
     from clothlight.fit.colour_match import MATCH_DELTA_E, ShadeModel, match_colour
@@ -55,7 +58,7 @@ def main() -> None:
     names = args.fabrics.split(",") if args.fabrics else sorted(p.stem for p in FABRICS.glob("*.csv"))
     print(f"{'fabric':22s} {'target':8s} {'recipe: ' + ', '.join(d.removesuffix('.csv') for d in model.dyes):42s} "
           f"{'fibre/mm':>8s} {'ΔE2000':>7s} {'evals':>5s} {'s':>5s}")
-    reached = 0
+    reached, rows = 0, []
     for name in names:
         target = fabric_srgb(FABRICS / f"{name}.csv")
         result = match_colour(target, model)
@@ -64,7 +67,42 @@ def main() -> None:
         recipe = ", ".join(f"{p:.3g} %" for p in result.recipe[:-1])
         print(f"{name:22s} {hex_target:8s} {recipe:42s} {result.recipe[-1]:8.3g} {result.delta_e:7.2f} "
               f"{result.evaluations:5d} {result.seconds:5.1f}", flush=True)
+        rows.append((name, target, result))
     print(f"reached (ΔE2000 ≤ {MATCH_DELTA_E:g}): {reached} of {len(names)}")
+    if args.plot:
+        plot_matches(rows, args.plot, args.preset)
+        print(f"plot: {args.plot}")
+
+
+def plot_matches(rows, path: pathlib.Path, preset: str) -> None:
+    """Each fabric's colour (top) over its recipe's (bottom), ΔE2000 beneath: a reached match in black."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from clothlight.fit.colour_match import MATCH_DELTA_E
+    from precompute.tables.color import linear_to_srgb
+
+    figure, axis = plt.subplots(figsize=(1.1 * len(rows) + 1.0, 3.2))
+    for column, (name, target, result) in enumerate(rows):
+        axis.add_patch(plt.Rectangle((column, 1.0), 0.9, 0.9, color=np.clip(target, 0, 1)))
+        axis.add_patch(plt.Rectangle((column, 0.0), 0.9, 0.9, color=linear_to_srgb(result.cloth_rgb)))
+        axis.text(column + 0.45, -0.15, f"ΔE {result.delta_e:.1f}", ha="center", va="top", fontsize=8,
+                  color="black" if result.delta_e <= MATCH_DELTA_E else "firebrick")
+        axis.text(column + 0.45, 2.0, name.replace("-fabric", "").replace("-", " "), ha="center", va="bottom",
+                  fontsize=8, rotation=30)
+    axis.text(-0.1, 1.45, "fabric", ha="right", va="center", fontsize=9)
+    axis.text(-0.1, 0.45, "recipe", ha="right", va="center", fontsize=9)
+    axis.set_xlim(-1.0, len(rows))
+    axis.set_ylim(-0.6, 2.7)
+    axis.set_aspect("equal")
+    axis.axis("off")
+    axis.set_title(f"Raw-data fabrics' colours and the shade recipes on {preset}'s yarn "
+                   f"(specular excluded; ΔE2000 ≤ {MATCH_DELTA_E:g} reached)", fontsize=9)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=150, bbox_inches="tight")
+    plt.close(figure)
 
 
 if __name__ == "__main__":

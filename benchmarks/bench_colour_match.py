@@ -11,6 +11,9 @@ or made: minutes the first time).
     python benchmarks/bench_colour_match.py [--preset red_cotton] [--fabrics red-fabric2,blue-fabric] [--plot PNG]
 
 ``--plot`` draws each fabric's colour beside its recipe's (sRGB patches, ΔE2000 under them).
+``--check-grid`` also evaluates a dense grid of recipes (:data:`CHECK_LEVELS_PERCENT` per dye ×
+:data:`CHECK_FIBRE_PER_MM`) and prints its nearest ΔE2000 per fabric: a solve that missed a nearer
+recipe would show there.
 """
 
 from __future__ import annotations
@@ -25,6 +28,9 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 import numpy as np
 
 FABRICS = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data" / "real_fabrics" / "neural"
+#: ``--check-grid``: dye amounts (% o.w.f., none then 0.003–2 % geometric) and fibre absorptions (1/mm).
+CHECK_LEVELS_PERCENT = (1e-4, *np.geomspace(0.003, 2.0, 11))
+CHECK_FIBRE_PER_MM = (0.0, 0.2, 0.8, 2.0)
 #: Views of the fabric's colour: normal light, views this far off the normal, degrees.
 COLOUR_VIEWS_DEG = (15.0, 30.0)
 
@@ -45,6 +51,7 @@ def main() -> None:
     parser.add_argument("--preset", default="red_cotton")
     parser.add_argument("--fabrics", help="comma-separated fabric names (default: every CSV in the folder)")
     parser.add_argument("--plot", type=pathlib.Path, help="PNG of each target beside its recipe's colour")
+    parser.add_argument("--check-grid", action="store_true", help="also the nearest recipe of a dense grid")
     args = parser.parse_args()
 
     from clothlight.fit.colour_match import MATCH_DELTA_E, ShadeModel, match_colour
@@ -56,8 +63,17 @@ def main() -> None:
     print(f"{args.preset}: model ready in {time.perf_counter() - start:.1f} s "
           f"(clear cloth: linear RGB {np.round(model([1e-4] * len(model.dyes) + [0.0]), 3).tolist()})")
     names = args.fabrics.split(",") if args.fabrics else sorted(p.stem for p in FABRICS.glob("*.csv"))
+    grid_labs = None
+    if args.check_grid:
+        import itertools
+
+        from precompute.tables.color import linear_rgb_to_lab
+
+        grid = [(*dyes, fibre) for fibre in CHECK_FIBRE_PER_MM
+                for dyes in itertools.product(CHECK_LEVELS_PERCENT, repeat=len(model.dyes))]
+        grid_labs = linear_rgb_to_lab(np.array([model(recipe) for recipe in grid]))
     print(f"{'fabric':22s} {'target':8s} {'recipe: ' + ', '.join(d.removesuffix('.csv') for d in model.dyes):42s} "
-          f"{'fibre/mm':>8s} {'ΔE2000':>7s} {'evals':>5s} {'s':>5s}")
+          f"{'fibre/mm':>8s} {'ΔE2000':>7s} {'evals':>5s} {'s':>5s}" + ("  grid ΔE2000" if args.check_grid else ""))
     reached, rows = 0, []
     for name in names:
         target = fabric_srgb(FABRICS / f"{name}.csv")
@@ -65,8 +81,13 @@ def main() -> None:
         reached += result.reached
         hex_target = "#" + "".join(f"{round(255 * v):02x}" for v in target)
         recipe = ", ".join(f"{p:.3g} %" for p in result.recipe[:-1])
+        nearest = ""
+        if grid_labs is not None:
+            from precompute.tables.color import delta_e_2000, linear_rgb_to_lab, srgb_to_linear_rgb
+
+            nearest = f"  {float(delta_e_2000(grid_labs, linear_rgb_to_lab(srgb_to_linear_rgb(target))).min()):11.2f}"
         print(f"{name:22s} {hex_target:8s} {recipe:42s} {result.recipe[-1]:8.3g} {result.delta_e:7.2f} "
-              f"{result.evaluations:5d} {result.seconds:5.1f}", flush=True)
+              f"{result.evaluations:5d} {result.seconds:5.1f}{nearest}", flush=True)
         rows.append((name, target, result))
     print(f"reached (ΔE2000 ≤ {MATCH_DELTA_E:g}): {reached} of {len(names)}")
     if args.plot:

@@ -37,9 +37,7 @@ rendering it again.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
-import os
 import pathlib
 import subprocess
 import sys
@@ -118,25 +116,12 @@ def bake_tables(preset: str, out: pathlib.Path) -> pathlib.Path:
     return folder
 
 
-@contextlib.contextmanager
-def stdout_to_stderr():
-    """Blender's render log (written to file descriptor 1) to 2 meanwhile: stdout keeps the figures."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    os.dup2(2, 1)
-    try:
-        yield
-    finally:
-        sys.stdout.flush()
-        os.dup2(saved, 1)
-        os.close(saved)
-
-
 def sweep(name: str, sample: Sample, args, tables: pathlib.Path) -> dict:
     """One validation sweep of ``sample`` into ``out/name``; its results."""
     from clothlight.blender import scene_files
     from clothlight.blender.validation.rig import RigSettings
     from clothlight.blender.validation.run import run_validation
+    from clothlight.validate import stdout_to_stderr
 
     settings = RigSettings(incidences_deg=args.incidences, views_deg=args.views, resolution=args.resolution,
                            samples=args.samples, seed=args.seed + sample.seed)

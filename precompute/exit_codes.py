@@ -82,10 +82,15 @@ class DeferredInterrupt:
     itself; :meth:`check` (called between renders, e.g. from a progress callback) raises
     KeyboardInterrupt, and so does leaving the block after one came.  Outside the main thread (where
     signals cannot be handled) it does nothing.
+
+    With ``at_once`` the Ctrl-C is also raised where it lands, as Python's own handler does, and the
+    block only remembers it: a KeyboardInterrupt that a library catches and drops on the way (a
+    bake's kernels compile and run in numba) still ends the block with one.
     """
 
-    def __init__(self, note: str = "interrupting after the current step…"):
+    def __init__(self, note: str = "interrupting after the current step…", *, at_once: bool = False):
         self.note = note
+        self.at_once = at_once
         self.received = False
         self._previous = None
 
@@ -93,6 +98,8 @@ class DeferredInterrupt:
         if not self.received and self.note:
             _say(f"\n{self.note}")
         self.received = True
+        if self.at_once:
+            raise KeyboardInterrupt
 
     def check(self) -> None:
         """Raise KeyboardInterrupt if a Ctrl-C came."""

@@ -389,6 +389,39 @@ def test_a_real_ctrl_c_among_the_start_up_imports_exits_130(tmp_path):
     assert lines[-1] == "interrupted" and "Traceback" not in err
 
 
+def test_a_deferred_interrupt_at_once_raises_where_it_lands_and_remembers_a_dropped_one():
+    with pytest.raises(KeyboardInterrupt):
+        with exit_codes.DeferredInterrupt(note="", at_once=True) as interrupt:
+            with pytest.raises(KeyboardInterrupt):
+                os.kill(os.getpid(), signal.SIGINT)
+                sum(range(1000))  # the handler runs between bytecodes
+            assert interrupt.received  # dropped here, as a library might: leaving the block raises it again
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_ctrl_c_a_library_drops_during_the_bake_still_exits_130_and_writes_nothing(tmp_path, monkeypatch, capsys):
+    """A KeyboardInterrupt caught and dropped inside the bake (numba compiles and runs its kernels
+    there) used to let the command run on to exit 0 and write --out."""
+    from precompute.bake import BakeResult
+    import precompute.cli.bake as bake_cli
+
+    tables = REPO / "example_blends" / "tables" / "paper_2008"
+
+    def bake_that_drops_a_ctrl_c(*args, progress=None, **kwargs):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            sum(range(1000))
+        except KeyboardInterrupt:
+            pass
+        return BakeResult(tables, True, False, json.loads((tables / "summary.json").read_text()))
+
+    monkeypatch.setattr(bake_cli, "bake", bake_that_drops_a_ctrl_c)
+    out = tmp_path / "out"
+    assert precompute_cli.main(["bake", "--preset", "paper_2008", "--scheduler", "none", "--out", str(out)]) == 130
+    assert capsys.readouterr().err.rstrip().endswith("interrupted")
+    assert list(tmp_path.iterdir()) == []  # no --out, no staging folder
+
+
 @pytest.mark.blender
 @pytest.mark.render
 @pytest.mark.parametrize("scheduler", ["none", "local"])

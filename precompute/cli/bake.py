@@ -14,6 +14,7 @@ from precompute import bounds
 from precompute.bake import bake, export_bake
 from precompute.distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
 from precompute.errors import ParameterError
+from precompute.exit_codes import DeferredInterrupt
 from precompute.optics.medium import DEFAULT_PRESET, preset_names
 from precompute.outputs import check_writable_folder
 from precompute.tables.folder import YARN_FOLDER_FILES, check_output_folder
@@ -71,16 +72,22 @@ def run(args) -> int:
     scheduler = check_scheduler(args.scheduler)
     bars = []  # opened at the first progress report, so input errors print no bar
 
+    # A Ctrl-C is raised where it lands and also remembered, so that one dropped on the way ends the
+    # bake all the same, at the next progress report or before --out is written (exit 130).
+    interrupt = DeferredInterrupt(note="", at_once=True)
+
     def progress(fraction: float) -> None:
+        interrupt.check()
         if not bars:
             bars.append(tqdm(total=100, desc="bake", unit="%", file=sys.stderr, dynamic_ncols=True,
                              bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed} elapsed, {remaining} left"))
         bars[0].update(max(0.0, round(100 * fraction, 1) - bars[0].n))
 
     try:
-        result = bake(args.config or args.preset, args.overrides, seed=args.seed, paths_per_cell=args.paths,
-                      target_rel_stderr=args.target_error, threads=args.threads, cache_dir=args.cache_dir,
-                      progress=progress, dye_series=args.dye_series, scheduler=scheduler)
+        with interrupt:
+            result = bake(args.config or args.preset, args.overrides, seed=args.seed, paths_per_cell=args.paths,
+                          target_rel_stderr=args.target_error, threads=args.threads, cache_dir=args.cache_dir,
+                          progress=progress, dye_series=args.dye_series, scheduler=scheduler)
     finally:
         for bar in bars:
             bar.close()

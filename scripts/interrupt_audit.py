@@ -39,6 +39,8 @@ COMMANDS = {
                 "--scheduler", "none"],
     "fit": ["clothlight.fit", "--measured", str(MEASURED), "--preset", "paper_2008", "--free", "dye_weight_percent",
             "--budget-evaluations", "8", "--scheduler", "none", "--cache-dir", "{cache}", "--out", "{out}"],
+    "match_colour": ["clothlight.fit.match_colour", "--target", "#8c1c24", "--preset", "red_cotton",
+                     "--cache-dir", "{cache}", "--out", "{out}.toml"],
 }
 
 

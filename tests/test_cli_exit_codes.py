@@ -440,6 +440,21 @@ def test_ctrl_c_during_a_validation_sweep_stops_it_with_130(tmp_path, scheduler)
     assert list(tmp_path.iterdir()) == []  # nothing written: no renders, no staging folder
 
 
+
+@pytest.mark.blender
+@pytest.mark.render
+@pytest.mark.parametrize("delay", [0.5, 6.0])
+def test_ctrl_c_while_the_colour_match_renders_its_response_exits_130(tmp_path, delay):
+    """The colour match renders its swatch response with Blender the first time (bpy imported, then
+    renders): a Ctrl-C there used to crash the process (import) or be dropped (render)."""
+    pytest.importorskip("bpy")
+    code, err = _interrupt_when([sys.executable, "-m", "clothlight.fit.match_colour", "--target", "#8c1c24",
+                                 "--cache-dir", str(tmp_path / "cache"), "--out", str(tmp_path / "red.toml")],
+                                r"cloth response of the swatches", delay=delay)
+    assert code == 130, err[-2000:]
+    assert err.rstrip().endswith("interrupted") and "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert [p.name for p in tmp_path.iterdir()] in ([], ["cache"])  # no recipe, no staging file
+
 # ---- bounds: one definition, read by the API, every command line and the panel ------------------
 
 PRECOMPUTE_BOUNDS = [value for value in vars(bounds).values() if isinstance(value, bounds.Bound)]

@@ -25,6 +25,7 @@ dyes make it) gets the nearest recipe, and the caller is told how far it stays
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import itertools
 import math
@@ -144,11 +145,16 @@ def recipe_config(base: dict, recipe: Sequence[float], dyes: Sequence[str] = REC
 class ShadeModel:
     """The swatch colour of every recipe of ``dyes`` on ``base`` (a preset's TOML content, its own
     ``[dye]`` and fibre absorption replaced): ``model(recipe)`` → linear Rec.709 reflectance factor
-    (3,) of the cloth lit and seen along its normal (:func:`recipe_config` for ``recipe``)."""
+    (3,) of the cloth lit and seen along its normal (:func:`recipe_config` for ``recipe``).
+
+    ``progress(text)`` names each step that takes minutes the first time; ``building(done, total)``
+    follows the swatch response's renders, which run inside ``while_building()`` (the command line
+    holds a Ctrl-C there until a render ends, as the fit does: Blender drops one raised in a render)."""
 
     def __init__(self, base: dict, base_dir: pathlib.Path = PRESET_DIR, dyes: Sequence[str] = RECIPE_DYES, *,
                  cache_dir=None, seed: int = 0, threads: int | None = None,
-                 progress: Callable[[str], None] | None = None):
+                 progress: Callable[[str], None] | None = None, building: Callable[[int, int], None] | None = None,
+                 while_building: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext):
         self.base = {key: value for key, value in base.items() if key != "dye"}
         self.base_dir = pathlib.Path(base_dir)
         self.dyes = tuple(dyes)
@@ -164,8 +170,9 @@ class ShadeModel:
         self.seed = seed
         say = progress or (lambda text: None)
         say("cloth response of the swatches (rendered once, then cached)")
-        self.forward = forward.build_forward_model([], clear, self.base_dir, seed=seed, cache_dir=self.cache_dir,
-                                                   threads=threads)
+        with while_building():
+            self.forward = forward.build_forward_model([], clear, self.base_dir, seed=seed, cache_dir=self.cache_dir,
+                                                       threads=threads, progress=building)
         # dyes and the fibre's absorption only absorb: a recipe's optics are the clear yarn's with
         # their μa added (per dye at 1 %, per 1/mm of the fibre's), so a candidate needs no Mie again
         self.clear = medium_optics(self.medium)

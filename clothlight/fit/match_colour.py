@@ -64,7 +64,7 @@ def main(argv=None) -> int:
 
 
 def _main(argv) -> int:
-    from precompute import outputs
+    from precompute import exit_codes, outputs
     from precompute.cli.arguments import parse_arguments
     from precompute.errors import ParameterError
     from precompute.fit.report import absolute_data_files, to_toml
@@ -81,8 +81,12 @@ def _main(argv) -> int:
 
     from .colour_match import ShadeModel, match_colour
 
+    # Blender prints and drops an exception raised in a render: a Ctrl-C while the swatch response
+    # renders (and while bpy is imported) is held and raised between renders instead.
+    held = exit_codes.DeferredInterrupt("interrupting after the current render…")
     model = ShadeModel(base, base_dir, cache_dir=args.cache_dir, seed=args.seed,
-                       progress=lambda text: print(text, file=sys.stderr, flush=True))
+                       progress=lambda text: print(text, file=sys.stderr, flush=True),
+                       building=lambda done, total: held.check(), while_building=lambda: held)
     result = match_colour(target, model)
     recipe = ", ".join(f"{name.removesuffix('.csv')} {percent:.3g} %"
                        for name, percent in zip(result.dyes, result.recipe) if percent > 0)

@@ -23,6 +23,11 @@
   nodes, its lobe table packed), beside a Principled BSDF with sheen on the same geometry; scene
   "Front-Lit" (sun and sky from the front) and scene "Back-Lit" (a window-sized area light behind
   the cloth), sharing the cloth's collection.  8 × 8 yarns, so that the file stays small.
+* ``closeup_denim_twill.blend`` — the same close-up as denim: ``sheeting_weave("blue_cotton",
+  interlacing="twill_3_1")``, a warp-faced 3/1 twill of the fitted ``blue_cotton`` yarn (MERL's
+  blue-fabric) with its plies, twist, irregularity and fibres, in that preset's yarn material (lobe
+  table packed) beside Principled+sheen of the yarn's own albedo; the same two scenes, a stop brighter.
+  ``--denim-only`` writes it alone, ``--render-denim DIR`` renders its pictures.
 
 Both read the paper's red-cotton tables from ``example_blends/tables/paper_2008/`` through ``//``-relative
 paths, so the folder can be moved as a whole; the OSL shaders are embedded with their compiled
@@ -38,6 +43,7 @@ import math
 import pathlib
 import shutil
 import sys
+from dataclasses import dataclass
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(REPO_ROOT) not in sys.path:  # a development script: the installed extension never does this
@@ -235,9 +241,9 @@ def draped_garment_general(out_dir: pathlib.Path, cloth_dir: pathlib.Path) -> pa
 
 
 CLOSEUP_PRESET = "red_cotton"
-#: Yarns each way in the close-up example: half the default's 16, so the .blend stays small.
+#: Yarns each way in the close-up examples: half the default's 16, so the .blend stays small.
 CLOSEUP_YARNS = 8
-#: Names of the close-up example's scenes (tests and scripts/render_closeup_example.py read them).
+#: Names of the close-up examples' scenes (tests read them).
 FRONT_LIT, BACK_LIT = "Front-Lit", "Back-Lit"
 #: The Principled copy's offset along x (mm): the 8 × 8 sample at 0.40 mm is 3.2 mm wide.
 CLOSEUP_OFFSET_MM = 3.6
@@ -275,46 +281,102 @@ def uniform_world(name: str, color) -> bpy.types.World:
     return world
 
 
-def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
-    """The default red-cotton close-up with flyaway fibres, in ClothLight's general mode (left) and
-    in a Principled BSDF with sheen (right, the same mesh and fibres), front-lit and back-lit."""
+@dataclass(frozen=True)
+class CloseupExample:
+    """One close-up example blend: ``sheeting_weave(preset)`` woven as ``interlacing``, in the preset's
+    general-mode yarn material named ``material_name``, beside Principled+sheen of ``principled_colour``
+    (linear RGB; None: the bake's hemispherical albedo at normal incidence, :func:`yarn_albedo_colour`);
+    ``exposure`` (stops) for both of its scenes."""
+
+    preset: str
+    stem: str
+    material_name: str
+    principled_colour: tuple[float, float, float] | None = None
+    interlacing: str = "plain"
+    exposure: float = 0.0
+
+
+RED_COTTON_CLOSEUP = CloseupExample(CLOSEUP_PRESET, "closeup_red_cotton", "ClothLight Red Cotton",
+                                    principled_colour=(0.5, 0.02, 0.03))  # benchmarks/render_cost.py's reference
+#: Denim: a warp-faced 3/1 twill (Z, the diagonal rising to the right) of the blue_cotton preset's yarn, fitted to
+#: MERL's blue-fabric; its Principled copy gets the yarn's own albedo.  A dark cloth: both scenes a stop up.
+DENIM_TWILL_CLOSEUP = CloseupExample("blue_cotton", "closeup_denim_twill", "ClothLight Blue Cotton Denim",
+                                     interlacing="twill_3_1", exposure=1.0)
+
+
+def yarn_albedo_colour(folder: pathlib.Path) -> tuple[float, float, float]:
+    """The hemispherical albedo (linear RGB) of a bake's yarn lit along its normal: the centre cell
+    of ``albedo.exr`` (the odd incidence grid puts the normal on a cell's centre, docs/table-spec.md)."""
+    from precompute.tables.exr import read_table
+
+    pixels = read_table(folder / "albedo.exr", kind="albedo").pixels
+    rows, columns = pixels.shape[:2]
+    return tuple(float(value) for value in pixels[rows // 2, columns // 2, :3])
+
+
+def packed_yarn_material(tables, name: str):
+    """The general-mode yarn material of ``tables`` (plain nodes, its lobe table packed in the file), with
+    nothing in it that names this machine: the packed image's path is ``//lobes.exr`` and the material
+    does not record its bake folder (a cache path here, meaningless wherever the blend goes)."""
+    from clothlight.blender.materials import TABLES_PROPERTY
+
+    material = build_yarn_material(tables, name, mode=GENERAL_MODE)
+    for node in material.node_tree.nodes:
+        if node.type == "TEX_IMAGE" and node.image is not None and node.image.packed_file is not None:
+            node.image.filepath_raw = "//lobes.exr"
+    if TABLES_PROPERTY in material:
+        del material[TABLES_PROPERTY]
+    return material
+
+
+def closeup_scene(scene, cloth, exposure: float) -> None:
+    """A close-up example's scene: millimetres, plain nodes under SVM, 640 × 320, 64 samples, denoised,
+    showing the collection ``cloth``."""
+    millimetre_scene(scene)
+    scene.cycles.shading_system = False  # the general mode is plain nodes: SVM, GPUs welcome
+    scene.cycles.samples = 64
+    scene.cycles.use_denoising = True
+    scene.render.resolution_x, scene.render.resolution_y = 640, 320
+    scene.view_settings.exposure = exposure
+    if cloth.name not in scene.collection.children:
+        scene.collection.children.link(cloth)
+
+
+def closeup_example(out_dir: pathlib.Path, example: CloseupExample) -> pathlib.Path:
+    """A close-up with flyaway fibres in ClothLight's general mode (left) and in a Principled BSDF
+    with sheen (right, the same mesh and fibres), front-lit (scene FRONT_LIT) and back-lit (BACK_LIT),
+    written as ``out_dir/<example.stem>.blend``."""
     from clothlight.blender.flyaway_object import build_flyaway_object
     from clothlight.weave.closeup import closeup_settings, sheeting_weave
+    from precompute.cache import entries as cache
     from precompute.optics.medium import load_preset_config
 
     fresh_file()
     front = bpy.context.scene
     front.name = FRONT_LIT
-    millimetre_scene(front)
-    front.cycles.shading_system = False  # the general mode is plain nodes: SVM, GPUs welcome
-    front.cycles.samples = 64
-    front.cycles.use_denoising = True
-    front.render.resolution_x, front.render.resolution_y = 640, 320
     cloth = bpy.data.collections.new("Cloth")
-    front.collection.children.link(cloth)
+    closeup_scene(front, cloth, example.exposure)
 
-    params = sheeting_weave(CLOSEUP_PRESET, warp_count=CLOSEUP_YARNS, weft_count=CLOSEUP_YARNS)
+    params = sheeting_weave(example.preset, interlacing=example.interlacing,
+                            warp_count=CLOSEUP_YARNS, weft_count=CLOSEUP_YARNS)
     sample = build_sample_object(params, collection=cloth)
     sample.name = "ClothLight Sample"
-    fibres = build_flyaway_object(sample, params, closeup_settings(load_preset_config(CLOSEUP_PRESET)[0]),
-                                  CLOSEUP_PRESET, collection=cloth)
+    fibres = build_flyaway_object(sample, params, closeup_settings(load_preset_config(example.preset)[0]),
+                                  example.preset, collection=cloth)
     # The general mode packs its lobe table in the file: no table folder travels with this blend.
-    from precompute.cache import entries as cache
-
-    baked = BakeJob(preset_request(CLOSEUP_PRESET), cache_dir=cache.default_cache_dir()).wait()
-    yarn = build_yarn_material(yarn_tables_from_bake(baked.folder),
-                               "ClothLight Red Cotton", mode=GENERAL_MODE)
+    baked = BakeJob(preset_request(example.preset), cache_dir=cache.default_cache_dir()).wait(
+        on_progress=lambda f: print(f"\rbaking {example.preset}: {f:.0%}", end="", file=sys.stderr))
+    print(file=sys.stderr)
+    yarn = packed_yarn_material(yarn_tables_from_bake(baked.folder), example.material_name)
     sample.data.materials.clear()
     sample.data.materials.append(yarn)
-    for node in yarn.node_tree.nodes:  # packed: its path in this machine's bake cache means nothing elsewhere
-        if node.type == "TEX_IMAGE" and node.image is not None and node.image.packed_file is not None:
-            node.image.filepath_raw = "//lobes.exr"
     sample.location.x = -CLOSEUP_OFFSET_MM / 2
 
     # The reference shares the mesh data; its materials are the objects' own.
     principled = bpy.data.materials.new("Principled BSDF + Sheen")
     node = principled.node_tree.nodes["Principled BSDF"]
-    node.inputs["Base Color"].default_value = (0.5, 0.02, 0.03, 1.0)  # benchmarks/render_cost.py's reference
+    colour = example.principled_colour or yarn_albedo_colour(baked.folder)
+    node.inputs["Base Color"].default_value = (*colour, 1.0)
     node.inputs["Sheen Weight"].default_value = 1.0
     node.inputs["Roughness"].default_value = 0.8
     for original in (sample, fibres):
@@ -335,12 +397,7 @@ def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
     front.world = uniform_world("Sky", (0.25, 0.3, 0.4))  # a blue-grey sky from every direction
 
     back = bpy.data.scenes.new(BACK_LIT)
-    millimetre_scene(back)
-    back.cycles.shading_system = False
-    back.cycles.samples = 64
-    back.cycles.use_denoising = True
-    back.render.resolution_x, back.render.resolution_y = 640, 320
-    back.collection.children.link(cloth)
+    closeup_scene(back, cloth, example.exposure)
     # A window behind the cloth (below it, facing the camera through it): the yarns glow.
     window = bpy.data.objects.new("Window", bpy.data.lights.new("Window", "AREA"))
     window.data.energy = 600.0  # W over 96 mm² about 4 mm behind the cloth: what gets through glows
@@ -351,18 +408,29 @@ def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
     back.collection.objects.link(window)
     add_camera(back, "Camera Back-Lit", (0.0, -6.0, 5.0), (0.0, 0.0, 0.0), lens_mm=50.0)
     back.world = uniform_world("Dark Room", (0.01, 0.01, 0.012))
-    path = out_dir / "closeup_red_cotton.blend"
+    path = out_dir / f"{example.stem}.blend"
     save(path)
     return path
 
 
-#: The docs pictures of the close-up example: small, since they render on a shared 2-core machine.
+def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
+    """The default red-cotton close-up (plain sheeting) with flyaway fibres, beside Principled+sheen."""
+    return closeup_example(out_dir, RED_COTTON_CLOSEUP)
+
+
+def closeup_denim_twill(out_dir: pathlib.Path) -> pathlib.Path:
+    """The denim close-up: a warp-faced 3/1 twill of the fitted blue_cotton yarn, beside Principled+sheen."""
+    return closeup_example(out_dir, DENIM_TWILL_CLOSEUP)
+
+
+#: The docs pictures of the close-up examples: small, since they render on a shared 2-core machine.
 PICTURE_SIZE, PICTURE_SAMPLES = (320, 160), 64
 
 
 def render_closeup(blend: pathlib.Path, out_dir: pathlib.Path) -> list[pathlib.Path]:
-    """Render each scene of the close-up example (ClothLight left, Principled+sheen right) at
-    PICTURE_SIZE pixels, PICTURE_SAMPLES samples, no denoising, into ``out_dir``; returns the PNGs."""
+    """Render each scene of a close-up example (ClothLight left, Principled+sheen right) at
+    PICTURE_SIZE pixels, PICTURE_SAMPLES samples, no denoising, into ``out_dir`` as
+    ``<blend stem>_<scene>.png``; returns the PNGs."""
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     out_dir.mkdir(parents=True, exist_ok=True)
     pictures = []
@@ -372,11 +440,47 @@ def render_closeup(blend: pathlib.Path, out_dir: pathlib.Path) -> list[pathlib.P
         scene.cycles.samples = PICTURE_SAMPLES
         scene.cycles.use_denoising = False
         scene.render.image_settings.file_format = "PNG"
-        scene.render.filepath = str(out_dir / f"closeup_red_cotton_{name.lower()}.png")
+        scene.render.filepath = str(out_dir / f"{blend.stem}_{name.lower()}.png")
         bpy.ops.render.render(write_still=True, scene=name)
         pictures.append(pathlib.Path(scene.render.filepath))
         print(scene.render.filepath)
     return pictures
+
+
+#: The measurement of the close-up examples' colours (:func:`measure_closeup`): few samples, no denoising.
+MEASURE_SAMPLES = 16
+
+
+def measure_closeup(blend: pathlib.Path, out_dir: pathlib.Path) -> dict[str, dict[str, list[float]]]:
+    """The mean linear RGB of the cloth (yarns and fibres, the world transparent) in each half of each
+    scene of a close-up example, ClothLight on the left and Principled+sheen on the right, rendered at
+    PICTURE_SIZE with MEASURE_SAMPLES samples into ``out_dir`` (OpenEXR, kept for a look); exposure not
+    applied.  Prints them and returns {scene: {"ClothLight": rgb, "Principled": rgb}}."""
+    import numpy as np
+
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    means = {}
+    for name in (FRONT_LIT, BACK_LIT):
+        scene = bpy.data.scenes[name]
+        scene.render.resolution_x, scene.render.resolution_y = PICTURE_SIZE
+        scene.render.resolution_percentage = 100
+        scene.cycles.samples = MEASURE_SAMPLES
+        scene.cycles.use_denoising = False
+        scene.render.film_transparent = True
+        scene.render.image_settings.file_format = "OPEN_EXR"
+        scene.render.image_settings.color_depth = "32"
+        scene.render.filepath = str(out_dir / f"{blend.stem}_{name.lower()}.exr")
+        bpy.ops.render.render(write_still=True, scene=name)
+        image = bpy.data.images.load(scene.render.filepath, check_existing=False)
+        width, height = image.size
+        pixels = np.array(image.pixels[:], dtype=np.float64).reshape(height, width, 4)
+        bpy.data.images.remove(image)
+        halves = {"ClothLight": pixels[:, : width // 2], "Principled": pixels[:, width // 2:]}
+        means[name] = {side: [float(v) for v in half[half[..., 3] > 0.5, :3].mean(axis=0)]
+                       for side, half in halves.items()}
+        print(name, {side: [round(v, 4) for v in rgb] for side, rgb in means[name].items()})
+    return means
 
 
 def main(argv=None) -> None:
@@ -385,13 +489,30 @@ def main(argv=None) -> None:
     parser.add_argument("--closeup-only", action="store_true", help="write closeup_red_cotton.blend alone")
     parser.add_argument("--render-closeup", type=pathlib.Path, metavar="DIR",
                         help="then render its front-lit and back-lit scenes into DIR (PNG)")
+    parser.add_argument("--denim-only", action="store_true", help="write closeup_denim_twill.blend alone")
+    parser.add_argument("--render-denim", type=pathlib.Path, metavar="DIR",
+                        help="then render its front-lit and back-lit scenes into DIR (PNG)")
+    parser.add_argument("--measure", type=pathlib.Path, metavar="DIR",
+                        help="then print the mean colour of the cloth in each half of each scene of the blends "
+                             "written (renders in DIR, OpenEXR)")
     args = parser.parse_args(argv)
+    if args.closeup_only and args.denim_only:
+        parser.error("--closeup-only and --denim-only each write one blend: give one of them")
     out_dir = args.out.resolve()
     out_dir.mkdir(parents=True, exist_ok=True)
-    closeup = closeup_red_cotton(out_dir)
-    if args.render_closeup:
-        render_closeup(closeup, args.render_closeup.resolve())
-    if args.closeup_only:
+    if not args.denim_only:
+        closeup = closeup_red_cotton(out_dir)
+        if args.render_closeup:
+            render_closeup(closeup, args.render_closeup.resolve())
+        if args.measure:
+            measure_closeup(closeup, args.measure.resolve())
+    if not args.closeup_only:
+        denim = closeup_denim_twill(out_dir)
+        if args.render_denim:
+            render_closeup(denim, args.render_denim.resolve())
+        if args.measure:
+            measure_closeup(denim, args.measure.resolve())
+    if args.closeup_only or args.denim_only:
         return
     tables_dir = example_tables(out_dir)
     paper_sample_validation(out_dir, tables_dir)

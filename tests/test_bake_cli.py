@@ -136,7 +136,7 @@ def test_a_preset_file_with_transport_and_bake_tables(tmp_path):
         (["--set", "bake.illuminant=D66"], "bake.illuminant"),
         (["--set", "yarn.cross_section=\"ellipse\"", "--set", "yarn.semi_axes_mm=[0.1, 0.05]"], "yarn.cross_section"),
         (["--set", "no-equals-sign"], "--set"),
-        (["--preset", "silk"], "preset"),
+        (["--preset", "silk"], "--preset"),
         (["--paths", "0"], "transport.paths_per_cell"),
         (["--target-error", "1.5"], "transport.target_rel_stderr"),
         (["--threads", "0"], "threads"),

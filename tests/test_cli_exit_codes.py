@@ -26,6 +26,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import clothlight.fit.__main__ as fit_cli
+import clothlight.fit.match_colour as match_colour_cli
 import clothlight.garment.__main__ as garment_cli
 import clothlight.validate as validate_cli
 import clothlight.validation.report as report_cli
@@ -40,7 +41,7 @@ from tests.helpers import REPO
 
 YARN_BAKE = REPO / "example_blends" / "tables" / "paper_2008"
 CLIS = {"precompute": precompute_cli.main, "validate": validate_cli.main, "garment": garment_cli.main,
-        "report": report_cli.main, "fit": fit_cli.main}
+        "report": report_cli.main, "fit": fit_cli.main, "colour": match_colour_cli.main}
 #: A place no process can write into, root included: the permission bits of /sys say yes to root,
 #: the file system says no.
 UNWRITABLE = "/sys/clothlight-output"
@@ -82,6 +83,9 @@ def no_work(monkeypatch):
     import clothlight.fit.run
 
     monkeypatch.setattr(clothlight.fit.run, "run_fit", _started(command="fit"))
+    import clothlight.fit.colour_match
+
+    monkeypatch.setattr(clothlight.fit.colour_match, "ShadeModel", _started(command="match_colour"))
 
 
 @pytest.fixture(scope="module")
@@ -187,10 +191,11 @@ BAD_INPUTS = [
     ("precompute", ["bake", "--set", "particles.0.diameter_nm=1e9"], ["diameter_nm", "[1, 100000] nm"]),
     ("precompute", ["bake", "--set", "yarn.radius_mm=1e6"], ["yarn.radius_mm", "[0.001, 10] mm"]),
     ("precompute", ["bake", "--set", "wavelengths.step_nm=1e-9"], ["wavelengths.step_nm", "1001"]),
-    ("precompute", ["bake", "--preset", ""], ["preset = ''", "red_cotton"]),
-    ("precompute", ["optics", "--preset", ""], ["preset = ''", "red_cotton"]),
-    ("precompute", ["bake", "--config", "{binary}"], ["preset", "binary.toml", "UTF-8"]),
-    ("precompute", ["optics", "--config", "{folder}"], ["preset", "folder"]),
+    ("precompute", ["bake", "--preset", ""], ["--preset = ''", "red_cotton"]),
+    ("precompute", ["optics", "--preset", ""], ["--preset = ''", "red_cotton"]),
+    ("precompute", ["bake", "--preset", "no_such_yarn"], ["--preset = 'no_such_yarn'", "red_cotton"]),
+    ("precompute", ["bake", "--config", "{binary}"], ["--config", "binary.toml", "UTF-8"]),
+    ("precompute", ["optics", "--config", "{folder}"], ["--config", "folder"]),
     ("precompute", ["optics", "--config", "{low_index}"], ["host.refractive_index.n = 0.5", "[1, 10]"]),
     ("precompute", ["bake", "--config", "{low_index}"], ["host.refractive_index.n = 0.5", "[1, 10]"]),
     ("precompute", ["bake", "--cache-dir", "{a_file}"], ["--cache-dir", "a-file"]),
@@ -242,6 +247,15 @@ BAD_INPUTS = [
     ("fit", ["--measured", "{bad_csv}", "--free", "dye_weight_percent", "--out", "{root}/fit"],
      ["measured.csv", "row 3"]),
     ("fit", ["--measured", str(MEASURED), "--free", "sheen", "--out", "{root}/fit"], ["--free", "sheen"]),
+    ("fit", ["--measured", str(MEASURED), "--free", "dye_weight_percent", "--out", "{root}/fit", "--config",
+             "{root}/missing.toml"], ["--config", "missing.toml"]),
+    ("colour", ["--target", "#8c1c2", "--out", "{root}/red.toml"], ["--target", "#rrggbb"]),
+    ("colour", ["--target", "1.2,0,0", "--out", "{root}/red.toml"], ["--target", "[0, 1]"]),
+    ("colour", ["--target", "#8c1c24", "--out", "{folder}"], ["--out", "is a folder"]),
+    ("colour", ["--target", "#8c1c24", "--out", f"{UNWRITABLE}/red.toml"], ["--out", "not writable"]),
+    ("colour", ["--target", "#8c1c24", "--out", "{root}/red.toml", "--cache-dir", f"{UNWRITABLE}/cache"],
+     ["--cache-dir", "not writable"]),
+    ("colour", ["--target", "#8c1c24", "--out", "{root}/red.toml", "--preset", "nope"], ["--preset = 'nope'"]),
     # values that begin with "-": refused by their option's own check, not taken for options
     ("precompute", ["bake", "--dye-series", "-1,5"], ["--dye-series", "'-1,5'", "0 ≤ LOW < HIGH < 100"]),
     ("precompute", ["bake", "--dye-series", "5"], ["--dye-series", "LOW,HIGH"]),

@@ -96,7 +96,7 @@ def test_unknown_parameter_is_bad_input(inputs, tmp_path, fake_forward, capsys):
 
 @pytest.mark.parametrize("args, words", [
     (["--measured", "{tmp}/missing.csv"], ["--measured", "missing.csv"]),
-    (["--config", "{tmp}/missing.toml"], ["preset", "missing.toml"]),
+    (["--config", "{tmp}/missing.toml"], ["--config", "missing.toml"]),
     (["--preset", "paper_2008"], ["voids", "[[particles]]"]),  # no voids species in the paper's preset
     (["--target-ratios", "B/R=-1"], ["--target-ratios"]),
     (["--budget-evaluations", "4"], ["--budget-evaluations"]),

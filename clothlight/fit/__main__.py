@@ -83,10 +83,11 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from .run import check_fit_inputs, run_fit
+    from precompute.cli.arguments import preset_argument
     from precompute.fit.report import fit_summary, write_fit_folder
 
     # every input checked before any work (clothlight.fit.run, shared with the add-on's fit worker)
-    inputs = check_fit_inputs(args.measured, args.config or args.preset, args.free, out=args.out,
+    inputs = check_fit_inputs(args.measured, preset_argument(args), args.free, out=args.out,
                               target_ratios=args.target_ratios, max_back_front=args.max_back_front,
                               budget_evaluations=args.budget_evaluations, budget_seconds=args.budget_seconds,
                               dye_series=args.dye_series, cache_dir=args.cache_dir)

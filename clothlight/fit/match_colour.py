@@ -65,7 +65,7 @@ def main(argv=None) -> int:
 
 def _main(argv) -> int:
     from precompute import exit_codes, outputs
-    from precompute.cli.arguments import parse_arguments
+    from precompute.cli.arguments import parse_arguments, preset_argument
     from precompute.errors import ParameterError
     from precompute.fit.report import absolute_data_files, to_toml
     from precompute.optics.medium import load_preset_config
@@ -77,7 +77,7 @@ def _main(argv) -> int:
     out = outputs.check_writable_file(args.out, "--out", what="a preset TOML file")
     if args.cache_dir is not None:
         outputs.check_writable_folder(args.cache_dir, "--cache-dir", what="a cache folder")
-    base, base_dir = load_preset_config(args.config if args.config is not None else args.preset)
+    base, base_dir = load_preset_config(preset_argument(args))
 
     from .colour_match import ShadeModel, match_colour
 

@@ -4,6 +4,7 @@ argparse takes a value that begins with ``-`` (``--dye-series -1,5``, ``--seed -
 and refuses it with "expected one argument", which names neither the range nor what was wrong.
 :func:`parse_arguments` hands such a value to its option, so that the option's own check refuses
 it, naming the parameter and what is allowed, as it refuses every other bad value.
+:func:`preset_argument` checks the yarn a command reads under the option the user gave it.
 """
 
 from __future__ import annotations
@@ -42,3 +43,21 @@ def values_attached(parser: argparse.ArgumentParser, argv: Sequence[str]) -> lis
 def parse_arguments(parser: argparse.ArgumentParser, argv: Sequence[str]) -> argparse.Namespace:
     """``parser.parse_args`` of ``argv`` with its dash-led values attached (:func:`values_attached`)."""
     return parser.parse_args(values_attached(parser, argv))
+
+
+def preset_argument(args: argparse.Namespace):
+    """The yarn a command reads, ``--config FILE`` or else ``--preset NAME`` (the default preset
+    when neither is given), checked as a readable preset: ParameterError naming the option as the
+    user wrote it, not the API's ``preset``."""
+    from precompute.errors import ParameterError
+    from precompute.optics.medium import DEFAULT_PRESET, load_preset_config
+
+    option, value = ("--config", args.config) if args.config is not None else ("--preset", args.preset)
+    value = DEFAULT_PRESET if value is None else value
+    try:
+        load_preset_config(value)
+    except ParameterError as error:
+        if error.name != "preset":
+            raise
+        raise ParameterError(option, error.value, error.allowed) from None
+    return value

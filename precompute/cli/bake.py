@@ -12,6 +12,7 @@ import sys
 
 from precompute import bounds
 from precompute.bake import bake, export_bake
+from precompute.cli.arguments import preset_argument
 from precompute.distributed import LOCAL, NO_SCHEDULER, check_scheduler, default_scheduler
 from precompute.errors import ParameterError
 from precompute.exit_codes import DeferredInterrupt
@@ -65,6 +66,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
+    preset = preset_argument(args)
     if args.out:
         check_output_folder(args.out, YARN_FOLDER_FILES)  # before the bake, not after it
     if args.cache_dir is not None:
@@ -85,7 +87,7 @@ def run(args) -> int:
 
     try:
         with interrupt:
-            result = bake(args.config or args.preset, args.overrides, seed=args.seed, paths_per_cell=args.paths,
+            result = bake(preset, args.overrides, seed=args.seed, paths_per_cell=args.paths,
                           target_rel_stderr=args.target_error, threads=args.threads, cache_dir=args.cache_dir,
                           progress=progress, dye_series=args.dye_series, scheduler=scheduler)
     finally:

@@ -16,6 +16,7 @@ import sys
 
 import numpy as np
 
+from precompute.cli.arguments import preset_argument
 from precompute.optics.medium import DEFAULT_PRESET, MediumParameters, load_preset, preset_names
 from precompute.optics.coefficients import MediumOptics, medium_optics
 from precompute.outputs import check_writable_file
@@ -113,9 +114,7 @@ def _print_table(report: dict) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.plot:  # before any work
         check_writable_file(args.plot, "--plot", what="a PNG file")
-    # An empty --preset '' is refused by name, never taken for the default.
-    params = load_preset(args.config if args.config is not None else
-                         (args.preset if args.preset is not None else DEFAULT_PRESET))
+    params = load_preset(preset_argument(args))
     independent = medium_optics(_with_model(params, "none"))
     corrected = medium_optics(_with_model(params, "percus-yevick"))
     chosen_model = "percus-yevick" if args.percus_yevick else params.dependent_scattering

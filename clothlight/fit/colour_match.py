@@ -295,7 +295,9 @@ def match_colour(target_srgb, model: ShadeModel) -> ShadeMatch:
         if best[1] <= 0.5 * MATCH_DELTA_E:
             break
     recipe = best[0]
-    recipe[:count] = np.where(recipe[:count] <= 1.01 * MIN_DYE_PERCENT, 0.0, recipe[:count])  # at the floor: unused
+    unused = recipe[:count] <= 1.01 * MIN_DYE_PERCENT  # a dye at the floor is left out, unless every one is: a
+    if not unused.all():  # recipe holds some dye (the nearest to a colour lighter than the clear cloth, the floor)
+        recipe[:count] = np.where(unused, 0.0, recipe[:count])
     cloth = model(recipe, exact=True)
     return ShadeMatch(dyes=model.dyes, recipe=recipe, cloth_rgb=cloth, target_rgb=target_rgb,
                       delta_e=float(delta_e_2000(linear_rgb_to_lab(cloth), target_lab)),

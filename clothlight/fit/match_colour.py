@@ -67,7 +67,6 @@ def _main(argv) -> int:
     from precompute import exit_codes, outputs
     from precompute.cli.arguments import parse_arguments, preset_argument
     from precompute.errors import ParameterError
-    from precompute.fit.report import absolute_data_files, to_toml
     from precompute.optics.medium import load_preset_config
 
     args = parse_arguments(build_parser(), argv)
@@ -88,25 +87,16 @@ def _main(argv) -> int:
                        progress=lambda text: print(text, file=sys.stderr, flush=True),
                        building=lambda done, total: held.check(), while_building=lambda: held)
     result = match_colour(target, model)
-    recipe = ", ".join(f"{name.removesuffix('.csv')} {percent:.3g} %"
-                       for name, percent in zip(result.dyes, result.recipe) if percent > 0)
-    recipe += f" of fibre weight, fibre absorption {result.recipe[-1]:.3g} /mm"
-    hex_target = "#" + "".join(f"{round(255 * v):02x}" for v in target)
+    recipe = recipe_line(result)
     if not result.reached and not args.nearest:
         raise ParameterError("--target", args.target,
                              f"a colour the dyes reach on this yarn within ΔE2000 {MATCH_DELTA_E:g} (the nearest, "
                              f"{recipe}, is ΔE2000 {result.delta_e:.2f} away; --nearest writes it)")
     command = "python -m clothlight.fit.match_colour " + shlex.join(argv)
-    header = [f"# Shade recipe for sRGB {hex_target}, solved by `{command}`:",
-              f"# {recipe}; the cloth lit and seen along its normal (specular excluded) is CIEDE2000 "
-              f"{result.delta_e:.2f} from the colour asked for (clothlight/fit/colour_match.py)."]
-    config = dict(result.config)
-    absolute_data_files(config, base_dir)
-    config["name"] = out.stem
-    config["description"] = f"{base.get('description', 'a yarn')}; dyed to sRGB {hex_target} ({recipe})"
+    text = preset_text(result, target, base, base_dir, out.stem, f"solved by `{command}`")
     out.parent.mkdir(parents=True, exist_ok=True)
     partial = out.with_name(f".{out.name}.partial")
-    partial.write_text("\n".join(header) + "\n\n" + to_toml(config), encoding="utf-8")
+    partial.write_text(text, encoding="utf-8")
     partial.replace(out)
     summary = {"target_srgb": target.tolist(), "dyes": list(result.dyes),
                "dye_percent": result.recipe[:-1].tolist(), "fibre_absorption_per_mm": float(result.recipe[-1]),
@@ -119,6 +109,33 @@ def _main(argv) -> int:
         print(f"{out}: {recipe}; ΔE2000 {result.delta_e:.2f} ({result.evaluations} evaluations, "
               f"{result.seconds:.1f} s)")
     return 0
+
+
+def recipe_line(result) -> str:
+    """A recipe (:class:`.colour_match.ShadeMatch`) in one line: each dye used, % of fibre weight, and the
+    fibre's own absorption."""
+    recipe = ", ".join(f"{name.removesuffix('.csv')} {percent:.3g} %"
+                       for name, percent in zip(result.dyes, result.recipe) if percent > 0)
+    return recipe + f" of fibre weight, fibre absorption {result.recipe[-1]:.3g} /mm"
+
+
+def preset_text(result, target, base: dict, base_dir, name: str, solved_by: str) -> str:
+    """The preset TOML of a recipe (:class:`.colour_match.ShadeMatch`) for the sRGB ``target`` on the yarn
+    ``base`` (a preset's TOML content, its files resolving in ``base_dir``), named ``name``: a header
+    saying how it was solved (``solved_by``) and how near it comes, then the preset, its data files by
+    absolute path where they are not shipped ones."""
+    from precompute.fit.report import absolute_data_files, to_toml
+
+    recipe = recipe_line(result)
+    hex_target = "#" + "".join(f"{round(255 * v):02x}" for v in target)
+    header = [f"# Shade recipe for sRGB {hex_target}, {solved_by}:",
+              f"# {recipe}; the cloth lit and seen along its normal (specular excluded) is CIEDE2000 "
+              f"{result.delta_e:.2f} from the colour asked for (clothlight/fit/colour_match.py)."]
+    config = dict(result.config)
+    absolute_data_files(config, base_dir)
+    config["name"] = name
+    config["description"] = f"{base.get('description', 'a yarn')}; dyed to sRGB {hex_target} ({recipe})"
+    return "\n".join(header) + "\n\n" + to_toml(config)
 
 
 if __name__ == "__main__":

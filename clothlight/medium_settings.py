@@ -4,7 +4,9 @@ A shipped preset is TOML (``precompute/presets/<name>.toml``) whose values are n
 (``dye.weight_percent``, ``particles.0.diameter_nm``); a bake is asked for by a
 :class:`BakeRequest`, a preset plus overrides of such keys, the seed, the budget and the grids; the
 Yarn Medium panel shows a few of those values as properties (``dye_weight_percent``) and keeps the
-rest of a fit's values as overrides.  This module holds the mapping between the three, without
+rest of a fit's values as overrides.  The panel's medium may also start from a preset TOML file of the
+user's (:data:`CUSTOM_BASE`, :func:`medium_config`: a colour's shade recipe, which numeric overrides
+cannot express), named in the request by its path.  This module holds the mapping between the three, without
 Blender: the panel (:mod:`clothlight.blender.properties`), the bake's child
 (:mod:`clothlight.bake_worker`), the fit (:func:`fitted_overrides`) and the extension's build
 (``scripts/build_extension.py``, the pre-baked requests) all go through it.
@@ -15,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import json
+import pathlib
 from collections.abc import Iterable, Mapping
 
 from precompute.bounds import GRID_SETTINGS
@@ -38,7 +41,8 @@ class BakeRequest:
     Attributes
     ----------
     preset
-        Name of a shipped medium preset (``precompute/presets/<name>.toml``).
+        Name of a shipped medium preset (``precompute/presets/<name>.toml``), or the absolute path of a
+        preset TOML file (the panel's Base Medium "Custom File", e.g. a colour's recipe: :data:`CUSTOM_BASE`).
     overrides
         ``(dotted key, value)`` pairs applied to the preset's TOML, e.g. ``("dye.weight_percent", 2.0)``.
     seed
@@ -125,6 +129,39 @@ def preset_request(name: str) -> BakeRequest:
 def preset_config(name: str) -> dict:
     """The TOML content of the shipped preset ``name`` (ParameterError for an unknown name)."""
     return load_preset_config(name)[0]
+
+
+#: The panel's Base Medium that is a preset TOML file of the user's (a colour's recipe, a fit's preset),
+#: not a shipped preset: its request names the file by its absolute path.
+CUSTOM_BASE = "CUSTOM"
+
+
+def is_preset_file(name_or_path: str) -> bool:
+    """Whether a request's ``preset`` is a preset TOML file rather than a shipped preset's name."""
+    return str(name_or_path).endswith(".toml") or pathlib.Path(str(name_or_path)).is_absolute()
+
+
+def medium_config(name_or_path: str) -> dict:
+    """The TOML content of a shipped preset (by name, as :func:`preset_config`) or of a preset TOML
+    file (by path, read again whenever the file changes: a colour solved again rewrites it);
+    ParameterError for an unknown name or a missing or unreadable file."""
+    if not is_preset_file(name_or_path):
+        return preset_config(name_or_path)
+    path = pathlib.Path(name_or_path)
+    try:
+        stat = path.stat()
+    except OSError:
+        stat = None
+    if stat is None or not path.is_file():
+        from precompute.errors import ParameterError
+
+        raise ParameterError("preset", str(name_or_path), "an existing preset TOML file")
+    return _file_config(str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=16)
+def _file_config(path: str, _mtime_ns: int, _size: int) -> dict:
+    return load_preset_config(path)[0]
 
 
 def particle_size_key(config: dict) -> str | None:

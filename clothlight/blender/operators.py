@@ -1,14 +1,17 @@
-"""Operators of the ClothLight add-on: Build Sample, Bake Tables, Bake Cloth, Fit to Measurement, Apply Material,
-Set Up Cycles.
+"""Operators of the ClothLight add-on: Build Sample, Bake Tables, Bake Cloth, Fit to Measurement, Match Colour,
+Apply Material, Set Up Cycles.
 
 Each reports errors through Blender's report system (bad input names the parameter; unexpected
 failures print their traceback to the console and report one line).  Build Sample and Apply
 Material edit the scene and are undoable; neither leaves unused data blocks behind.  Bake Tables,
-Bake Cloth and Fit to Measurement run in a child process (:mod:`clothlight.jobs`, :mod:`clothlight.fit_job`):
+Bake Cloth, Fit to Measurement and Match Colour run in a child process (:mod:`clothlight.jobs`,
+:mod:`clothlight.fit_job`, :mod:`clothlight.colour_match_job`):
 in the interface they are modal, with a progress bar in the status bar and Esc (or the panel's
 Cancel button) to stop them; in background mode (``blender -b``, or Blender as a Python module)
 ``execute()`` runs the same job to the end.  A fit's result is loaded into the medium settings
-(Load Fit, or at once with the fit settings' Load Result).  The validation operator,
+(Load Fit, or at once with the fit settings' Load Result); a matched colour's recipe is written as a
+preset file in the user folder (:func:`colour_directory`) and becomes the medium's Custom File (an
+unreachable colour's nearest recipe only when applied anyway).  The validation operator,
 ``clothlight.validate``, lives in :mod:`.validation.operator`.
 """
 
@@ -24,10 +27,12 @@ from collections.abc import Callable
 import bpy
 
 from . import preferences
+from ..colour_match_job import (ColourMatchJob, ColourMatchOutcome, ColourMatchRequest, recipe_file_name, srgb_hex,
+                                write_preset)
 from ..fit_job import FitJob, fit_unavailable_reason
 from ..jobs import (BakeCancelled, BakeFailed, BakeJob, ClothBakeJob, JobCancelled, JobFailed,
                     bake_unavailable_reason)
-from ..medium_settings import BakeRequest, preset_request
+from ..medium_settings import BakeRequest, is_preset_file, preset_request
 from .materials import (
     GENERAL_MODE,
     SUN_MODE,
@@ -42,7 +47,8 @@ from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from ..prebaked import tables_for_request
 from .garment.operator import NAME_SEPARATOR, apply_to_meshes, report_applied
 from .properties import ParameterError, millimetre_scale
-from .running_jobs import RunningBake, RunningClothBake, RunningFit
+from . import running_jobs
+from .running_jobs import RunningBake, RunningClothBake, RunningColourMatch, RunningFit
 from .render_setup import use_cycles, use_cycles_osl_on_cpu
 from .sample_object import DEFAULT_NAME, WEAVE_PROPERTY, build_sample_object
 from .sun_link import SUN_PROPERTY
@@ -85,7 +91,8 @@ def material_name(medium, folder: pathlib.Path, mode: str) -> str:
         label = f"{label} {_short_hash(str(folder))}"
     else:
         request = BakeRequest.from_json(medium.tables_request) if medium.tables_dir else medium.request()
-        label = bpy.path.display_name(request.preset)
+        label = pathlib.Path(request.preset).stem if is_preset_file(request.preset) else request.preset
+        label = bpy.path.display_name(label)
         if request != preset_request(request.preset):
             label += " " + _short_hash(request.to_json())
     return f"ClothLight {label}" + (" Sun" if mode == SUN_MODE else "")
@@ -677,6 +684,144 @@ class CLOTHLIGHT_OT_clear_fitted_values(bpy.types.Operator):
         return {"FINISHED"}
 
 
+# -- Match Colour --------------------------------------------------------------------------------
+
+
+def colour_directory() -> str:
+    """Where Match Colour writes its recipes: ``colours/`` in the extension's user folder, never the
+    extension's own (in development, in the user cache folder)."""
+    if preferences.EXTENSION_PACKAGE:
+        return bpy.utils.extension_path_user(preferences.EXTENSION_PACKAGE, path="colours", create=True)
+    from precompute.cache.entries import default_cache_dir
+
+    return str(default_cache_dir() / "colours")
+
+
+def _colour_job_for(context, request: ColourMatchRequest) -> ColourMatchJob:
+    prefs = preferences.preferences(context)
+    threads = prefs.threads if prefs is not None and prefs.threads > 0 else None
+    return ColourMatchJob(request, cache_dir=preferences.cache_directory(context), threads=threads,
+                          blender=bpy.app.binary_path, numba_cache_dir=preferences.numba_cache_directory(),
+                          bytecode_cache_dir=preferences.bytecode_cache_directory())
+
+
+def apply_colour_recipe(scene, outcome: ColourMatchOutcome) -> str:
+    """Make the written recipe of ``outcome`` the scene's medium (its Custom File, values and bake
+    settings loaded from it) and, with Bake After Match in the interface, bake it once no bake runs.
+    Returns a note for the report ("" when nothing was scheduled)."""
+    medium = scene.clothlight.medium
+    medium.set_base(str(outcome.preset))
+    medium.load_preset(medium.base_preset())  # the file may have been rewritten at the same path
+    if medium.bake_after_match and not bpy.app.background:
+        running_jobs.schedule_bake(scene.name)
+        return "; baking its tables"
+    return ""
+
+
+def colour_match_summary(outcome: ColourMatchOutcome) -> str:
+    """A match in one line: the colour, how near the recipe comes, the recipe."""
+    near = f"ΔE2000 {outcome.delta_e:.2f}"
+    if outcome.reached:
+        return f"{srgb_hex(outcome.target_srgb)} matched, {near}: {outcome.recipe_text()}"
+    return (f"{srgb_hex(outcome.target_srgb)} is out of the dyes' reach on this yarn: the nearest recipe "
+            f"({outcome.recipe_text()}) is {near} away")
+
+
+class CLOTHLIGHT_OT_match_colour(_ChildJobOperator, bpy.types.Operator):
+    """Solve the red, blue and yellow dye and the fibre's absorption that give the Base Medium's yarn the Target
+    Colour (lit and seen along the normal, sheen excluded), write the recipe as a preset file and make it the
+    medium (in a background process: minutes the first time for a yarn, then seconds). Esc cancels"""
+
+    bl_idname = "clothlight.match_colour"
+    bl_label = "Match Colour"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def _start(self, context) -> ColourMatchJob | None:
+        medium = context.scene.clothlight.medium
+        try:
+            yarn = medium.request()
+            target = tuple(float(v) for v in medium.target_colour)
+            out = pathlib.Path(colour_directory()) / recipe_file_name(yarn, target)
+            request = ColourMatchRequest(target=target, medium=yarn, out=str(out)).check()
+            job = _colour_job_for(context, request)
+        except (ParameterError, ValueError, OSError) as error:
+            self.report({"ERROR"}, str(error))
+            return None
+        return job
+
+    def _finish(self, scene, job: ColourMatchJob):
+        if isinstance(job.error, JobCancelled):
+            self.report({"WARNING"}, str(job.error))
+            return {"CANCELLED"}
+        if isinstance(job.error, JobFailed):
+            if not job.error.bad_input and job.error.log:
+                print(job.error.log, file=sys.stderr)
+            self.report({"ERROR"}, f"Match Colour failed: {job.error}")
+            return {"CANCELLED"}
+        outcome = job.outcome
+        medium = scene.clothlight.medium
+        medium.colour_match = outcome.to_json()
+        medium.matched_colour = outcome.cloth_srgb
+        if not outcome.written:
+            self.report({"WARNING"}, f"{colour_match_summary(outcome)}. Nothing was written: Apply Nearest Recipe "
+                                     "writes it and makes it the medium")
+            return {"FINISHED"}
+        try:
+            note = apply_colour_recipe(scene, outcome)
+        except ParameterError as error:
+            self.report({"ERROR"}, f"The recipe cannot be loaded: {error}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"{colour_match_summary(outcome)}{note}. Preset: {outcome.preset}")
+        return {"FINISHED"}
+
+    _running = RunningColourMatch
+    _what = "Colour match"
+    _unavailable_reason = staticmethod(bake_unavailable_reason)
+
+    def _status(self, job) -> str:
+        return "Matching the colour" + (f", {job.stage}" if job.stage else "")
+
+
+class CLOTHLIGHT_OT_cancel_colour_match(_CancelJobOperator, bpy.types.Operator):
+    """Stop the running colour match; nothing is written"""
+
+    bl_idname = "clothlight.cancel_colour_match"
+    bl_label = "Cancel Colour Match"
+    _running = RunningColourMatch
+
+
+class CLOTHLIGHT_OT_apply_colour_match(bpy.types.Operator):
+    """Write the last colour match's nearest recipe, which does not reach the Target Colour, and make it the
+    medium anyway"""
+
+    bl_idname = "clothlight.apply_colour_match"
+    bl_label = "Apply Nearest Recipe"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        outcome = context.scene.clothlight.medium.last_colour_match() if context.scene is not None else None
+        if outcome is None or outcome.written:
+            cls.poll_message_set("No colour match with an unapplied recipe")
+            return False
+        return True
+
+    def execute(self, context):
+        medium = context.scene.clothlight.medium
+        outcome = medium.last_colour_match()
+        try:
+            write_preset(outcome.text, outcome.preset)
+            outcome.written = True
+            medium.colour_match = outcome.to_json()
+            note = apply_colour_recipe(context.scene, outcome)
+        except (OSError, ParameterError) as error:
+            self.report({"ERROR"}, f"The nearest recipe cannot be applied: {error}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Nearest recipe applied, ΔE2000 {outcome.delta_e:.2f} from "
+                              f"{srgb_hex(outcome.target_srgb)}{note}. Preset: {outcome.preset}")
+        return {"FINISHED"}
+
+
 # -- Set Up Cycles -------------------------------------------------------------------------------
 
 
@@ -725,6 +870,9 @@ CLASSES = (
     CLOTHLIGHT_OT_cancel_fit,
     CLOTHLIGHT_OT_load_fit,
     CLOTHLIGHT_OT_clear_fitted_values,
+    CLOTHLIGHT_OT_match_colour,
+    CLOTHLIGHT_OT_cancel_colour_match,
+    CLOTHLIGHT_OT_apply_colour_match,
     CLOTHLIGHT_OT_apply_material,
     CLOTHLIGHT_OT_setup_render,
 )

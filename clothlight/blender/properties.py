@@ -24,14 +24,19 @@ import pathlib
 
 import bpy
 import numpy as np
-from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
+from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, IntProperty, PointerProperty,
+                       StringProperty)
 
 from ..fit_job import FREE_PARAMETERS, FitRequest
+from ..colour_match_job import ColourMatchOutcome
 from ..medium_settings import (
+    CUSTOM_BASE,
     BakeRequest,
     config_value,
     exposed_values,
     fitted_values_json,
+    is_preset_file,
+    medium_config,
     medium_keys,
     particle_size_key,
     preset_config,
@@ -222,7 +227,11 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
 
     def medium_plies(self) -> tuple[int, float]:
         """The plies and twist angle (degrees) of the scene's Base Medium preset (``[yarn]``)."""
-        yarn = preset_config(self.id_data.clothlight.medium.base).get("yarn", {})
+        medium = self.id_data.clothlight.medium
+        try:
+            yarn = medium.base_config().get("yarn", {})
+        except ParameterError:
+            raise WeaveParameterError("Base Medium", medium.custom_path, "a readable preset TOML file") from None
         return int(yarn.get("ply_count", 1)), float(yarn.get("twist_angle_deg", 0.0))
 
     def closeup_settings(self) -> CloseupSettings:
@@ -256,11 +265,26 @@ def _base_items():
     for index, name in enumerate(_medium.preset_names()):
         description = str(preset_config(name).get("description", name))
         items.append((name, bpy.path.display_name(name), description, index))
+    # an index of its own, apart from the shipped presets': a .blend keeps it whatever presets ship later
+    items.append((CUSTOM_BASE, "Custom File", "A preset TOML file of your own (Custom File below): a colour's "
+                                              "shade recipe that Match Colour wrote, a fit's preset.toml", 999))
     return items
 
 
 def _load_base(self, _context) -> None:
-    self.load_preset(self.base)
+    if self.base != CUSTOM_BASE:
+        self.load_preset(self.base)
+    elif self.custom_problem() is None:
+        self.load_preset(self.base_preset())
+
+
+def _load_custom(self, _context) -> None:
+    if self.base == CUSTOM_BASE and self.custom_problem() is None:
+        self.load_preset(self.base_preset())
+
+
+#: Match Colour's colour when nothing was picked yet: MERL red-fabric2's (benchmarks/bench_colour_match.py).
+DEFAULT_TARGET_COLOUR = (0x6a / 255, 0x27 / 255, 0x17 / 255)
 
 
 #: The Dye Range's default, % of fibre weight: the shipped dyed presets' amounts and the paper's 1–5 % (§6.2).
@@ -274,7 +298,7 @@ def _recolour(self, context) -> None:
     try:
         baked = BakeRequest.from_json(self.tables_request)
         wanted = self.request()
-    except (ValueError, TypeError, KeyError):
+    except (ValueError, TypeError, KeyError, ParameterError):
         return
     if baked.dye_series is None or wanted == baked or not wanted.same_but_dye(baked):
         return
@@ -297,8 +321,28 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
     base: EnumProperty(
         name="Base Medium", items=_base_items(), default=_medium.DEFAULT_PRESET,
         update=_load_base,
-        description="Shipped medium preset the values below start from (host, particles, dye spectrum, yarn); "
-                    "choosing one loads its values")
+        description="Shipped medium preset the values below start from (host, particles, dye spectrum, yarn), "
+                    "or a preset file of your own (Custom File); choosing one loads its values")
+    custom_path: StringProperty(
+        name="Custom File", subtype="FILE_PATH", default="", update=_load_custom,
+        description="Preset TOML file the medium starts from when the Base Medium is Custom File (Match Colour "
+                    "writes its recipe here; 'python -m clothlight.fit.match_colour' and a fit's preset.toml "
+                    "are such files); choosing one loads its values")
+    target_colour: FloatVectorProperty(
+        name="Target Colour", subtype="COLOR_GAMMA", size=3, min=0.0, max=1.0, default=DEFAULT_TARGET_COLOUR,
+        description="The colour the cloth should have (sRGB), lit and seen along its normal without the sheen, "
+                    "as textile colour is measured: Match Colour solves the red, blue and yellow dye and the "
+                    "fibre's own absorption that give the Base Medium's yarn this colour")
+    bake_after_match: BoolProperty(
+        name="Bake After Match", default=True,
+        description="Once a colour is matched (or its nearest recipe applied), bake the recipe's tables "
+                    "(Bake Tables, in the background)")
+    colour_match: StringProperty(
+        name="Last Colour Match", default="", options={"HIDDEN"},
+        description="The last Match Colour's outcome (JSON: the colour, the recipe, its CIEDE2000, its preset)")
+    matched_colour: FloatVectorProperty(
+        name="Cloth Colour", subtype="COLOR_GAMMA", size=3, min=0.0, max=1.0, default=(0.0, 0.0, 0.0),
+        description="The colour the last matched recipe gives the cloth (sRGB), for comparison with the target")
     dye_weight_percent: FloatProperty(
         name="Dye (% of fibre weight)", default=_default("dye.weight_percent", 0.0), min=0.0, max=100.0,
         soft_max=10.0, precision=2, step=10, update=_recolour,
@@ -374,10 +418,63 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         description="Values a fit set that the panel does not show (JSON pairs of a preset key and its value in "
                     "the preset's units), baked with the rest; cleared when the base medium changes")
 
+    def base_preset(self) -> str:
+        """The preset the medium starts from: a shipped preset's name, or the Custom File's absolute path
+        (ParameterError when it names none)."""
+        if self.base != CUSTOM_BASE:
+            return self.base
+        if not self.custom_path.strip():
+            raise ParameterError("Custom File", self.custom_path, "a preset TOML file")
+        return str(pathlib.Path(bpy.path.abspath(self.custom_path)).resolve())
+
+    def base_config(self) -> dict:
+        """The TOML content of :meth:`base_preset` (ParameterError naming the Custom File for a missing or
+        unreadable one)."""
+        try:
+            return medium_config(self.base_preset())
+        except ParameterError as error:
+            if self.base != CUSTOM_BASE:
+                raise
+            raise ParameterError("Custom File", self.custom_path, error.allowed) from None
+
+    def custom_problem(self) -> str | None:
+        """Why the Custom File cannot be the medium (a message for the panel), or None (or not chosen)."""
+        if self.base != CUSTOM_BASE:
+            return None
+        try:
+            self.base_config()
+        except ParameterError as error:
+            return str(error)
+        return None
+
+    def set_base(self, name_or_path: str) -> None:
+        """Make the medium start from a shipped preset (by name) or a preset file (by path), loading its
+        values when it is another than now."""
+        if not is_preset_file(name_or_path):
+            if self.base != name_or_path:
+                self.base = name_or_path
+            return
+        path = str(pathlib.Path(name_or_path).resolve())
+        if self.base == CUSTOM_BASE and self.custom_path and self.base_preset() == path:
+            return
+        self.custom_path = path
+        if self.base != CUSTOM_BASE:
+            self.base = CUSTOM_BASE
+
+    def last_colour_match(self) -> ColourMatchOutcome | None:
+        """The last Match Colour's outcome as stored, or None."""
+        if not self.colour_match:
+            return None
+        try:
+            return ColourMatchOutcome.from_json(self.colour_match)
+        except (ValueError, KeyError, TypeError):
+            return None
+
     def load_preset(self, name: str) -> None:
-        """Set every exposed value from the shipped preset ``name`` (its [transport] table included);
-        ``request()`` is then :func:`clothlight.medium_settings.preset_request` of it."""
-        config = preset_config(name)
+        """Set every exposed value from the preset ``name`` (a shipped one's name or a preset file's path;
+        its [transport] table included); ``request()`` is then
+        :func:`clothlight.medium_settings.preset_request` of it."""
+        config = medium_config(name)
         for prop, key in medium_keys(config).items():
             setattr(self, prop, float(config_value(config, key)))
         self.fitted_overrides = ""
@@ -391,7 +488,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
             self.budget, self.target_error = "TARGET_ERROR", request.target_rel_stderr
 
     def exposed_keys(self) -> dict[str, str]:
-        return medium_keys(preset_config(self.base))
+        return medium_keys(self.base_config())
 
     def extra_overrides(self) -> list[tuple[str, float]]:
         """The fitted values the panel does not expose (``fitted_overrides``), as (key, value) pairs."""
@@ -404,23 +501,24 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
 
     def extra_overrides_text(self) -> str:
         """The fitted values the panel does not expose, as one line ("" for none)."""
-        config = preset_config(self.base)
+        config = self.base_config()
         return ", ".join(f"{shown_key(key, config)} {value:.4g}" for key, value in self.extra_overrides())
 
     def set_values(self, base: str, overrides) -> None:
-        """Make these settings the medium ``base`` with ``overrides`` ((dotted key, value) pairs, as a
-        :class:`~clothlight.medium_settings.BakeRequest` holds them): the exposed values from them or the preset,
-        the rest kept in ``fitted_overrides``.  The bake settings (budget, seed, grids) stay."""
-        if self.base != base:
-            self.base = base  # loads the preset's values and bake settings
-        values, fitted = exposed_values(preset_config(base), overrides)
+        """Make these settings the medium ``base`` (a shipped preset's name or a preset file's path) with
+        ``overrides`` ((dotted key, value) pairs, as a :class:`~clothlight.medium_settings.BakeRequest`
+        holds them): the exposed values from them or the preset, the rest kept in ``fitted_overrides``.
+        The bake settings (budget, seed, grids) stay."""
+        self.set_base(base)  # another medium than now: loads the preset's values and bake settings
+        values, fitted = exposed_values(medium_config(base), overrides)
         for prop, value in values.items():
             setattr(self, prop, value)
         self.fitted_overrides = fitted_values_json(fitted)
 
     def request(self) -> BakeRequest:
-        """The bake these settings ask for: overrides only where a value differs from the preset."""
-        config = preset_config(self.base)
+        """The bake these settings ask for: overrides only where a value differs from the preset
+        (ParameterError when the Custom File is missing or unreadable)."""
+        config = self.base_config()
         values = {prop: getattr(self, prop) for prop in medium_keys(config)}
         overrides = request_overrides(config, values, self.extra_overrides())
         fixed = self.budget == "PATHS"
@@ -429,7 +527,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
             series = (typed_number(self.dye_series_low), typed_number(self.dye_series_high))
         return BakeRequest(
             dye_series=series,
-            preset=self.base, overrides=overrides, seed=self.seed,
+            preset=self.base_preset(), overrides=overrides, seed=self.seed,
             paths_per_cell=self.paths_per_cell if fixed else None,
             target_rel_stderr=None if fixed else self.target_error,
             n_around=self.n_around, n_along=self.n_along,

@@ -1,4 +1,5 @@
-"""The bake, the cloth bake and the fit the interface is running, and the recolouring bake a dye change schedules.
+"""The bake, the cloth bake, the fit and the colour match the interface is running, and the bake a dye change (or
+a matched colour) schedules.
 
 Held here, apart from the operators that start them, so that the settings (a dye change with Dye
 Range on schedules a bake: :mod:`.properties`), the operators and the panels (their progress) all
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import bpy
 
+from ..colour_match_job import ColourMatchJob
 from ..fit_job import FitJob
 from ..jobs import BakeJob, ClothBakeJob
 
@@ -47,6 +49,12 @@ def schedule_recolour(scene_name: str) -> None:
     bpy.app.timers.register(start, first_interval=RECOLOUR_DELAY_SECONDS)
 
 
+def schedule_bake(scene_name: str) -> None:
+    """Start Bake Tables for ``scene_name`` soon, once no bake runs (a matched colour's recipe): as
+    :func:`schedule_recolour`."""
+    schedule_recolour(scene_name)
+
+
 class ScheduledRecolour:
     """The pending recolouring bake's timer function (None when none is pending)."""
 
@@ -81,10 +89,21 @@ def running_cloth_bake() -> ClothBakeJob | None:
     return RunningClothBake.job
 
 
+class RunningColourMatch:
+    """The one colour match the interface is running (None when idle); the Yarn Medium panel draws its progress."""
+
+    job: ColourMatchJob | None = None
+    scene_name: str = ""
+
+
+def running_colour_match() -> ColourMatchJob | None:
+    return RunningColourMatch.job
+
+
 def stop_all() -> None:
     """Cancel the pending recolouring bake and every running job (the add-on is being disabled)."""
     ScheduledRecolour.cancel()
-    for holder in (RunningBake, RunningClothBake, RunningFit):
+    for holder in (RunningBake, RunningClothBake, RunningFit, RunningColourMatch):
         if holder.job is not None:
             holder.job.cancel()
             holder.job = None

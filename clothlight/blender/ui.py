@@ -1,8 +1,9 @@
 """ClothLight panels: the 3D View sidebar's "Cloth" tab, and the Material properties of a ClothLight material.
 
 Sidebar (N panel → Cloth): ClothLight (render set-up) with sub-panels Woven Sample, Yarn Medium
-(with Bake Settings and Grids, and Fit to Measurement), Material and Validation, in the order of the
-work.  The weave and medium panels carry their preset menus in the header, as Blender's own panels do.
+(its Target Colour and Match Colour under the base medium; with Bake Settings and Grids, and Fit to
+Measurement), Material and Validation, in the order of the work.  The weave and medium panels carry
+their preset menus in the header, as Blender's own panels do.
 """
 
 from __future__ import annotations
@@ -11,9 +12,12 @@ import bpy
 
 from . import operators, running_jobs
 from .closeup_operator import CLOTHLIGHT_OT_add_flyaways
+from ..colour_match_job import dye_label, srgb_hex
 from ..fit_job import fit_unavailable_reason
 from ..jobs import bake_unavailable_reason
+from ..medium_settings import CUSTOM_BASE
 from ..prebaked import prebaked_tables
+from ..weave import WeaveParameterError
 from .garment.operator import BAKE_COMMAND
 from .materials import material_mode
 from .preset_menus import CLOTHLIGHT_PT_medium_presets, CLOTHLIGHT_PT_weave_presets
@@ -96,9 +100,14 @@ class CLOTHLIGHT_PT_closeup(_SidebarPanel, bpy.types.Panel):
         layout.use_property_decorate = False
         layout.prop(weave, "use_plies")
         if weave.use_plies:
-            plies, twist = weave.medium_plies()
-            noun = "ply" if plies == 1 else "plies"
-            layout.label(text=f"{plies} {noun} at {twist:g}° ({context.scene.clothlight.medium.base})", icon="INFO")
+            try:
+                plies, twist = weave.medium_plies()
+            except WeaveParameterError as error:
+                layout.label(text=str(error), icon="ERROR")
+            else:
+                noun = "ply" if plies == 1 else "plies"
+                layout.label(text=f"{plies} {noun} at {twist:g}° ({_medium_name(context.scene.clothlight.medium)})",
+                             icon="INFO")
         col = layout.column(align=True)
         col.prop(weave, "spacing_jitter")
         col.prop(weave, "height_jitter")
@@ -110,6 +119,49 @@ class CLOTHLIGHT_PT_closeup(_SidebarPanel, bpy.types.Panel):
         col.prop(weave, "flyaway_curl_per_mm")
         if CLOTHLIGHT_OT_add_flyaways.is_registered:
             layout.operator(CLOTHLIGHT_OT_add_flyaways.bl_idname, icon="CURVES")
+
+
+def _medium_name(medium) -> str:
+    """The Base Medium as the panels name it: a shipped preset's name, or the Custom File's name."""
+    if medium.base != CUSTOM_BASE:
+        return medium.base
+    return bpy.path.display_name_from_filepath(medium.custom_path) or "no custom file"
+
+
+def _draw_colour_match(layout, medium) -> None:
+    """Target Colour and Match Colour (its progress while it runs), then the last match: how near it came,
+    the recipe, the cloth's colour, and Apply Nearest Recipe for a colour out of reach."""
+    column = layout.column(align=True)
+    column.prop(medium, "target_colour")
+    job = running_jobs.running_colour_match()
+    if job is not None:
+        row = column.row(align=True)
+        row.progress(factor=job.progress, type="BAR", text=f"Matching: {job.progress:.0%}")
+        row.operator("clothlight.cancel_colour_match", text="", icon="CANCEL")
+        if job.stage:
+            column.label(text=job.stage)
+    else:
+        column.operator("clothlight.match_colour", icon="EYEDROPPER")
+    layout.prop(medium, "bake_after_match")
+    outcome = medium.last_colour_match()
+    if outcome is None:
+        return
+    column = layout.column(align=True)
+    if outcome.reached:
+        column.label(text=f"{srgb_hex(outcome.target_srgb)} matched: ΔE2000 {outcome.delta_e:.2f}", icon="CHECKMARK")
+    else:
+        column.label(text=f"{srgb_hex(outcome.target_srgb)} out of reach: nearest ΔE2000 {outcome.delta_e:.2f}",
+                     icon="ERROR")
+    for name, percent in zip(outcome.dyes, outcome.dye_percent):
+        column.label(text=f"{dye_label(name)}: {percent:.3g} % of fibre weight")
+    column.label(text=f"Fibre absorption: {outcome.fibre_absorption_per_mm:.3g} /mm")
+    row = column.row(align=True)
+    row.enabled = False
+    row.prop(medium, "matched_colour")
+    if not outcome.written:
+        column.operator("clothlight.apply_colour_match", icon="IMPORT")
+    else:
+        column.label(text=f"Preset: {outcome.preset.name}", icon="FILE_TEXT")
 
 
 class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
@@ -125,6 +177,14 @@ class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         layout.prop(medium, "base")
+        if medium.base == CUSTOM_BASE:
+            layout.prop(medium, "custom_path")
+        problem = medium.custom_problem()
+        if problem:
+            layout.label(text=problem, icon="ERROR")
+        _draw_colour_match(layout, medium)
+        if problem:
+            return
         keys = medium.exposed_keys()
         col = layout.column(align=True)
         for prop in ("dye_weight_percent", "particle_diameter_nm", "particle_volume_fraction", "yarn_radius_mm"):

@@ -10,7 +10,10 @@ The medium settings start from a shipped preset (``precompute/presets/*.toml``, 
 the bake as overrides, so an untouched preset bakes exactly what ``python -m precompute bake
 --preset <name>`` bakes and hits the same cache entry (and the same pre-baked tables).  Values a
 fit found that the panel does not expose (a second particle species, the fibre's absorption, the
-sheen) are kept as overrides of their own (``fitted_overrides``) and baked with the rest.
+sheen) are kept as overrides of their own (``fitted_overrides``) and baked with the rest.  The base may
+also be a preset TOML file of the user's (``base`` "Custom File", ``custom_path``): Match Colour writes
+the recipe of the ``target_colour`` (an sRGB picker) there and points the base at it
+(:mod:`clothlight.colour_match_job`); its last outcome is kept in ``colour_match``.
 
 The fit settings (``Scene.clothlight.fit``) say what ``python -m clothlight.fit`` would be told:
 the measurement, the free parameters, the budget, the colour targets, the output folder

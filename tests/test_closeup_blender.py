@@ -18,7 +18,7 @@ from clothlight.weave import build_woven_mesh  # noqa: E402
 from clothlight.weave.closeup import CloseupSettings, closeup_settings, sheeting_weave  # noqa: E402
 from clothlight.weave.fibre_optics import fibre_radius_mm, hair_absorption_coefficient  # noqa: E402
 from clothlight.weave.flyaways import flyaway_fibres  # noqa: E402
-from precompute.optics.medium import load_preset, load_preset_config  # noqa: E402
+from precompute.optics.medium import PRESET_DIR, load_preset, load_preset_config  # noqa: E402
 
 pytestmark = pytest.mark.blender
 
@@ -110,6 +110,13 @@ def test_the_panel_builds_the_base_mediums_plies_and_the_operator_grows_fibres(s
     assert bpy.ops.clothlight.add_flyaways() == {"FINISHED"}
     fibres = bpy.data.objects[flyaway_name(sample)]
     assert fibres[FLYAWAY_PROPERTY]["density_per_mm"] == pytest.approx(weave.flyaway_density_per_mm)
+    # a preset file of the user's (Match Colour's recipe, a fit's preset.toml) gives its fibres too
+    scene.clothlight.medium.custom_path = str(PRESET_DIR / "pink_felt.toml")
+    scene.clothlight.medium.base = "CUSTOM"
+    bpy.data.objects.remove(fibres)
+    assert bpy.ops.clothlight.add_flyaways() == {"FINISHED"}
+    assert flyaway_name(sample) in bpy.data.objects
+    scene.clothlight.medium.base = "red_cotton"
     weave.height_jitter = 0.99                         # crossings pushed through each other: refused by name
     with pytest.raises(Exception, match="height_jitter"):
         weave.parameters()

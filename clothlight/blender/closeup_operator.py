@@ -8,6 +8,8 @@ fibres' dye, material and radius), and builds the fibres as a child of the sampl
 
 from __future__ import annotations
 
+import pathlib
+
 import bpy
 
 from precompute.errors import ParameterError
@@ -41,12 +43,13 @@ class CLOTHLIGHT_OT_add_flyaways(bpy.types.Operator):
         sample = context.active_object
         try:
             params = weave_from_record(sample[WEAVE_PROPERTY])
-            fibres = build_flyaway_object(sample, params, settings.weave.closeup_settings(), settings.medium.base)
+            preset = settings.medium.base_preset()  # a shipped preset's name or the Custom File's path
+            fibres = build_flyaway_object(sample, params, settings.weave.closeup_settings(), preset)
         except ParameterError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         count = 0 if fibres is None else len(fibres.data.curves)
-        self.report({"INFO"}, f"{sample.name}: {count} flyaway fibres of {settings.medium.base}")
+        self.report({"INFO"}, f"{sample.name}: {count} flyaway fibres of {pathlib.Path(preset).stem}")
         return {"FINISHED"}
 
 

@@ -25,10 +25,10 @@ WEAVE_VALUES = [f"weave.{name}" for name in (
     "yarn_radius_mm", "half_width_mm", "half_thickness_mm", "auto_crimp", "crimp_warp_mm", "crimp_weft_mm",
     "segments_per_crossing", "segments_around", "real_world_size", "use_plies", "spacing_jitter", "height_jitter",
     "ply_radius_jitter", "irregularity_seed", "flyaway_density_per_mm", "flyaway_length_mm", "flyaway_curl_per_mm")]
-# "base" first: setting it loads the TOML preset, the saved values then override it (a fit's values
-# the panel does not show among them).
+# "base" first (after the Custom File it may name): setting it loads the TOML preset, the saved values
+# then override it (a fit's values the panel does not show among them).
 MEDIUM_VALUES = [f"medium.{name}" for name in (
-    "base", "dye_weight_percent", "particle_diameter_nm", "particle_volume_fraction", "yarn_radius_mm",
+    "custom_path", "base", "dye_weight_percent", "particle_diameter_nm", "particle_volume_fraction", "yarn_radius_mm",
     "fitted_overrides",
     "budget", "target_error", "paths_per_cell", "seed", "n_around", "n_along", "angular_resolution",
     "incidence_resolution")]

@@ -24,9 +24,11 @@
   "Front-Lit" (sun and sky from the front) and scene "Back-Lit" (a window-sized area light behind
   the cloth), sharing the cloth's collection.  8 × 8 yarns, so that the file stays small.
 * ``closeup_denim_twill.blend`` — the same close-up as denim: ``sheeting_weave("blue_cotton",
-  interlacing="twill_3_1")``, a warp-faced 3/1 twill of the fitted ``blue_cotton`` yarn (MERL's
-  blue-fabric) with its plies, twist, irregularity and fibres, in that preset's yarn material (lobe
-  table packed) beside Principled+sheen of the yarn's own albedo; the same two scenes, a stop brighter.
+  interlacing="twill_3_1")``, a warp-faced 3/1 twill of an indigo warp, the fitted ``blue_cotton``
+  yarn (MERL's blue-fabric), and an undyed weft, ``white_cotton``: plies, twist, irregularity and
+  fibres, each face in its own yarn's material (slot 0 the warp's, 1 the weft's; both lobe tables
+  packed; the fibres all in the warp's hair BSDF), beside Principled+sheen of each yarn's own albedo;
+  the same two scenes, a stop brighter.
   ``--denim-only`` writes it alone, ``--render-denim DIR`` renders its pictures.
 
 Both read the paper's red-cotton tables from ``example_blends/tables/paper_2008/`` through ``//``-relative
@@ -294,14 +296,24 @@ class CloseupExample:
     principled_colour: tuple[float, float, float] | None = None
     interlacing: str = "plain"
     exposure: float = 0.0
+    #: A weft of another yarn (None: the warp's): its preset, its yarn material's name and its
+    #: Principled twin's; each face of the mesh takes the material of the yarn it belongs to (the fibres the warp's).
+    weft_preset: str | None = None
+    weft_material_name: str = ""
 
 
 RED_COTTON_CLOSEUP = CloseupExample(CLOSEUP_PRESET, "closeup_red_cotton", "ClothLight Red Cotton",
                                     principled_colour=(0.5, 0.02, 0.03))  # benchmarks/render_cost.py's reference
-#: Denim: a warp-faced 3/1 twill (Z, the diagonal rising to the right) of the blue_cotton preset's yarn, fitted to
-#: MERL's blue-fabric; its Principled copy gets the yarn's own albedo.  A dark cloth: both scenes a stop up.
-DENIM_TWILL_CLOSEUP = CloseupExample("blue_cotton", "closeup_denim_twill", "ClothLight Blue Cotton Denim",
-                                     interlacing="twill_3_1", exposure=1.0)
+#: Denim: a warp-faced 3/1 twill (Z, the diagonal rising to the right) of an indigo warp, the blue_cotton preset's
+#: yarn fitted to MERL's blue-fabric, and an undyed weft, white_cotton (no dye; fitted to MERL's white-fabric the
+#: same way): blue face, pale back; its Principled copy gets each yarn's own albedo.  A dark face: both scenes a
+#: stop up.  (undyed_cotton, the paper's medium without dye, is nearly clear: its unscattered light needs the OSL
+#: shader, which reads its tables by path, not packed, and not under SVM.)
+DENIM_TWILL_CLOSEUP = CloseupExample("blue_cotton", "closeup_denim_twill", "ClothLight Denim Warp (Blue Cotton)",
+                                     interlacing="twill_3_1", exposure=1.0, weft_preset="white_cotton",
+                                     weft_material_name="ClothLight Denim Weft (White Cotton)")
+#: The Principled+sheen twin's material(s): one, or the warp's and the weft's for a weft of another yarn.
+PRINCIPLED_NAME = "Principled BSDF + Sheen"
 
 
 def yarn_albedo_colour(folder: pathlib.Path) -> tuple[float, float, float]:
@@ -320,13 +332,51 @@ def packed_yarn_material(tables, name: str):
     does not record its bake folder (a cache path here, meaningless wherever the blend goes)."""
     from clothlight.blender.materials import TABLES_PROPERTY
 
-    material = build_yarn_material(tables, name, mode=GENERAL_MODE)
+    material = build_yarn_material(tables, name, mode=GENERAL_MODE, plain_nodes=True)  # SVM; refuses OSL
     for node in material.node_tree.nodes:
         if node.type == "TEX_IMAGE" and node.image is not None and node.image.packed_file is not None:
             node.image.filepath_raw = "//lobes.exr"
     if TABLES_PROPERTY in material:
         del material[TABLES_PROPERTY]
     return material
+
+
+def baked_yarn(preset: str) -> pathlib.Path:
+    """The bake folder of ``preset``'s yarn tables (baked, or found in the bake cache)."""
+    from precompute.cache import entries as cache
+
+    baked = BakeJob(preset_request(preset), cache_dir=cache.default_cache_dir()).wait(
+        on_progress=lambda f: print(f"\rbaking {preset}: {f:.0%}", end="", file=sys.stderr))
+    print(file=sys.stderr)
+    return baked.folder
+
+
+def principled_sheen(name: str, colour) -> bpy.types.Material:
+    """Principled BSDF of base colour ``colour`` (linear RGB) with full sheen, roughness 0.8."""
+    material = bpy.data.materials.new(name)
+    node = material.node_tree.nodes["Principled BSDF"]
+    node.inputs["Base Color"].default_value = (*colour, 1.0)
+    node.inputs["Sheen Weight"].default_value = 1.0
+    node.inputs["Roughness"].default_value = 0.8
+    return material
+
+
+def weft_material_indices(sample) -> None:
+    """Material index 1 for each face of the sample whose yarn is a weft (``is_warp`` 0 on its vertices;
+    a face belongs to one yarn)."""
+    import numpy as np
+
+    from clothlight.mesh_attributes import IS_WARP
+
+    mesh = sample.data
+    is_warp = np.empty(len(mesh.vertices), np.int32)
+    mesh.attributes[IS_WARP].data.foreach_get("value", is_warp)
+    corner_vert = np.empty(len(mesh.loops), np.int32)
+    mesh.attributes[".corner_vert"].data.foreach_get("value", corner_vert)
+    loop_start = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_start", loop_start)
+    mesh.polygons.foreach_set("material_index", np.where(is_warp[corner_vert[loop_start]] != 0, 0, 1).astype(np.int32))
+    mesh.update()
 
 
 def closeup_scene(scene, cloth, exposure: float) -> None:
@@ -348,7 +398,6 @@ def closeup_example(out_dir: pathlib.Path, example: CloseupExample) -> pathlib.P
     written as ``out_dir/<example.stem>.blend``."""
     from clothlight.blender.flyaway_object import build_flyaway_object
     from clothlight.weave.closeup import closeup_settings, sheeting_weave
-    from precompute.cache import entries as cache
     from precompute.optics.medium import load_preset_config
 
     fresh_file()
@@ -361,31 +410,34 @@ def closeup_example(out_dir: pathlib.Path, example: CloseupExample) -> pathlib.P
                             warp_count=CLOSEUP_YARNS, weft_count=CLOSEUP_YARNS)
     sample = build_sample_object(params, collection=cloth)
     sample.name = "ClothLight Sample"
-    fibres = build_flyaway_object(sample, params, closeup_settings(load_preset_config(example.preset)[0]),
-                                  example.preset, collection=cloth)
+    settings = closeup_settings(load_preset_config(example.preset)[0])
+    fibres = build_flyaway_object(sample, params, settings, example.preset, collection=cloth)
     # The general mode packs its lobe table in the file: no table folder travels with this blend.
-    baked = BakeJob(preset_request(example.preset), cache_dir=cache.default_cache_dir()).wait(
-        on_progress=lambda f: print(f"\rbaking {example.preset}: {f:.0%}", end="", file=sys.stderr))
-    print(file=sys.stderr)
-    yarn = packed_yarn_material(yarn_tables_from_bake(baked.folder), example.material_name)
+    baked = baked_yarn(example.preset)
     sample.data.materials.clear()
-    sample.data.materials.append(yarn)
+    sample.data.materials.append(packed_yarn_material(yarn_tables_from_bake(baked), example.material_name))
+    principled = [principled_sheen(PRINCIPLED_NAME, example.principled_colour or yarn_albedo_colour(baked))]
+    # Slot 1, the weft's: its yarn material and its Principled twin's.  The fibres keep the warp's hair
+    # material: Cycles (5.0) renders a hair-curves object in its first material whatever the curves'
+    # material_index, so the weft's fibres would need an object of their own.
+    if example.weft_preset:
+        weft_baked = baked_yarn(example.weft_preset)
+        sample.data.materials.append(packed_yarn_material(yarn_tables_from_bake(weft_baked),
+                                                          example.weft_material_name))
+        principled[0].name = f"{PRINCIPLED_NAME} Warp"
+        principled.append(principled_sheen(f"{PRINCIPLED_NAME} Weft", yarn_albedo_colour(weft_baked)))
+        weft_material_indices(sample)
     sample.location.x = -CLOSEUP_OFFSET_MM / 2
 
     # The reference shares the mesh data; its materials are the objects' own.
-    principled = bpy.data.materials.new("Principled BSDF + Sheen")
-    node = principled.node_tree.nodes["Principled BSDF"]
-    colour = example.principled_colour or yarn_albedo_colour(baked.folder)
-    node.inputs["Base Color"].default_value = (*colour, 1.0)
-    node.inputs["Sheen Weight"].default_value = 1.0
-    node.inputs["Roughness"].default_value = 0.8
     for original in (sample, fibres):
         twin = original.copy()
         twin.name = original.name.replace("ClothLight", "Principled") if "ClothLight" in original.name \
             else f"{original.name} Principled"
         cloth.objects.link(twin)
-        twin.material_slots[0].link = "OBJECT"
-        twin.material_slots[0].material = principled
+        for slot, material in zip(twin.material_slots, principled):  # the fibres: the warp's, as above
+            slot.link = "OBJECT"
+            slot.material = material
         if original is sample:
             sample_twin = twin
         else:
@@ -419,7 +471,8 @@ def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
 
 
 def closeup_denim_twill(out_dir: pathlib.Path) -> pathlib.Path:
-    """The denim close-up: a warp-faced 3/1 twill of the fitted blue_cotton yarn, beside Principled+sheen."""
+    """The denim close-up: a warp-faced 3/1 twill of an indigo warp (the fitted blue_cotton yarn) and an
+    undyed weft (white_cotton), beside Principled+sheen."""
     return closeup_example(out_dir, DENIM_TWILL_CLOSEUP)
 
 

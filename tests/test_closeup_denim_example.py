@@ -1,6 +1,7 @@
 """example_blends/closeup_denim_twill.blend (scripts/make_example_blends.py --denim-only): the denim
-close-up, a warp-faced 3/1 twill of the fitted blue_cotton yarn with its fibres, in ClothLight's
-general mode and in Principled+sheen on the same geometry, front-lit and back-lit.  The file is
+close-up, a warp-faced 3/1 twill of an indigo warp (the fitted blue_cotton yarn) and an undyed weft
+(white_cotton, undyed) with their fibres, each yarn in its own material, in ClothLight's general mode and in
+Principled+sheen on the same geometry, front-lit and back-lit.  The file is
 opened, not rendered (test_example_blends.py renders every example)."""
 
 import pathlib
@@ -14,8 +15,9 @@ from mathutils import Vector  # noqa: E402
 from precompute.optics.medium import load_preset_config  # noqa: E402
 
 BLEND = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "closeup_denim_twill.blend"
-PRESET = "blue_cotton"
-YARN_MATERIAL = "ClothLight Blue Cotton Denim"
+PRESET, WEFT_PRESET = "blue_cotton", "white_cotton"
+YARN_MATERIAL = "ClothLight Denim Warp (Blue Cotton)"
+WEFT_MATERIAL = "ClothLight Denim Weft (White Cotton)"
 #: The 3/1 Z twill's drawdown (clothlight.weave.patterns.twill(3, 1)): pick i, end j, True where the
 #: warp end is over the pick; three of four crossings show the warp.
 TWILL_3_1 = [[True, True, True, False], [False, True, True, True], [True, False, True, True], [True, True, False, True]]
@@ -55,12 +57,47 @@ def test_both_materials_dress_the_same_twill_sample_and_fibres(blend):
     assert len(meshes[0].data.polygons) > 10_000
 
 
-def test_the_face_shows_the_warp_and_the_back_the_weft(blend):
-    """Warp-faced: over the cloth's middle, the highest yarn surface is warp in most places and the
-    lowest is weft (a plain weave shows each half the time on both sides)."""
+def _face_materials(mesh) -> np.ndarray:
+    indices = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("material_index", indices)
+    return indices
+
+
+def test_warp_faces_wear_the_blue_yarn_and_weft_faces_the_undyed_one(blend):
+    """Slot 0 the warp's blue_cotton material, slot 1 the weft's white_cotton (undyed); every face takes its
+    yarn's (a face's vertices are all of one yarn), half of the faces each (8 warps, 8 wefts)."""
+    sample = blend.objects["ClothLight Sample"]
+    assert [slot.material.name for slot in sample.material_slots] == [YARN_MATERIAL, WEFT_MATERIAL]
+    mesh = sample.data
+    warp = _vertex_array(mesh, "is_warp", dtype=np.int32)
+    corners = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("vertex_index", corners)
+    starts, totals = np.empty(len(mesh.polygons), np.int32), np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_start", starts)
+    mesh.polygons.foreach_get("loop_total", totals)
+    face_of_corner = np.repeat(np.arange(len(starts)), totals)
+    corner_warp = warp[corners]
+    face_warp = np.bincount(face_of_corner, corner_warp) / totals  # 1: all warp, 0: all weft
+    assert set(np.unique(face_warp)) == {0.0, 1.0}
+    materials = _face_materials(mesh)
+    np.testing.assert_array_equal(materials, np.where(face_warp == 1.0, 0, 1))
+    assert 0.4 < materials.mean() < 0.6
+
+
+def test_the_face_is_mostly_the_blue_material_and_the_back_the_undyed_one(blend):
+    """Warp-faced: over the cloth's middle, the highest yarn surface wears the warp's blue material in
+    most places and the lowest the weft's undyed one (a plain weave shows each half the time on both
+    sides)."""
     mesh = blend.objects["ClothLight Sample"].data
     position = _vertex_array(mesh, "position", "vector", 3)
-    warp = _vertex_array(mesh, "is_warp", dtype=np.int32).astype(bool)
+    corners = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("vertex_index", corners)
+    totals = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_total", totals)
+    vertex_material = np.full(len(mesh.vertices), -1, np.int32)
+    vertex_material[corners] = np.repeat(_face_materials(mesh), totals)
+    assert (vertex_material >= 0).all()
+    warp = vertex_material == 0  # the blue material
     inner = (np.abs(position[:, :2]) < 1.2).all(axis=1)  # clear of the cut edges
     position, warp = position[inner], warp[inner]
     cell = np.floor(position[:, :2] / 0.04).astype(np.int64)
@@ -72,21 +109,32 @@ def test_the_face_shows_the_warp_and_the_back_the_weft(blend):
     assert face > 0.55 and back < 0.45 and face - back > 0.15, (face, back)
 
 
-def test_the_clothlight_material_reads_blue_cotton_packed(blend):
-    """The yarn material is blue_cotton's: its lobe table is blue and packed, its sheen is the preset's
-    fitted [fit] specular term, and nothing in it names a folder of this machine."""
-    yarn = blend.materials[YARN_MATERIAL]
-    assert blend.objects["ClothLight Sample"].material_slots[0].material == yarn
-    assert yarn.get("clothlight_mode") == "GENERAL"
-    assert "clothlight_tables" not in yarn  # the bake folder was a path in this machine's cache
-    images = {node.image for node in yarn.node_tree.nodes if node.type == "TEX_IMAGE"}
+def _packed_lobes(material):
+    """The material's one lobe table, packed, and the mean weights of its diffuse lobe (tile 0)."""
+    assert material.get("clothlight_mode") == "GENERAL"
+    assert "clothlight_tables" not in material  # the bake folder was a path in this machine's cache
+    images = {node.image for node in material.node_tree.nodes if node.type == "TEX_IMAGE"}
     assert len(images) == 1
     lobes = images.pop()
     assert lobes.packed_file is not None and lobes.filepath_raw == "//lobes.exr"
     width, height = lobes.size
     pixels = np.array(lobes.pixels[:], dtype=np.float64).reshape(height, width, 4)
-    diffuse = pixels[:, : width // 5, :3].mean(axis=(0, 1))  # tile 0, the diffuse lobe's weights
+    return lobes, pixels[:, : width // 5, :3].mean(axis=(0, 1))
+
+
+def test_the_clothlight_materials_read_blue_cotton_and_white_cotton_packed(blend):
+    """The warp's material is blue_cotton's: its lobe table is blue and packed, its sheen is the
+    preset's fitted [fit] specular term; the weft's is white_cotton's, its own packed table, much
+    paler; nothing in either names a folder of this machine."""
+    yarn, weft = blend.materials[YARN_MATERIAL], blend.materials[WEFT_MATERIAL]
+    lobes, diffuse = _packed_lobes(yarn)
     assert diffuse[2] > 2 * diffuse[1] > 2 * diffuse[0] >= 0, diffuse  # a blue yarn (red_cotton's is red)
+    weft_lobes, weft_diffuse = _packed_lobes(weft)
+    assert weft_lobes != lobes and weft_lobes.packed_file.data != lobes.packed_file.data
+    # undyed: every channel far above the indigo's red and green, the three nearly alike
+    assert (weft_diffuse > 0).all() and weft_diffuse[0] > 20 * diffuse[0] and weft_diffuse[1] > 2 * diffuse[1]
+    assert weft_diffuse[0] / weft_diffuse[2] > 10 * diffuse[0] / diffuse[2], (weft_diffuse, diffuse)
+    assert weft_diffuse.max() < 1.25 * weft_diffuse.min(), weft_diffuse  # grey-white, no dye
 
     fit = load_preset_config(PRESET)[0]["fit"]
     sheen = [node for node in yarn.node_tree.nodes if node.bl_idname == "ShaderNodeBsdfMetallic"]
@@ -121,17 +169,30 @@ def test_no_path_of_this_machine_in_the_file(blend):
                 assert not text.startswith("/"), (datablock.name, text)
 
 
-def test_principled_copy_and_fibres_are_blue(blend):
-    principled = blend.materials["Principled BSDF + Sheen"]
-    assert {obj.material_slots[0].material for obj in blend.objects
-            if obj.type in ("MESH", "CURVES") and obj.name.startswith("Principled")} == {principled}
-    node = principled.node_tree.nodes["Principled BSDF"]
-    r, g, b, _ = node.inputs["Base Color"].default_value
-    assert b > g > r >= 0 and node.inputs["Sheen Weight"].default_value == 1.0
+def test_principled_copy_has_each_yarns_colour(blend):
+    """The twin's two materials, warp and weft, have each yarn's reflectance at normal incidence (the
+    bake's albedo): an indigo blue and a far paler undyed colour."""
+    warp, weft = blend.materials["Principled BSDF + Sheen Warp"], blend.materials["Principled BSDF + Sheen Weft"]
+    slots = blend.objects["Principled Sample"].material_slots
+    assert [(slot.link, slot.material) for slot in slots] == [("OBJECT", warp), ("OBJECT", weft)]
+    colours = []
+    for material in (warp, weft):
+        node = material.node_tree.nodes["Principled BSDF"]
+        assert node.inputs["Sheen Weight"].default_value == 1.0
+        colours.append(np.array(node.inputs["Base Color"].default_value[:3]))
+    blue, undyed = colours
+    assert blue[2] > blue[1] > blue[0] >= 0
+    assert (undyed > blue).all() and undyed[0] > 20 * blue[0] and undyed.max() < 1.25 * undyed.min()  # grey-white
+
+
+def test_the_fibres_are_the_warps_blue(blend):
+    """The fibres, all in blue_cotton's hair BSDF (Evans blue: red absorbed most), the warp's; the
+    Principled copy's in the warp's Principled material."""
     hair = blend.materials[f"ClothLight Fibres {PRESET}"]
-    assert blend.objects["ClothLight Sample Flyaways"].material_slots[0].material == hair
-    fibres = blend.objects["ClothLight Sample Flyaways"].data
-    assert len(fibres.curves) > 100
+    assert [slot.material for slot in blend.objects["ClothLight Sample Flyaways"].material_slots] == [hair]
+    assert [slot.material.name for slot in blend.objects["Principled Sample Flyaways"].material_slots] == [
+        "Principled BSDF + Sheen Warp"]
+    assert len(blend.objects["ClothLight Sample Flyaways"].data.curves) > 100
     sigma = next(n for n in hair.node_tree.nodes if n.type == "BSDF_HAIR_PRINCIPLED").inputs["Absorption Coefficient"]
     red, green, blue = sigma.default_value
     assert red > green > blue  # a blue fibre absorbs red most
@@ -155,16 +216,18 @@ def test_a_sun_in_front_and_a_window_behind(blend):
 
 @pytest.mark.slow
 def test_the_packed_lobe_table_is_blue_cottons_bake(blend):
-    """The packed image holds blue_cotton's lobes.exr to the last bit (the bake, or the cache's copy)."""
+    """The packed images hold blue_cotton's and white_cotton's lobes.exr to the last bit (the bake, or
+    the cache's copy)."""
     from clothlight.jobs import BakeJob
     from clothlight.medium_settings import preset_request
     from precompute.cache import entries as cache
     from precompute.tables.exr import read_table
 
-    baked = BakeJob(preset_request(PRESET), cache_dir=cache.default_cache_dir()).wait()
-    table = read_table(baked.folder / "lobes.exr").pixels
-    lobes = next(node.image for node in blend.materials[YARN_MATERIAL].node_tree.nodes if node.type == "TEX_IMAGE")
-    width, height = lobes.size
-    pixels = np.array(lobes.pixels[:], dtype=np.float32).reshape(height, width, 4)[::-1, :, :3]  # bottom row first
-    assert pixels.shape == table.shape
-    np.testing.assert_array_equal(pixels, table)
+    for preset, material in ((PRESET, YARN_MATERIAL), (WEFT_PRESET, WEFT_MATERIAL)):
+        baked = BakeJob(preset_request(preset), cache_dir=cache.default_cache_dir()).wait()
+        table = read_table(baked.folder / "lobes.exr").pixels
+        lobes = next(node.image for node in blend.materials[material].node_tree.nodes if node.type == "TEX_IMAGE")
+        width, height = lobes.size
+        pixels = np.array(lobes.pixels[:], dtype=np.float32).reshape(height, width, 4)[::-1, :, :3]  # bottom first
+        assert pixels.shape == table.shape
+        np.testing.assert_array_equal(pixels, table)

@@ -36,6 +36,7 @@ def test_the_closeup_example_holds_the_sample_fibres_both_materials_and_both_lig
     assert len(principled) == 2 and {m.name for m in materials.values()} >= {"ClothLight Red Cotton"}
     yarn = bpy.data.materials["ClothLight Red Cotton"]
     assert any(node.type == "TEX_IMAGE" and node.image.packed_file for node in yarn.node_tree.nodes)
+    assert "clothlight_tables" not in yarn  # its bake folder: a path in the bake cache of the machine that built it
     front, back = bpy.data.scenes["Front-Lit"], bpy.data.scenes["Back-Lit"]
     for scene in (front, back):
         assert set(meshes + fibres) <= set(scene.objects)

@@ -20,7 +20,8 @@ and for both sides together:
 
 ``lobes.exr``
     The general-lighting closure mixture: per view, the weights of :data:`GARMENT_LOBES`
-    fitted to each side's ρ (:func:`precompute.tables.closure_fit.fit_closure_weights`), and the open
+    fitted to each side's ρ (:func:`precompute.tables.closure_fit.fit_closure_weights`: the gloss
+    lobe to the specular term, the others to the rest, :data:`SPECULAR_LOBE`), and the open
     weave, 1 − the fraction of the cloth hidden by yarn along the view, through which light
     passes unscattered (a transparent closure).  Laid out for a node-based material
     (:func:`lobe_image`): views on a square grid over the projected hemisphere, front side on top.
@@ -59,6 +60,11 @@ GARMENT_LOBES = ("diffuse", "translucent", "fibre_transmission", "gloss")
 #: the yarn sample: validation sweep 13.4 % (14.2 % weighing every incidence alike), lit from
 #: straight behind 1.03 of the sample's red glow (1.38).
 FIT_WEIGHTING = "absolute"
+#: The lobe that carries the specular term (the yarns' Cook–Torrance, whose Beckmann distribution it
+#: shares), fitted to that term alone, and the other lobes to ρ without it: fitted among them to all
+#: of ρ, the white, narrow peak bent the coloured lobes (red_cotton, the mixture against its own ρ
+#: in the validation sweep's directions, mean ρ / mixture in blue 1.33 → 1.08; docs/garment.md).
+SPECULAR_LOBE = "gloss"
 SUMMARY_FILE = "summary.json"
 #: How far above 1 a cloth's reflected + transmitted + open share of the incident light may come before
 #: it is refused: the yarn tables' Monte-Carlo error (a few % a cell) and the measurement's pixel sums.
@@ -171,6 +177,37 @@ def check_energy(energy: dict, incidence_resolution: int) -> None:
         f"{'RGB'[worst[1]]}), at most 1 + {ENERGY_TOLERANCE:g} allowed; were the tables' values scaled?")
 
 
+def mixture_weights(rho: np.ndarray, specular: np.ndarray, incidence_resolution: int,
+                    shape: closure_fit.LobeShape, views: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The general-lighting mixture of one side standing for all of ``rho`` (n_in, n_out, 3), 1/sr,
+    whose ``specular`` term (n_in, n_out), 1/sr, is carried by :data:`SPECULAR_LOBE` alone: weights
+    (n_views, len(GARMENT_LOBES), 3) at ``views``, and the mixture's relative error against ``rho``
+    (:func:`mixture_error`)."""
+    specular = np.broadcast_to(np.asarray(specular, float)[..., None], rho.shape)
+    weights = np.zeros((len(views), len(GARMENT_LOBES), rho.shape[-1]))
+    for part, lobes in ((np.maximum(rho - specular, 0.0), tuple(k for k in GARMENT_LOBES if k != SPECULAR_LOBE)),
+                        (specular, (SPECULAR_LOBE,))):
+        fitted, _ = closure_fit.fit_closure_weights(table_layout.brdf_atlas(part), incidence_resolution, shape,
+                                                    lobes=lobes, views=views, weighting=FIT_WEIGHTING)
+        weights[:, [GARMENT_LOBES.index(k) for k in lobes]] = fitted
+    return weights, mixture_error(table_layout.brdf_atlas(rho), incidence_resolution, weights, shape, views)
+
+
+def mixture_error(atlas: np.ndarray, incidence_resolution: int, weights: np.ndarray, shape: closure_fit.LobeShape,
+                  views: np.ndarray, subsamples: int = 3) -> np.ndarray:
+    """The relative error (n_views, C) of the mixture ``weights`` (n_views, len(GARMENT_LOBES), C) against
+    ``atlas``, as :func:`precompute.tables.closure_fit.fit_closure_weights` measures its own fit's: RMS
+    over the incidence samples of (mixture − ρ) / (ρ + mean ρ)."""
+    grid = AngularGrid("sphere", incidence_resolution)
+    light = closure_fit.incidence_samples(grid, subsamples)
+    error = np.zeros((len(views), atlas.shape[2]))
+    for exit_cell, view in enumerate(views):
+        target = closure_fit.interpolate_rho(atlas, incidence_resolution, light, np.broadcast_to(view, light.shape))
+        mixture = closure_fit.lobe_responses(view, light, shape, GARMENT_LOBES) @ weights[exit_cell]
+        error[exit_cell] = np.sqrt(np.mean(((mixture - target) / (target + target.mean(axis=0) + 1e-30)) ** 2, axis=0))
+    return error
+
+
 def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key: str, code_digest: str) -> dict:
     """Write the tables of a :class:`.goniometry.ClothMeasurement` into ``folder`` (created) and its
     summary; returns the summary."""
@@ -202,10 +239,7 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
         precompute_tables.write_table(folder / SPECULAR_VISIBILITY_FILES[side], table_layout.brdf_atlas(visibility),
                                       {**header, "side": side, "layout": layout, "table": "brdf",
                                        "quantity": "specular visibility", "specular": measurement.specular_parameters})
-        # The closure mixture stands for all of ρ, specular included.
-        atlas = table_layout.brdf_atlas(measurement.rho[side])
-        weights, error = closure_fit.fit_closure_weights(atlas, n_i, shape, lobes=GARMENT_LOBES, views=views,
-                                                         weighting=FIT_WEIGHTING)
+        weights, error = mixture_weights(measurement.rho[side], measurement.specular[side], n_i, shape, views)
         fit_error[side] = np.median(error, axis=0).tolist()
         open_weave = 1.0 - coverage_along(measurement.coverage[side], views)
         tiles[side] = np.concatenate([weights, np.repeat(open_weave[:, None, None], 3, axis=-1)], axis=1)

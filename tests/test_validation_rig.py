@@ -140,6 +140,23 @@ def test_a_constant_yarn_table_measures_rho_over_cos_incidence(tmp_path, constan
     rig.remove()
 
 
+def test_two_rigs_in_one_file_keep_their_own_samples():
+    """A cluster worker keeps a rig for the yarn sweep and one for the garment sweep in one file: the
+    garment rig's flat patch hid the yarn rig's sample when both were the same object (black swatches)."""
+    from clothlight.blender.validation.run import garment_patch
+
+    yarn_rig = build_rig(None)  # the validation weave, as a worker builds it
+    garment_rig = build_rig(None)
+    try:
+        assert yarn_rig.sample != garment_rig.sample
+        garment_rig.replace_sample(garment_patch(garment_rig))
+        assert not yarn_rig.sample.hide_render and yarn_rig.sample.name in yarn_rig.scene.collection.objects
+    finally:
+        garment_rig.remove()
+        yarn_rig.remove()
+    assert not [obj for obj in bpy.data.objects if obj.name.startswith("ClothLight Gonioreflectometer")]
+
+
 @pytest.mark.blender
 @pytest.mark.parametrize("theta_v", [-70.0, -45.0, 0.0, 30.0, 70.0])
 def test_every_view_frames_exactly_the_patch(theta_v):

@@ -21,6 +21,7 @@ path tracing instead (:meth:`Rig.use_path_tracing`, :data:`SCENE_BOUNCES`), so y
 
 from __future__ import annotations
 
+import itertools
 import math
 import pathlib
 from dataclasses import dataclass, field
@@ -282,7 +283,12 @@ def build_rig(sample, settings: RigSettings = RigSettings()) -> Rig:
     owned = [scene]
     try:
         if sample is None or isinstance(sample, WeaveParameters):
-            copy = build_sample_object(sample or VALIDATION_WEAVE, name=RIG_SAMPLE, collection=scene.collection)
+            # A name no other rig's sample has: build_sample_object rebuilds a sample of its name in
+            # place, and a cluster worker keeps a rig for each kind of sweep (yarn, garment) in one file,
+            # where the garment rig hid the yarn rig's sample and its swatches rendered black.
+            names = (f"{RIG_SAMPLE}.{k:03d}" if k else RIG_SAMPLE for k in itertools.count())
+            name = next(name for name in names if name not in bpy.data.objects)
+            copy = build_sample_object(sample or VALIDATION_WEAVE, name=name, collection=scene.collection)
             if copy.name not in scene.collection.objects:
                 scene.collection.objects.link(copy)
             owned += [copy.data, copy]

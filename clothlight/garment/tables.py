@@ -62,8 +62,8 @@ GARMENT_LOBES = ("diffuse", "translucent", "fibre_transmission", "gloss")
 FIT_WEIGHTING = "absolute"
 #: The lobe that carries the specular term (the yarns' Cook–Torrance, whose Beckmann distribution it
 #: shares), fitted to that term alone, and the other lobes to ρ without it: fitted among them to all
-#: of ρ, the white, narrow peak bent the coloured lobes (red_cotton, the mixture against its own ρ
-#: in the validation sweep's directions, mean ρ / mixture in blue 1.33 → 1.08; docs/garment.md).
+#: of ρ, the white, narrow peak bent the coloured lobes (red_cotton's general mode vs the yarn sample
+#: over the validation sweep: 37.1 % → 21.2 % RGB, blue 79.8 % → 41.6 %; docs/garment.md).
 SPECULAR_LOBE = "gloss"
 SUMMARY_FILE = "summary.json"
 #: How far above 1 a cloth's reflected + transmitted + open share of the incident light may come before

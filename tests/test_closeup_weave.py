@@ -246,3 +246,99 @@ def test_the_presets_plies_and_twist_build():
     params = WeaveParameters(warp_count=3, weft_count=3, ply_count=yarn.ply_count, twist_angle_deg=yarn.twist_angle_deg)
     assert params.ply_count == 2 and params.twist_angle_deg == pytest.approx(24.0)
     assert len(build_woven_mesh(params).tube_faces) == 12
+
+
+# -- a section pressed at the crossings, relaxed between ---------------------------------------------
+
+
+def ring_semi_axes(mesh, params, yarn):
+    """Every ring of a single-ply yarn measured on the mesh: its semi-axes along B and across it in
+    the ring's plane (n,), (n,), and that plane's unit normal N (n, 3), from the ring's vertices at
+    φ = 0 and π/2 (segments_around a multiple of 4 puts vertices on both axes)."""
+    binormal = np.array([0.0, 1.0, 0.0]) if yarn < params.warp_count else np.array([1.0, 0.0, 0.0])
+    offsets = tube_rings(mesh, params, yarn, 0) - mesh.centerlines[yarn][:, None]
+    top = offsets[:, params.segments_around // 4]
+    return np.abs(offsets[:, 0] @ binormal), np.linalg.norm(top, axis=1), top / np.linalg.norm(top, axis=1)[:, None]
+
+
+#: A relaxing section on a plied, jittered plain weave that clears.
+RELAXED = dict(PLIED, semi_axes_mm=(0.12, 0.075), crimp_amplitude_mm=0.085, spacing_mm=0.5, segments_per_crossing=16,
+               segments_around=16, section_relaxation=0.75)
+
+
+@pytest.mark.parametrize("jittered", [False, True])
+def test_a_relaxed_section_is_pressed_at_the_crossings_and_rounder_between(jittered):
+    single = dict(ply_count=1, ply_radius_jitter=0.0)
+    params = WeaveParameters(**RELAXED | single | ({} if jittered else dict(spacing_jitter=0.0, height_jitter=0.0)))
+    mesh = build_woven_mesh(params)
+    a, b = params.cross_section_mm
+    r, segments = params.section_relaxation, params.segments_per_crossing
+    first = -(-segments // 2)                      # the ring on the first crossing
+    for yarn in (0, params.warp_count + 2):
+        width, thickness, _ = ring_semi_axes(mesh, params, yarn)
+        crossings = first + segments * np.arange(params.weft_count if yarn < params.warp_count else params.warp_count)
+        np.testing.assert_allclose(width[crossings], a, rtol=1e-12)
+        np.testing.assert_allclose(thickness[crossings], b, rtol=1e-12)
+        midway = crossings[:-1] + segments // 2
+        # rounder, as the flattening F^(1 − r) says, and of the same area
+        np.testing.assert_allclose(width[midway] / thickness[midway], (a / b) ** (1 - r), rtol=1e-9)
+        np.testing.assert_allclose(width[midway] * thickness[midway], a * b, rtol=1e-9)
+        # pressed flat on the end pieces beyond the first and last crossing
+        np.testing.assert_allclose(width[:first], a, rtol=1e-12)
+        np.testing.assert_allclose(thickness[crossings[-1]:], b, rtol=1e-12)
+
+
+def test_no_relaxation_keeps_the_section_everywhere():
+    rigid = dict(RELAXED, section_relaxation=0.0)
+    mesh = build_woven_mesh(WeaveParameters(**rigid))
+    default = {key: value for key, value in rigid.items() if key != "section_relaxation"}
+    np.testing.assert_array_equal(mesh.vertices, build_woven_mesh(WeaveParameters(**default)).vertices)
+    params = WeaveParameters(**rigid | dict(ply_count=1, ply_radius_jitter=0.0))
+    single = build_woven_mesh(params)
+    for yarn in (0, params.warp_count):
+        width, thickness, _ = ring_semi_axes(single, params, yarn)
+        np.testing.assert_allclose(width, 0.12, rtol=1e-12)
+        np.testing.assert_allclose(thickness, 0.075, rtol=1e-12)
+
+
+def test_relaxed_plies_stay_inside_their_envelope_and_clear_of_the_yarns_they_cross():
+    params = WeaveParameters(**RELAXED)
+    mesh = build_woven_mesh(params)
+    envelope = build_woven_mesh(dataclasses.replace(params, ply_count=1, ply_radius_jitter=0.0))
+    for yarn in (0, 1, params.warp_count, params.warp_count + 3):
+        width, thickness, normal = ring_semi_axes(envelope, params, yarn)
+        binormal = np.array([0.0, 1.0, 0.0]) if yarn < params.warp_count else np.array([1.0, 0.0, 0.0])
+        for ply in range(params.ply_count):
+            offsets = tube_rings(mesh, params, yarn, ply) - envelope.centerlines[yarn][:, None]
+            x = offsets @ binormal / width[:, None]
+            y = np.sum(offsets * normal[:, None], axis=-1) / thickness[:, None]
+            assert (x**2 + y**2).max() <= 1 + 1e-9
+    assert np.ptp(width) > 0.01                                   # the envelope did change along the yarn
+    assert not meshes_cross(mesh, params)
+    assert params.minimum_gap_mm > 0
+
+
+def test_a_relaxation_that_makes_yarns_meet_is_refused_naming_what_fits():
+    """At the sheeting's density a yarn relaxed to round between crossings is too thick where it bends
+    under the yarn it crosses: refused by name, with the largest relaxation that clears; the mesh of
+    the refused one (built past the check) does cut into the crossing yarns, the offered one's not."""
+    dense = dict(interlacing="plain", warp_count=4, weft_count=4, spacing_mm=0.4, semi_axes_mm=(0.12, 0.075),
+                 crimp_amplitude_mm=0.08475, segments_per_crossing=16, segments_around=16)
+    WeaveParameters(**dense)                                      # the rigid section clears
+    with pytest.raises(WeaveParameterError) as refusal:
+        WeaveParameters(**dense, section_relaxation=1.0)
+    assert refusal.value.name == "section_relaxation" and "at most " in str(refusal.value)
+    largest = float(str(refusal.value).split("at most ")[1].split()[0])
+    assert 0.0 < largest < 1.0
+    fits = WeaveParameters(**dense, section_relaxation=largest)
+    assert fits.minimum_gap_mm > 0 and not meshes_cross(build_woven_mesh(fits), fits)
+    object.__setattr__(fits, "section_relaxation", 1.0)
+    assert meshes_cross(build_woven_mesh(fits), fits)
+
+
+@pytest.mark.parametrize("value", [-0.1, 1.5, float("nan")])
+def test_a_relaxation_out_of_range_is_refused_by_name(value):
+    with pytest.raises(WeaveParameterError) as refusal:
+        WeaveParameters(section_relaxation=value)
+    assert refusal.value.name == "section_relaxation" and "[0, 1]" in str(refusal.value)
+

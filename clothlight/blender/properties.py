@@ -51,7 +51,8 @@ from ..medium_settings import (
 from . import running_jobs
 from ..weave import BUILT_IN, WeaveParameterError, WeaveParameters
 from ..weave.closeup import FLYAWAY_BOUNDS, CloseupSettings, sheeting_weave
-from ..weave.params import COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM, IRREGULARITY_BOUNDS
+from ..weave.params import (COUNT_BOUNDS, CROSSING_CLEARANCE, DEFAULT_YARN_RADIUS_MM, IRREGULARITY_BOUNDS,
+                             SECTION_BOUNDS)
 
 from precompute.optics import medium as _medium
 #: The allowed ranges, one definition shared with the bake's API and command line (precompute/bounds.py).
@@ -140,6 +141,12 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
         name="Half-Thickness (mm)", default=_WEAVE.cross_section_mm[1], min=0.001, max=10.0, soft_min=0.02,
         soft_max=1.0, precision=3, step=1,
         description="Semi-axis of the elliptical cross-section across the cloth, in millimetres")
+    section_relaxation: FloatProperty(
+        name="Section Relaxation", default=_WEAVE.section_relaxation,
+        **SECTION_BOUNDS["section_relaxation"].limits(), precision=3, step=1, subtype="FACTOR",
+        description="How far the yarn relaxes towards a round section of the same area midway between "
+                    "crossings, where nothing presses it: 0 keeps the cross-section everywhere, 1 is round "
+                    "midway; at every crossing the section is the one set above")
     auto_crimp: BoolProperty(
         name="Automatic Crimp", default=_WEAVE.crimp_amplitude_mm is None,
         description=f"Crimp just clearing the crossing yarns: (1 + {CROSSING_CLEARANCE:g}) × the yarn's half-thickness")
@@ -226,7 +233,7 @@ class ClothLightWeaveSettings(bpy.types.PropertyGroup):
             segments_per_crossing=self.segments_per_crossing, segments_around=self.segments_around,
             ply_count=plies, twist_angle_deg=typed_number(twist), spacing_jitter=typed_number(self.spacing_jitter),
             height_jitter=typed_number(self.height_jitter), ply_radius_jitter=typed_number(self.ply_radius_jitter),
-            seed=self.irregularity_seed, **shape)
+            seed=self.irregularity_seed, section_relaxation=typed_number(self.section_relaxation), **shape)
 
     def medium_plies(self) -> tuple[int, float]:
         """The plies and twist angle (degrees) of the scene's Base Medium preset (``[yarn]``)."""

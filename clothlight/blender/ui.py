@@ -74,6 +74,7 @@ class CLOTHLIGHT_PT_sample(_SidebarPanel, bpy.types.Panel):
         else:
             col.prop(weave, "half_width_mm")
             col.prop(weave, "half_thickness_mm")
+        layout.prop(weave, "section_relaxation")
         layout.prop(weave, "auto_crimp")
         if not weave.auto_crimp:
             col = layout.column(align=True)

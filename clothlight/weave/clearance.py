@@ -2,7 +2,9 @@
 
 Only a warp and a weft that cross can touch: parallel neighbours are separated sideways (each
 tube stays within its semi-axis ``a`` of its own vertical plane, and 2a < spacing), and a warp
-and a weft meet only inside the square |x − xᵢ| < a, |y − yⱼ| < a around their crossing.
+and a weft meet only inside the square |x − xᵢ| < a, |y − yⱼ| < a around their crossing.  Where
+the section relaxes between crossings (:mod:`.section`: a(s), b(s) along the axial coordinate s),
+``a`` here is the largest a(s), and the square the one of that half-width.
 
 Inside that square both tubes are vertical intervals.  The cross-section of a tube is an ellipse
 with semi-axes ``a`` (in the cloth plane, across the yarn) and ``b`` (perpendicular to the yarn in
@@ -14,15 +16,27 @@ w·κ < 1 (the tube does not fold onto itself, checked by :class:`.WeaveParamete
 at a point of the square is how far the lower tube's top stays below the upper tube's bottom;
 its minimum over the square is negative exactly when the solids intersect.
 
+A relaxing section is a band of half-width w(η, s) = b(s)·√(1 − η²/a(s)²).  Its edge pinches to
+the centreline where a(s) falls to |η|, and there the offset curve turns back along s (it is no
+graph), so the band is taken from the tube that encloses it: the ellipse of semi-axes (max a,
+b(s)) at every s, w̄(η, s) = b(s)·√(1 − η²/max a²) ≥ w(η, s).  That is exact at every crossing
+(where a(s) = a is the largest, for a yarn flatter than round) and can only understate the gap
+between them.  Its edges are graphs while w̄·κ + |dw̄/ds| < 1 (the abscissa s ∓ w̄·z′/L grows at
+1 ∓ …: d(w̄·sin θ)/ds = w̄′·sin θ + w̄·κ, θ the centreline's slope angle), which
+:class:`.WeaveParameters` checks with the largest b(s), the largest curvature and the bound of
+:func:`.section.thickness_slope`.
+
 The triangle mesh differs from these exact tubes: its ring vertices lie on the exact surface,
 but along the yarn it follows chords between rings, which on the inside of a bend stand proud of
 the exact surface by up to κ·L²/8 (L the ring spacing).  Given the tessellation, the band edges
 are taken from the ring vertices and joined by straight lines, as the mesh joins them — the gap
-of the mesh as built.  (Around the yarn the mesh's polygon is inscribed in the ellipse, so taking
-the exact half-width there can only understate the gap.)
+of the mesh as built.  (Around the yarn the mesh's polygon is inscribed in the ring's ellipse,
+which lies in the enclosing one above, so taking that half-width there can only understate the
+gap.)
 
 The profile near a crossing depends only on the signs of the two crossings either side (a band
-never reaches further than a + b < 3/2 spacing along the yarn), so every crossing of the repeat
+never reaches further than max a + max b < 3/2 spacing along the yarn; the section relaxes the
+same way between every two crossings of a regular weave), so every crossing of the repeat
 is evaluated once with its neighbourhood taken periodically.  A sample cut from the cloth only
 loses neighbours, and a yarn running flat at its end stays further from the crossing yarn than
 one changing sides, so the repeat's gaps bound the sample's.
@@ -39,6 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 from .centerline import knot_height, ring_positions, unit_height
+from .section import largest_semi_axes, semi_axes_along
 
 #: Crossings either side of a crossing that shape the yarns near it (see the module docstring).
 NEIGHBOURHOOD = 2
@@ -54,11 +69,12 @@ def _windows(over: np.ndarray) -> np.ndarray:
 
 
 def _band_edges(window: np.ndarray, amplitude_mm: float, spacing_mm: float, semi_axes_mm, q: np.ndarray,
-                segments: int | None):
+                segments: int | None, relaxation: float):
     """Lower and upper edges (Q, Q) of one yarn's band at axial offsets ``q`` from its crossing
     (first index) and lateral offsets ``q`` (second index), mm: of the exact tube when
-    ``segments`` is None, else of its mesh with ``segments`` rings per spacing."""
-    width, thickness = semi_axes_mm
+    ``segments`` is None, else of its mesh with ``segments`` rings per spacing; its section
+    relaxed by ``relaxation`` between crossings (:mod:`.section`), enclosed as the module says."""
+    width, thickness = largest_semi_axes(semi_axes_mm, relaxation)
     reach = width + thickness
     if segments is None:
         s = np.linspace(-reach, reach, 16 * len(q) + 1)
@@ -70,7 +86,9 @@ def _band_edges(window: np.ndarray, amplitude_mm: float, spacing_mm: float, semi
     z = amplitude_mm * height
     dz = amplitude_mm * slope / spacing_mm
     length = np.sqrt(1.0 + dz**2)
-    half = thickness * np.sqrt(np.clip(1.0 - (q / width) ** 2, 0.0, None))
+    knots = spacing_mm * (np.arange(len(window)) - NEIGHBOURHOOD)
+    along = semi_axes_along(knots, s, semi_axes_mm, relaxation)[1]
+    half = along[None, :] * np.sqrt(np.clip(1.0 - (q / width) ** 2, 0.0, None))[:, None]    # (lateral, s)
     lower = np.empty((len(q), len(half)))
     upper = np.empty_like(lower)
     for column, w in enumerate(half):
@@ -81,7 +99,7 @@ def _band_edges(window: np.ndarray, amplitude_mm: float, spacing_mm: float, semi
 
 def crossing_gaps(interlacing: np.ndarray, spacing_mm: float, semi_axes_mm: tuple[float, float],
                   amplitudes_mm: tuple[float, float], segments_per_crossing: int | None = None,
-                  resolution: int = 49) -> np.ndarray:
+                  resolution: int = 49, relaxation: float = 0.0) -> np.ndarray:
     """Smallest vertical gap (mm) between the warp and the weft at every crossing of the repeat.
 
     Parameters
@@ -91,7 +109,7 @@ def crossing_gaps(interlacing: np.ndarray, spacing_mm: float, semi_axes_mm: tupl
     spacing_mm
         Centre-to-centre distance of neighbouring yarns, mm.
     semi_axes_mm
-        Cross-section semi-axes (in the cloth plane, across it), mm.
+        Cross-section semi-axes (in the cloth plane, across it) at the crossings, mm.
     amplitudes_mm
         Warp and weft crimp amplitudes, mm.
     segments_per_crossing
@@ -100,6 +118,8 @@ def crossing_gaps(interlacing: np.ndarray, spacing_mm: float, semi_axes_mm: tupl
     resolution
         Grid points across the square where the two tubes overlap in plan (odd, so the crossing
         itself is one of them).
+    relaxation
+        How far the section relaxes towards round between crossings, 0–1 (:mod:`.section`).
 
     Valid while no tube folds onto itself (half-thickness × centreline curvature < 1), which
     :class:`.WeaveParameters` checks first.
@@ -109,7 +129,7 @@ def crossing_gaps(interlacing: np.ndarray, spacing_mm: float, semi_axes_mm: tupl
     (R, C) array: negative where the tubes intersect.  At a crossing that both yarns leave on
     both sides it is h_warp + h_weft − 2b at the crossing point, unless the bends come closer.
     """
-    width = semi_axes_mm[0]
+    width = largest_semi_axes(semi_axes_mm, relaxation)[0]
     q = np.linspace(-width, width, resolution)
     warp_windows = _windows(interlacing.T).transpose(1, 0, 2)   # [i, j, :] along warp j
     weft_windows = _windows(~interlacing)                       # [i, j, :] along weft i
@@ -117,7 +137,7 @@ def crossing_gaps(interlacing: np.ndarray, spacing_mm: float, semi_axes_mm: tupl
     for windows, amplitude in ((warp_windows, amplitudes_mm[0]), (weft_windows, amplitudes_mm[1])):
         unique, inverse = np.unique(windows.reshape(-1, windows.shape[-1]), axis=0, return_inverse=True)
         ids.append(inverse.reshape(interlacing.shape))
-        edges.append([_band_edges(window, amplitude, spacing_mm, semi_axes_mm, q, segments_per_crossing)
+        edges.append([_band_edges(window, amplitude, spacing_mm, semi_axes_mm, q, segments_per_crossing, relaxation)
                       for window in unique])
     pairs, inverse = np.unique(np.stack(ids, -1).reshape(-1, 2), axis=0, return_inverse=True)
     pair_gaps = np.empty(len(pairs))
@@ -129,10 +149,12 @@ def crossing_gaps(interlacing: np.ndarray, spacing_mm: float, semi_axes_mm: tupl
 
 
 def minimum_gap(interlacing: np.ndarray, spacing_mm: float, semi_axes_mm: tuple[float, float],
-                amplitudes_mm: tuple[float, float], segments_per_crossing: int | None = None) -> float:
+                amplitudes_mm: tuple[float, float], segments_per_crossing: int | None = None,
+                relaxation: float = 0.0) -> float:
     """Smallest vertical gap (mm) between crossing yarns anywhere in the weave (see
     :func:`crossing_gaps`); negative when yarns intersect."""
-    return float(crossing_gaps(interlacing, spacing_mm, semi_axes_mm, amplitudes_mm, segments_per_crossing).min())
+    return float(crossing_gaps(interlacing, spacing_mm, semi_axes_mm, amplitudes_mm, segments_per_crossing,
+                               relaxation=relaxation).min())
 
 
 def _interpolate_rows(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
@@ -144,35 +166,38 @@ def _interpolate_rows(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarr
 
 
 def _crossing_band_edges(knots: np.ndarray, heights: np.ndarray, crossing: np.ndarray, s: np.ndarray,
-                         semi_axes_mm: tuple[float, float], q: np.ndarray):
+                         semi_axes_mm: tuple[float, float], q: np.ndarray, relaxation: float):
     """Lower and upper band edges (N, Q, Q) of N yarns near one crossing each, as
     :func:`_band_edges` but along irregular centrelines: ``heights`` (N, K) at the shared
     ``knots`` (K,), the crossing at axial ``crossing`` (N,), the edges taken at the axial
     samples ``s`` (N, n) (dense: the exact tube; the rings: the mesh) and read at axial and
     lateral offsets ``q`` from the crossing (indices [n, axial, lateral])."""
-    width, thickness = semi_axes_mm
+    width = largest_semi_axes(semi_axes_mm, relaxation)[0]
     z, dz = knot_height(knots, heights, s)
     length = np.sqrt(1.0 + dz**2)
-    half = thickness * np.sqrt(np.clip(1.0 - (q / width) ** 2, 0.0, None))     # (Q,) lateral
+    thickness = semi_axes_along(knots, s, semi_axes_mm, relaxation)[1][:, None, :]     # (N, 1, n)
+    half = thickness * np.sqrt(np.clip(1.0 - (q / width) ** 2, 0.0, None))[None, :, None]   # (N, Q lateral, n)
     along = (s - crossing[:, None])[:, None, :]                                   # (N, 1, n)
     tilt, rise = (dz / length)[:, None, :], (1.0 / length)[:, None, :]
     axial = np.broadcast_to(q, (len(s) * len(q), len(q)))
     edges = []
     for sign in (-1.0, 1.0):    # lower, upper
-        xp = (along - sign * half[None, :, None] * tilt).reshape(-1, s.shape[1])
-        fp = (z[:, None, :] + sign * half[None, :, None] * rise).reshape(-1, s.shape[1])
+        xp = (along - sign * half * tilt).reshape(-1, s.shape[1])
+        fp = (z[:, None, :] + sign * half * rise).reshape(-1, s.shape[1])
         edges.append(_interpolate_rows(axial, xp, fp).reshape(len(s), len(q), len(q)).transpose(0, 2, 1))
     return edges
 
 
 def sample_gaps(layout, semi_axes_mm: tuple[float, float], spacing_mm: float,
-                segments_per_crossing: int | None = None, resolution: int = 49, batch: int = 16) -> np.ndarray:
+                segments_per_crossing: int | None = None, resolution: int = 49, batch: int = 16,
+                relaxation: float = 0.0) -> np.ndarray:
     """Smallest vertical gap (mm) between the warp and the weft at every crossing of a sample whose
     yarns lie irregularly (a :class:`.layout.SampleLayout`): every crossing is its own, so each is
     evaluated, ``batch`` at a time.  As :func:`crossing_gaps` otherwise: the exact tubes when
     ``segments_per_crossing`` is None, else their meshes, whose rings :func:`.centerline.ring_positions`
-    places.  Returns (weft_count, warp_count), negative where the tubes intersect."""
-    width, thickness = semi_axes_mm
+    places; the section relaxed by ``relaxation`` between the layout's own crossings.  Returns
+    (weft_count, warp_count), negative where the tubes intersect."""
+    width, thickness = largest_semi_axes(semi_axes_mm, relaxation)
     reach = width + thickness
     q = np.linspace(-width, width, resolution)
     picks, ends = layout.weft_heights.shape
@@ -194,7 +219,7 @@ def sample_gaps(layout, semi_axes_mm: tuple[float, float], spacing_mm: float,
     for start in range(0, len(pick), batch):
         part = slice(start, start + batch)
         (warp_low, warp_high), (weft_low, weft_high) = (
-            _crossing_band_edges(knots, heights[part], at[part], s[part], semi_axes_mm, q)
+            _crossing_band_edges(knots, heights[part], at[part], s[part], semi_axes_mm, q, relaxation)
             for knots, heights, at, s in families)
         swapped_low, swapped_high = weft_low.transpose(0, 2, 1), weft_high.transpose(0, 2, 1)
         gaps[part] = np.maximum(warp_low - swapped_high, swapped_low - warp_high).min(axis=(1, 2))

@@ -10,8 +10,9 @@ moves these places and the crossings' heights by its seeded jitters (:mod:`.layo
 Each centreline is planar (see :mod:`.centerline`), so the sweep frame is exact and fixed: the
 tangent T, a binormal B in the cloth plane that never changes (+y for warps, +x for wefts) and
 the normal N = T × B, which tilts with the crimp but never rotates about the yarn axis.  A ring
-vertex at angle φ sits at  centre + a·cos φ·B + b·sin φ·N  (semi-axes a, b), so corresponding
-vertices of neighbouring rings stay on the same side of the yarn: no twist, no seam.  A plied
+vertex at angle φ sits at  centre + a·cos φ·B + b·sin φ·N  (semi-axes a, b: the ring's own where
+the section relaxes between crossings, :mod:`.section`), so corresponding vertices of neighbouring
+rings stay on the same side of the yarn: no twist, no seam.  A plied
 yarn is one such tube per ply, its rings swept about the ply's helical centre in the same frame
 (:mod:`.plies`); a single-ply yarn is the tube above.
 """
@@ -27,6 +28,7 @@ from .irregularity import ply_radius_factors
 from .layout import SampleLayout, sample_layout
 from .params import WeaveParameters
 from .plies import ply_rings
+from .section import semi_axes_along
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,7 +185,8 @@ def _family(params: WeaveParameters, layout: SampleLayout, warp: bool):
                                  params.ply_radius_jitter)[0 if warp else 1]
     # a ply's radius blends between its crossings as the centreline's height does
     radius = knot_height(knots, factors, s)[0]
-    rings, centres = ply_rings(center, binormal, normal, arc, params.cross_section_mm, params.ply_count,
+    section = semi_axes_along(knots, s, params.cross_section_mm, params.section_relaxation)
+    rings, centres = ply_rings(center, binormal, normal, arc, section, params.ply_count,
                                params.twist_angle_deg, radius, params.segments_around)
     if params.ply_count == 1:
         axis = np.broadcast_to(tangent[:, None], centres.shape)

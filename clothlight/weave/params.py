@@ -5,15 +5,17 @@ Default: a plain weave like the paper's measured red cotton (§3.1, Figure 1) wi
 (Peirce's diameter for an Ne 20 cotton yarn, see precompute/presets/red_cotton.toml).  The paper
 gives no thread spacing; 0.5 mm (20 threads/cm, a medium-weight cotton sheeting) is assumed.
 
-Yarns keep their cross-section everywhere (the paper's rigid cylinders), so they need room to
-change sides: round yarns of 0.1 mm cannot pass over and under each other closer than about
+Yarns keep their cross-section everywhere (the paper's rigid cylinders) unless it relaxes
+between crossings (``section_relaxation``, :mod:`.section`), so they need room to change sides: round yarns of 0.1 mm cannot pass over and under each other closer than about
 0.40 mm, and a flat elliptical yarn (``semi_axes_mm``, §7) must bend down within the width of
 the yarn it crosses, which limits how wide it can be (e.g. 0.17 mm × 0.047 mm at 0.5 mm).  Every
 set of parameters is checked against the exact tubes (:mod:`.clearance`), and a refusal names
 the largest cross-section of the same shape that fits.  A yarn of several plies twisted at the
 medium's twist angle (:mod:`.plies`) fills the same tube, so the same checks hold for its plies;
 an irregular sample (:mod:`.irregularity`) is checked crossing by crossing, and a refusal names
-the largest jitters that fit for its seed.
+the largest jitters that fit for its seed.  A section that relaxes between crossings is checked
+the same way, with its largest width and thickness where those bound it, and a relaxation that
+makes yarns meet where the rigid section clears is refused naming the largest that fits.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from .centerline import crimp_percent, max_curvature
 from .clearance import crossing_gaps, sample_curvature, sample_gaps
 from .errors import WeaveParameterError
 from .layout import sample_layout
+from .section import largest_semi_axes, thickness_slope
 from .patterns import plain, validate_interlacing, weave_pattern
 
 #: Radius of a round yarn when neither ``yarn_radius_mm`` nor ``semi_axes_mm`` is given, mm.
@@ -59,6 +62,10 @@ IRREGULARITY_BOUNDS = {
     "height_jitter": _Bound("height_jitter", 0.0, 1.0, high_open=True),
     "ply_radius_jitter": _Bound("ply_radius_jitter", 0.0, 1.0, high_open=True),
     "seed": _Bound("seed", 0, 2**32 - 1, integer=True),
+}
+#: How far the section relaxes between crossings (a fraction, :mod:`.section`).
+SECTION_BOUNDS = {
+    "section_relaxation": _Bound("section_relaxation", 0.0, 1.0),
 }
 #: Vertices a sample may have: 2·10⁷ is a mesh of ~2 GB in Blender (and what Cycles builds from it).
 MAX_VERTICES = 20_000_000
@@ -89,7 +96,8 @@ class WeaveParameters:
     yarn_radius_mm
         Radius of a round yarn, mm.  Give this or ``semi_axes_mm``; neither: 0.1 mm.
     semi_axes_mm
-        Elliptical cross-section (paper §7): semi-axis in the cloth plane, semi-axis across it, mm.
+        Elliptical cross-section (paper §7): semi-axis in the cloth plane, semi-axis across it, mm;
+        where the section relaxes, the one at every crossing.
     crimp_amplitude_mm
         Height of a yarn's centreline above (below) the cloth's mid-plane where it passes over
         (under) a crossing, mm: one value for both systems or (warp, weft).  None: derived, the
@@ -108,6 +116,12 @@ class WeaveParameters:
         Seeded irregularity (:mod:`.irregularity`): fractions of the spacing, of the yarn's
         half-thickness and of the ply radius by which yarn positions, crossing heights and ply
         radii vary.  All 0: the regular weave, every repeat alike.
+    section_relaxation
+        How far the section relaxes towards the round section of its area midway between
+        crossings, a fraction in [0, 1] (:mod:`.section`, after Kemp 1958): 0 keeps the
+        cross-section everywhere (the rigid tubes); r flattens it to the given one at every
+        crossing and to a/b = (a/b)^(1 − r) midway, the area and the plies' twist rate unchanged;
+        1 makes it round midway.
     """
 
     interlacing: np.ndarray = field(default_factory=plain)
@@ -125,13 +139,14 @@ class WeaveParameters:
     height_jitter: float = 0.0
     ply_radius_jitter: float = 0.0
     seed: int = 0
+    section_relaxation: float = 0.0
 
     def __post_init__(self):
         matrix = weave_pattern(self.interlacing) if isinstance(self.interlacing, str) else self.interlacing
         matrix = validate_interlacing(matrix)
         matrix.flags.writeable = False
         object.__setattr__(self, "interlacing", matrix)
-        for name, bound in (COUNT_BOUNDS | PLY_BOUNDS | IRREGULARITY_BOUNDS).items():
+        for name, bound in (COUNT_BOUNDS | PLY_BOUNDS | IRREGULARITY_BOUNDS | SECTION_BOUNDS).items():
             value = getattr(self, name)
             try:
                 bound.check(value)
@@ -194,15 +209,18 @@ class WeaveParameters:
         Plies lie inside their yarn's tube (:mod:`.plies`), so theirs is at least as large.  An
         irregular sample's: over every crossing of the sample."""
         if self.is_irregular:
-            return float(sample_gaps(sample_layout(self), self.cross_section_mm, self.spacing_mm).min())
+            return float(sample_gaps(sample_layout(self), self.cross_section_mm, self.spacing_mm,
+                                     relaxation=self.section_relaxation).min())
         return float(crossing_gaps(self.interlacing, self.spacing_mm, self.cross_section_mm,
-                                   self.crimp_amplitudes_mm).min())
+                                   self.crimp_amplitudes_mm, relaxation=self.section_relaxation).min())
 
     @property
     def cover_factor(self) -> float:
         """Fractional cover of the cloth seen from above, 0–1: each system covers the share 2a/p
         of the cloth (a the yarn's half-width, p the spacing), and the two together
-        1 − (1 − 2a/p)² (Peirce 1937; :mod:`.closeup` compares it with real sheeting)."""
+        1 − (1 − 2a/p)² (Peirce 1937; :mod:`.closeup` compares it with real sheeting).  a is the
+        width at the crossings: a section that relaxes between them (``section_relaxation``) is
+        narrower there, and covers that much less."""
         share = 2.0 * self.cross_section_mm[0] / self.spacing_mm
         return 1.0 - (1.0 - share) ** 2
 
@@ -264,6 +282,12 @@ class WeaveParameters:
             raise WeaveParameterError(self._cross_section_name, self._cross_section_value,
                                       f"a width 2·{width:g} mm below spacing_mm = {self.spacing_mm:g} mm: "
                                       "neighbouring parallel yarns would intersect")
+        widest = largest_semi_axes(self.cross_section_mm, self.section_relaxation)[0]
+        if 2.0 * widest >= self.spacing_mm:
+            raise WeaveParameterError("section_relaxation", self.section_relaxation,
+                                      f"a relaxed width 2·{widest:.4g} mm below spacing_mm = {self.spacing_mm:g} mm "
+                                      "(a yarn taller than wide widens between crossings): neighbouring parallel "
+                                      "yarns would intersect")
 
     def _check_crimp(self):
         value = self.crimp_amplitude_mm
@@ -282,30 +306,47 @@ class WeaveParameters:
                                       f"warp + weft amplitudes ≥ {least:.4g} mm (the two yarns' thickness "
                                       f"and {CROSSING_CLEARANCE:.0%}): crossing yarns would intersect")
 
-    def _problem(self, semi_axes, amplitudes, segments) -> tuple[str, str] | None:
-        """Why yarns of this cross-section and crimp would intersect — ("fold" | "tubes" | "mesh",
-        explanation) — or None if they clear, as exact tubes and as meshes of ``segments``."""
+    def _fold(self, semi_axes, curvature: float, shortest_mm: float, relaxation: float) -> str | None:
+        """Why a tube of this section, its centreline bent at most to ``curvature`` (1/mm) between
+        crossings at least ``shortest_mm`` apart, would fold onto itself (:mod:`.clearance`:
+        largest b·κ plus the largest |db/ds| reach 1), or None."""
+        thickness = largest_semi_axes(semi_axes, relaxation)[1]
+        slope = thickness_slope(semi_axes, relaxation, shortest_mm)
+        if thickness * curvature + slope < 1.0:
+            return None
+        relaxing = (f", growing by up to {slope:.3g} mm/mm between crossings (section_relaxation = "
+                    f"{relaxation:g})" if relaxation > 0.0 else "")
+        return (f"to a radius of {1 / curvature:.4g} mm, below the half-thickness {thickness:.4g} mm{relaxing}: "
+                "the tube would fold onto itself")
+
+    def _problem(self, semi_axes, amplitudes, segments, relaxation) -> tuple[str, str] | None:
+        """Why yarns of this cross-section, crimp and relaxation would intersect — ("fold" | "tubes" |
+        "mesh", explanation) — or None if they clear, as exact tubes and as meshes of ``segments``."""
         curvature = max_curvature(max(amplitudes), self.spacing_mm)
-        if semi_axes[1] * curvature >= 1.0:
+        fold = self._fold(semi_axes, curvature, self.spacing_mm, relaxation)
+        if fold is not None:
             return "fold", (f"a crimp of {max(amplitudes):.4g} mm over spacing_mm = {self.spacing_mm:g} mm bends "
-                            f"the centreline to a radius of {1 / curvature:.4g} mm, below the half-thickness "
-                            f"{semi_axes[1]:.4g} mm: the tube would fold onto itself")
+                            f"the centreline {fold}")
         for kind, tessellation, what in (("tubes", None, "the yarns"), ("mesh", segments, "their triangle meshes")):
-            gap = float(crossing_gaps(self.interlacing, self.spacing_mm, semi_axes, amplitudes, tessellation).min())
+            gap = float(crossing_gaps(self.interlacing, self.spacing_mm, semi_axes, amplitudes, tessellation,
+                                      relaxation=relaxation).min())
             if gap <= 0.0:
                 return kind, (f"{what} would cut into the yarns they cross (vertical gap {gap:.3g} mm "
                               f"at spacing_mm = {self.spacing_mm:g} mm)")
         return None
 
     def _check_clearance(self):
-        axes, amplitudes = self.cross_section_mm, self.crimp_amplitudes_mm
-        problem = self._problem(axes, amplitudes, self.segments_per_crossing)
+        axes, amplitudes, relaxation = self.cross_section_mm, self.crimp_amplitudes_mm, self.section_relaxation
+        problem = self._problem(axes, amplitudes, self.segments_per_crossing, relaxation)
         if problem is None:
             return
         kind, explanation = problem
+        if relaxation > 0.0 and self._problem(axes, amplitudes, self.segments_per_crossing, 0.0) is None:
+            self._refuse_relaxation(
+                lambda r: self._problem(axes, amplitudes, self.segments_per_crossing, r) is None, explanation)
         derived = axes[1] * (1.0 + CROSSING_CLEARANCE)
         if self.crimp_amplitude_mm is not None and \
-                self._problem(axes, (derived, derived), self.segments_per_crossing) is None:
+                self._problem(axes, (derived, derived), self.segments_per_crossing, relaxation) is None:
             raise WeaveParameterError("crimp_amplitude_mm", self.crimp_amplitude_mm,
                                       f"a flatter crimp, e.g. the derived {derived:.4g} mm: {explanation}")
         if kind == "mesh":
@@ -320,38 +361,53 @@ class WeaveParameters:
         raise WeaveParameterError(self._cross_section_name, self._cross_section_value,
                                   f"at most {largest} with the derived crimp: {explanation}")
 
-    def _irregular_problem(self, jitter_scale: float) -> str | None:
-        """Why this sample's yarns, moved by ``jitter_scale`` × its spacing and height jitters,
-        would intersect, or None if they clear, as exact tubes and as meshes."""
+    def _refuse_relaxation(self, clears, explanation: str):
+        """Refuse ``section_relaxation``, naming the largest that ``clears`` (a test of a relaxation;
+        0 clears), found by bisection and printed rounded down, so that it does clear."""
+        low, high = 0.0, self.section_relaxation
+        for _ in range(12):
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if clears(middle) else (low, middle)
+        largest = math.floor(low * 1000.0) / 1000.0
+        raise WeaveParameterError("section_relaxation", self.section_relaxation,
+                                  f"at most {largest:g} for this weave: {explanation}")
+
+    def _irregular_problem(self, jitter_scale: float, relaxation: float) -> str | None:
+        """Why this sample's yarns, moved by ``jitter_scale`` × its spacing and height jitters and
+        their section relaxed by ``relaxation``, would intersect, or None if they clear, as exact
+        tubes and as meshes."""
         layout = sample_layout(self, jitter_scale)
-        width, thickness = self.cross_section_mm
+        width = largest_semi_axes(self.cross_section_mm, relaxation)[0]
         closest = min(np.abs(np.diff(positions)).min(initial=np.inf) for positions in (layout.warp_y, layout.weft_x))
         if closest <= 2.0 * width:
             return (f"neighbouring parallel yarns {closest:.4g} mm apart, closer than their width "
                     f"2·{width:g} mm")
-        curvature = sample_curvature(layout)
-        if thickness * curvature >= 1.0:
-            return (f"a centreline bent to a radius of {1 / curvature:.4g} mm, below the half-thickness "
-                    f"{thickness:.4g} mm: the tube would fold onto itself")
+        fold = self._fold(self.cross_section_mm, sample_curvature(layout), closest, relaxation)
+        if fold is not None:
+            return f"a centreline bent {fold}"
         for tessellation, what in ((None, "the yarns"), (self.segments_per_crossing, "their triangle meshes")):
-            gap = float(sample_gaps(layout, self.cross_section_mm, self.spacing_mm, tessellation).min())
+            gap = float(sample_gaps(layout, self.cross_section_mm, self.spacing_mm, tessellation,
+                                    relaxation=relaxation).min())
             if gap <= 0.0:
                 return f"{what} would cut into the yarns they cross (vertical gap {gap:.3g} mm)"
         return None
 
     def _check_irregular_clearance(self):
-        """Every crossing of an irregular sample clears; else a refusal naming the spacing and
-        height jitters with the largest of the same proportion that clears for this weave and
-        seed (found by bisection)."""
+        """Every crossing of an irregular sample clears; else a refusal naming the section's
+        relaxation, where the rigid section clears, or the spacing and height jitters with the
+        largest of the same proportion that clears for this weave and seed (found by bisection)."""
         if not self.is_irregular:
             return
-        problem = self._irregular_problem(1.0)
+        relaxation = self.section_relaxation
+        problem = self._irregular_problem(1.0, relaxation)
         if problem is None:
             return
+        if relaxation > 0.0 and self._irregular_problem(1.0, 0.0) is None:
+            self._refuse_relaxation(lambda r: self._irregular_problem(1.0, r) is None, problem)
         low, high = 0.0, 1.0
         for _ in range(10):
             scale = 0.5 * (low + high)
-            low, high = (scale, high) if self._irregular_problem(scale) is None else (low, scale)
+            low, high = (scale, high) if self._irregular_problem(scale, relaxation) is None else (low, scale)
         raise WeaveParameterError(
             "spacing_jitter, height_jitter", (self.spacing_jitter, self.height_jitter),
             f"at most ({self.spacing_jitter * low:.3g}, {self.height_jitter * low:.3g}) for this weave "
@@ -360,12 +416,13 @@ class WeaveParameters:
     def _finest_needed(self, semi_axes, amplitudes, most: int = 128) -> int | None:
         """Fewest segments per spacing (up to ``most``) whose mesh clears, by bisection (chords
         shorten, and stand less proud, as the count grows)."""
-        if self._problem(semi_axes, amplitudes, most) is not None:
+        if self._problem(semi_axes, amplitudes, most, self.section_relaxation) is not None:
             return None
         low, high = self.segments_per_crossing, most
         while high - low > 1:
             middle = (low + high) // 2
-            low, high = (low, middle) if self._problem(semi_axes, amplitudes, middle) is None else (middle, high)
+            low, high = ((low, middle) if self._problem(semi_axes, amplitudes, middle, self.section_relaxation) is None
+                         else (middle, high))
         return high
 
     def _largest_clear_scale(self) -> float:
@@ -375,6 +432,7 @@ class WeaveParameters:
         for _ in range(24):
             scale = 0.5 * (low + high)
             h = thickness * scale * (1.0 + CROSSING_CLEARANCE)
-            fits = self._problem((width * scale, thickness * scale), (h, h), self.segments_per_crossing) is None
+            fits = self._problem((width * scale, thickness * scale), (h, h), self.segments_per_crossing,
+                                 self.section_relaxation) is None
             low, high = (scale, high) if fits else (low, scale)
         return low

@@ -16,14 +16,17 @@ sweep frame of :mod:`.geometry` (binormal B, normal N); the unit disc maps onto 
 (x, y) ↦ a·x·B + b·y·N, so in a flattened yarn the plies flatten with it, and every ply lies inside
 the envelope: the envelope's clearance checks hold for the plies.  Across the yarn, that is: a ply's
 section by the plane square to the yarn's axis is this ellipse (its own section, square to its
-helical axis, is narrower by the cosine of its helix angle).
+helical axis, is narrower by the cosine of its helix angle).  Where the envelope flattens at the
+crossings and relaxes between them (:mod:`.section`), the map takes each ring's own (a, b), so the
+plies flatten and relax with it and stay inside it at every ring.
 
 Twist: ply ``k`` sits at the angle φₖ(u) = 2πk/P + ω·u about the axis, u the arc length along the
 yarn's centreline.  The twist angle θ is the helix angle at the yarn's surface (the preset's
 ``yarn.twist_angle_deg``, the textile definition tan θ = π·d·T for a yarn of diameter d and T
 turns per unit length): a point at the envelope's radius R turning at ω travels the helix
 tan θ = R·ω, so ω = tan θ / R.  A ply's outermost line (its crest) runs at that radius, so its
-grooves follow the twist angle; R is the envelope's mean radius √(a·b).  φ grows from B towards
+grooves follow the twist angle; R is the envelope's mean radius √(a·b), the same all along a yarn
+whose section relaxes between crossings (that keeps its area).  φ grows from B towards
 N, and (B, N, T) is right-handed: the plies make a right-handed helix, a Z twist.
 """
 
@@ -45,14 +48,14 @@ def ply_disc(ply_count: int) -> tuple[float, float, float]:
     return 1.0 - radius, radius, (math.sqrt(0.5) if ply_count == 2 else radius)
 
 
-def twist_rate(twist_angle_deg: float, semi_axes_mm: tuple[float, float]) -> float:
+def twist_rate(twist_angle_deg: float, semi_axes_mm):
     """Turns of the plies about the yarn axis per length of yarn, rad/mm: ω = tan θ / √(a·b)
-    (module docstring)."""
-    return math.tan(math.radians(twist_angle_deg)) / math.sqrt(semi_axes_mm[0] * semi_axes_mm[1])
+    (module docstring); semi-axes as numbers, mm, or arrays of them (an array of rates)."""
+    return math.tan(math.radians(twist_angle_deg)) / np.sqrt(semi_axes_mm[0] * semi_axes_mm[1])
 
 
 def ply_rings(center: np.ndarray, binormal: np.ndarray, normal: np.ndarray, arc_mm: np.ndarray,
-              semi_axes_mm: tuple[float, float], ply_count: int, twist_angle_deg: float,
+              semi_axes_mm, ply_count: int, twist_angle_deg: float,
               radius_factors: np.ndarray, segments_around: int):
     """Ring vertices and centre paths of the plies of yarns swept along their centrelines.
 
@@ -65,7 +68,9 @@ def ply_rings(center: np.ndarray, binormal: np.ndarray, normal: np.ndarray, arc_
     arc_mm
         (Y, n): arc length along each centreline at its rings, mm.
     semi_axes_mm
-        The envelope's semi-axes (in the cloth plane, across it), mm.
+        The envelope's semi-axes (in the cloth plane, across it) at every ring, mm: two arrays
+        (Y, n), or two numbers for a section that never changes.  Their product, the section's
+        area, is the same at every ring (:mod:`.section`), so the plies turn at one rate.
     ply_count, twist_angle_deg
         Plies per yarn and the twist angle at the yarn's surface, degrees.
     radius_factors
@@ -80,10 +85,10 @@ def ply_rings(center: np.ndarray, binormal: np.ndarray, normal: np.ndarray, arc_
     sits at the angle 2πm/segments_around from the ply's outermost point (its crest) on, turning
     the way the plies do; a single ply's vertex 0 stays on the B side, as on an untwisted tube.
     """
-    width, thickness = semi_axes_mm
+    width, thickness = (np.broadcast_to(axis, arc_mm.shape)[:, None, :, None] for axis in semi_axes_mm)
     centre_distance, towards_axis, across_axis = ply_disc(ply_count)
     phase = (2.0 * np.pi * np.arange(ply_count) / ply_count)[None, :, None] \
-        + twist_rate(twist_angle_deg, semi_axes_mm) * arc_mm[:, None, :]             # (Y, P, n)
+        + twist_rate(twist_angle_deg, (width, thickness))[..., 0] * arc_mm[:, None, :]   # (Y, P, n)
     if ply_count == 1:
         phase = np.zeros_like(phase)     # one ply fills the envelope: nothing turns
     psi = 2.0 * np.pi * np.arange(segments_around) / segments_around
@@ -94,6 +99,6 @@ def ply_rings(center: np.ndarray, binormal: np.ndarray, normal: np.ndarray, arc_
     up = (centre_distance + radial) * sin + tangential * cos
     rings = (center[:, None, :, None, :] + (width * across)[..., None] * binormal
              + (thickness * up)[..., None] * normal[:, None, :, None, :])
-    centres = (center[:, None] + (width * centre_distance * np.cos(phase))[..., None] * binormal
-               + (thickness * centre_distance * np.sin(phase))[..., None] * normal[:, None])
+    centres = (center[:, None] + (width[..., 0] * centre_distance * np.cos(phase))[..., None] * binormal
+               + (thickness[..., 0] * centre_distance * np.sin(phase))[..., None] * normal[:, None])
     return rings, centres

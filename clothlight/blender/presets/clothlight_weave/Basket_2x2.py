@@ -7,6 +7,7 @@ weave.weft_count = 8
 weave.spacing_mm = 0.5
 weave.cross_section = 'ROUND'
 weave.yarn_radius_mm = 0.1
+weave.section_relaxation = 0.0
 weave.auto_crimp = True
 weave.segments_per_crossing = 8
 weave.segments_around = 12

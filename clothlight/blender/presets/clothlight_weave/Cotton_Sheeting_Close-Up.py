@@ -11,6 +11,7 @@ weave.spacing_mm = 0.4
 weave.cross_section = 'ELLIPTICAL'
 weave.half_width_mm = 0.12
 weave.half_thickness_mm = 0.075
+weave.section_relaxation = 0.0
 weave.auto_crimp = False
 weave.crimp_warp_mm = 0.08475
 weave.crimp_weft_mm = 0.08475

@@ -2,10 +2,11 @@
 same grazing light (issue 43, twist; docs/twist.md).
 
 The sample is the default close-up (``sheeting_weave``, the ``red_cotton`` preset's two plies and
-irregularity), 8 × 8 yarns, seen from straight above through an orthographic camera (2.4 mm across),
-lit by a sun 15° above the cloth from −y, across the warps (which run left to right): the lighting
-``"light 15° from −y, view from above"`` of :data:`clothlight.weave.twist_highlight.LIGHTINGS`.  Its
-material shows the helix of fibres of Irawan & Marschner's model (clothlight.weave.twist_highlight):
+irregularity; its section that of the crossings all along, ``TWIST_SAMPLE``), 8 × 8 yarns, seen from
+straight above through an orthographic camera (2.4 mm across), lit by a sun 15° above the cloth
+from −y, across the warps (which run left to right): the lighting ``"light 15° from −y, view from
+above"`` of :data:`clothlight.weave.twist_highlight.LIGHTINGS`.  Its material shows the helix of
+fibres of Irawan & Marschner's model (clothlight.weave.twist_highlight):
 a dark red Principled BSDF whose specular lobe is anisotropic along the mesh's helical lines (the
 tangent of its ``YarnUV`` map's u, the arc length along the yarn; roughness 0.3, anisotropy 0.9),
 so that its glints streak along the lines.  Cycles, CPU, two threads, no denoising, fixed seed.
@@ -33,6 +34,7 @@ from clothlight.weave import build_woven_mesh
 from clothlight.weave.closeup import sheeting_weave
 from clothlight.weave.twist_highlight import (
     LIGHTINGS,
+    TWIST_SAMPLE,
     measure_highlights,
     predicted_highlights,
     streak_tilts_in_image,
@@ -95,7 +97,7 @@ def twist_scene(pixels: int, samples: int):
 def render_sample(scene, material, twist_angle_deg: float, path: pathlib.Path) -> np.ndarray:
     """Render the preset's close-up sample (8 × 8 yarns) at a twist angle (degrees) to the PNG
     ``path``; returns its pixels (H, W, 4), bottom row first, display values in [0, 1]."""
-    params = sheeting_weave(PRESET, twist_angle_deg=twist_angle_deg, warp_count=8, weft_count=8)
+    params = sheeting_weave(PRESET, twist_angle_deg=twist_angle_deg, warp_count=8, weft_count=8, **TWIST_SAMPLE)
     sample = build_sample_object(params, name=f"sample at {twist_angle_deg:g} deg")
     sample.data.materials.append(material)
     for obj in scene.objects:
@@ -125,7 +127,7 @@ def main():
         images.append(render_sample(scene, material, angle, out / f"twist_{angle:g}deg.png"))
         # the prediction against the measurement on the same sample's mesh, finely swept
         fine = sheeting_weave(PRESET, twist_angle_deg=angle, warp_count=8, weft_count=8, segments_per_crossing=32,
-                              segments_around=24)
+                              segments_around=24, **TWIST_SAMPLE)
         found = measure_highlights(build_woven_mesh(fine), fine, LIGHT, VIEW)
         phase, predicted = predicted_highlights(found, LIGHT, VIEW, angle, fine.cross_section_mm)
         has = ~np.isnan(phase)

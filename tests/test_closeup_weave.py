@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from clothlight.weave import WeaveParameterError, WeaveParameters, build_woven_mesh
+from clothlight.weave.closeup import sheeting_weave
 from clothlight.weave.plies import ply_disc
 from precompute.optics.medium import load_preset
 from tests.test_weave import depth_inside_tube, meshes_cross
@@ -342,3 +343,15 @@ def test_a_relaxation_out_of_range_is_refused_by_name(value):
         WeaveParameters(section_relaxation=value)
     assert refusal.value.name == "section_relaxation" and "[0, 1]" in str(refusal.value)
 
+
+
+@pytest.mark.parametrize("interlacing", ["plain", "twill_2_2", "twill_3_1"])
+def test_the_close_up_default_relaxes_its_section_between_crossings_and_clears(interlacing):
+    params = sheeting_weave(warp_count=5, weft_count=5, interlacing=interlacing)
+    assert 0 < params.section_relaxation <= 1
+    width, _, _ = ring_semi_axes(build_woven_mesh(dataclasses.replace(params, ply_count=1, ply_radius_jitter=0.0)),
+                                 params, 0)
+    assert width.max() - width.min() > 0.005                     # narrower between crossings than at them, mm
+    mesh = build_woven_mesh(params)
+    assert not meshes_cross(mesh, params)
+    assert params.minimum_gap_mm > 0

@@ -18,6 +18,7 @@ from clothlight.weave.closeup import sheeting_weave
 from clothlight.weave.plies import twist_rate
 from clothlight.weave.twist_highlight import (
     LIGHTINGS,
+    TWIST_SAMPLE,
     fibre_tangent,
     highlight_arc_mm,
     highlight_phase,
@@ -39,9 +40,10 @@ PRESET_TWIST = load_preset("red_cotton").yarn.twist_angle_deg      # 24°, two p
 
 def sample(twist_angle_deg, preset="red_cotton"):
     """The close-up sample of a preset (its plies, its irregularity), 6 × 6 yarns at a given twist,
-    swept finely enough along the yarn (12.5 µm) for the lines' direction to be measured."""
+    swept finely enough along the yarn (12.5 µm) for the lines' direction to be measured; its section
+    that of the crossings all along, as the prediction's helix has (:data:`TWIST_SAMPLE`)."""
     params = sheeting_weave(preset, twist_angle_deg=twist_angle_deg, warp_count=6, weft_count=6,
-                            segments_per_crossing=32, segments_around=24)
+                            segments_per_crossing=32, segments_around=24, **TWIST_SAMPLE)
     return params, build_woven_mesh(params)
 
 

@@ -22,9 +22,10 @@ MEDIUM_SUBDIR = "clothlight_medium"
 
 WEAVE_VALUES = [f"weave.{name}" for name in (
     "pattern", "custom_draft", "wif_path", "warp_count", "weft_count", "spacing_mm", "cross_section",
-    "yarn_radius_mm", "half_width_mm", "half_thickness_mm", "auto_crimp", "crimp_warp_mm", "crimp_weft_mm",
-    "segments_per_crossing", "segments_around", "real_world_size", "use_plies", "spacing_jitter", "height_jitter",
-    "ply_radius_jitter", "irregularity_seed", "flyaway_density_per_mm", "flyaway_length_mm", "flyaway_curl_per_mm")]
+    "yarn_radius_mm", "half_width_mm", "half_thickness_mm", "section_relaxation", "auto_crimp", "crimp_warp_mm",
+    "crimp_weft_mm", "segments_per_crossing", "segments_around", "real_world_size", "use_plies", "spacing_jitter",
+    "height_jitter", "ply_radius_jitter", "irregularity_seed", "flyaway_density_per_mm", "flyaway_length_mm",
+    "flyaway_curl_per_mm")]
 # "base" first (after the Custom File it may name): setting it loads the TOML preset, the saved values
 # then override it (a fit's values the panel does not show among them).
 MEDIUM_VALUES = [f"medium.{name}" for name in (

@@ -56,8 +56,8 @@ def woven_mesh_data(params: WeaveParameters, name: str = DEFAULT_NAME) -> bpy.ty
 
 
 def weave_record(params: WeaveParameters) -> dict:
-    """What a sample was built from, as JSON-ready values.  The plies, twist and irregularity are
-    recorded only where they change the geometry, so that a plain regular sample records what it
+    """What a sample was built from, as JSON-ready values.  The section's relaxation, the plies, twist
+    and irregularity are recorded only where they change the geometry, so that a plain regular sample records what it
     always did (the garment's measurement cache is keyed by this record)."""
     record = {
         "units": "mm",
@@ -74,6 +74,8 @@ def weave_record(params: WeaveParameters) -> dict:
         record.update(ply_count=params.ply_count, twist_angle_deg=params.twist_angle_deg,
                       spacing_jitter=params.spacing_jitter, height_jitter=params.height_jitter,
                       ply_radius_jitter=params.ply_radius_jitter, seed=params.seed)
+    if params.section_relaxation > 0:
+        record.update(section_relaxation=params.section_relaxation)
     return record
 
 
@@ -82,7 +84,7 @@ def weave_from_record(record) -> WeaveParameters:
     the object's ID property)."""
     record = record.to_dict() if hasattr(record, "to_dict") else dict(record)
     closeup = {key: record[key] for key in ("ply_count", "twist_angle_deg", "spacing_jitter", "height_jitter",
-                                            "ply_radius_jitter", "seed") if key in record}
+                                            "ply_radius_jitter", "seed", "section_relaxation") if key in record}
     return WeaveParameters(
         interlacing=np.array(record["interlacing"], dtype=bool), warp_count=record["warp_count"],
         weft_count=record["weft_count"], spacing_mm=record["spacing_mm"],

@@ -1,8 +1,9 @@
 """Flyaway fibres: the short fibre ends that leave a spun yarn's surface (its hairiness).
 
 Each yarn of a sample sends out, on average, ``flyaway_density_per_mm`` fibres per mm of its
-length (a Poisson count), rooted at uniformly drawn places along the yarn and around its envelope
-(:mod:`.closeup` gives the defaults and their sources).  A fibre leaves the surface along the
+length (a Poisson count), rooted at uniformly drawn places along the yarn and around its envelope,
+the section there (:mod:`.section`: it relaxes between crossings) (:mod:`.closeup` gives the
+defaults and their sources).  A fibre leaves the surface along the
 surface's twist helix — at the twist angle θ to the yarn axis, the direction its fibres run in —
 either way along the yarn, lifted off the surface by an angle drawn in [10°, 40°]; its length is
 exponential with mean ``flyaway_length_mm`` (the short-hair regime of Barella & Manich 1993), and
@@ -26,6 +27,7 @@ import numpy as np
 
 from .centerline import knot_height
 from .layout import SampleLayout, sample_layout
+from .section import largest_semi_axes, semi_axes_along
 
 #: Steps along every fibre.
 SEGMENTS = 8
@@ -72,26 +74,32 @@ def _families(layout: SampleLayout):
 
 
 def inside_any_yarn(points: np.ndarray, layout: SampleLayout, semi_axes_mm: tuple[float, float],
-                    spacing_mm: float, margin_mm: float = 0.0, samples: int = 65) -> np.ndarray:
+                    spacing_mm: float, margin_mm: float = 0.0, samples: int = 65,
+                    relaxation: float = 0.0) -> np.ndarray:
     """(P,) booleans: whether each point (P, 3), mm, lies inside a yarn's envelope grown by
-    ``margin_mm`` (semi-axes a + margin, b + margin).  At lateral offset η from its vertical plane
-    a yarn is the set within w(η) of its centreline in that plane (w the ellipse's half-height at
-    η, :mod:`.clearance`): the distance is taken to ``samples`` points of the centreline within
-    reach, which overstates it by at most Δs²/(8·w) (Δs their spacing: below 10⁻⁵ mm here)."""
-    width, thickness = semi_axes_mm[0] + margin_mm, semi_axes_mm[1] + margin_mm
-    offsets = np.linspace(-thickness, thickness, samples)
+    ``margin_mm`` (semi-axes a(s) + margin, b(s) + margin; the section at the crossings
+    ``semi_axes_mm``, relaxing between them by ``relaxation``, :mod:`.section`).  At lateral offset
+    η from its vertical plane a yarn is the set within w(η) of its centreline in that plane (w the
+    section's half-height at η, :mod:`.clearance`): the point is inside when it lies within w of one
+    of ``samples`` points of the centreline within reach, w taken at that point's section, which
+    misses at most Δs²/(8·w) (Δs their spacing: below 10⁻⁵ mm here)."""
+    largest = largest_semi_axes(semi_axes_mm, relaxation)
+    reach_width, reach = largest[0] + margin_mm, largest[1] + margin_mm
+    offsets = np.linspace(-reach, reach, samples)
     inside = np.zeros(len(points), dtype=bool)
     for knots, heights, lateral, warp in _families(layout):
         along = points[:, 0] if warp else -points[:, 1]
         across = points[:, 1] if warp else points[:, 0]
         eta = across[None, :] - lateral[:, None]                              # (Y, P)
         within = (along >= knots[0] - spacing_mm / 2) & (along <= knots[-1] + spacing_mm / 2)
-        yarn, point = np.nonzero((np.abs(eta) < width) & within[None, :])
+        yarn, point = np.nonzero((np.abs(eta) < reach_width) & within[None, :])
         s = along[point, None] + offsets                                        # (pairs, samples)
         z, _ = knot_height(knots, heights[yarn], s)
-        distance = np.sqrt(((s - along[point, None]) ** 2 + (z - points[point, 2, None]) ** 2).min(axis=1))
-        half = thickness * np.sqrt(np.clip(1.0 - (eta[yarn, point] / width) ** 2, 0.0, None))
-        inside[point[distance < half]] = True
+        distance = np.sqrt((s - along[point, None]) ** 2 + (z - points[point, 2, None]) ** 2)
+        width, thickness = semi_axes_along(knots, s, semi_axes_mm, relaxation)
+        width, thickness = width + margin_mm, thickness + margin_mm
+        half = thickness * np.sqrt(np.clip(1.0 - (eta[yarn, point, None] / width) ** 2, 0.0, None))
+        inside[point[(distance < half).any(axis=1)]] = True
     return inside
 
 
@@ -107,11 +115,13 @@ def _perpendicular_turn(direction: np.ndarray, angles: np.ndarray, rng) -> np.nd
 
 def _roots(params, rng, count: int, knots, heights, lateral, warp: bool, yarn: np.ndarray):
     """Root points, outward normals and twist-helix directions (F, 3) of ``count`` fibres on the
-    yarns ``yarn`` (indices into this family)."""
+    yarns ``yarn`` (indices into this family), on the section where each is rooted (:mod:`.section`),
+    and that section's half-thickness (F, 1), mm."""
     spacing = params.spacing_mm
-    width, thickness = params.cross_section_mm
     s = rng.uniform(knots[0] - spacing / 2, knots[-1] + spacing / 2, count)
     psi = rng.uniform(0.0, 2.0 * np.pi, count)
+    width, thickness = (axis[:, None] for axis in
+                        semi_axes_along(knots, s, params.cross_section_mm, params.section_relaxation))
     z, dz = knot_height(knots, heights[yarn], s[:, None])
     z, dz = z[:, 0], dz[:, 0]
     length = np.sqrt(1.0 + dz**2)
@@ -132,7 +142,7 @@ def _roots(params, rng, count: int, knots, heights, lateral, warp: bool, yarn: n
     around /= np.linalg.norm(around, axis=1, keepdims=True)
     twist = math.radians(params.twist_angle_deg)
     helix = math.cos(twist) * tangent + math.sin(twist) * around
-    return surface, outward, helix
+    return surface, outward, helix, thickness
 
 
 def flyaway_fibres(params, settings, radius_mm: float, layout: SampleLayout | None = None) -> FlyawayFibres:
@@ -142,7 +152,6 @@ def flyaway_fibres(params, settings, radius_mm: float, layout: SampleLayout | No
     layout = sample_layout(params) if layout is None else layout
     count_rng = np.random.default_rng((settings.seed, _COUNT_STREAM))
     rng = np.random.default_rng((settings.seed, _FIBRE_STREAM))
-    thickness = params.cross_section_mm[1]
     radius = radius_mm
     all_points, all_counts, all_yarns = [], [], []
     offset = 0
@@ -153,7 +162,7 @@ def flyaway_fibres(params, settings, radius_mm: float, layout: SampleLayout | No
         yarn = np.repeat(np.arange(yarns), counts)
         total = len(yarn)
         if total:
-            surface, outward, helix = _roots(params, rng, total, knots, heights, lateral, warp, yarn)
+            surface, outward, helix, thickness = _roots(params, rng, total, knots, heights, lateral, warp, yarn)
             way = np.where(rng.uniform(size=total) < 0.5, -1.0, 1.0)[:, None]
             lift = np.radians(rng.uniform(*LIFT_RANGE_DEG, total))[:, None]
             direction = np.cos(lift) * way * helix + np.sin(lift) * outward
@@ -183,7 +192,8 @@ def _steps_clear(points: np.ndarray, layout: SampleLayout, params, radius: float
     fractions = np.arange(1, CHECKS_PER_SEGMENT + 1) / CHECKS_PER_SEGMENT
     start, end = points[:, 1:-1], points[:, 2:]                                    # steps 2 …
     checks = start[:, :, None] + fractions[:, None] * (end - start)[:, :, None]    # (F, S, C, 3)
-    inside = inside_any_yarn(checks.reshape(-1, 3), layout, params.cross_section_mm, params.spacing_mm, radius)
+    inside = inside_any_yarn(checks.reshape(-1, 3), layout, params.cross_section_mm, params.spacing_mm, radius,
+                             relaxation=params.section_relaxation)
     blocked = inside.reshape(fibres, count - 2, CHECKS_PER_SEGMENT).any(axis=2)
     first = np.where(blocked.any(axis=1), blocked.argmax(axis=1), count - 2)
     return 1 + first

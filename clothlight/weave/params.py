@@ -6,9 +6,10 @@ Default: a plain weave like the paper's measured red cotton (§3.1, Figure 1) wi
 gives no thread spacing; 0.5 mm (20 threads/cm, a medium-weight cotton sheeting) is assumed.
 
 Yarns keep their cross-section everywhere (the paper's rigid cylinders) unless it relaxes
-between crossings (``section_relaxation``, :mod:`.section`), so they need room to change sides: round yarns of 0.1 mm cannot pass over and under each other closer than about
-0.40 mm, and a flat elliptical yarn (``semi_axes_mm``, §7) must bend down within the width of
-the yarn it crosses, which limits how wide it can be (e.g. 0.17 mm × 0.047 mm at 0.5 mm).  Every
+between crossings (``section_relaxation``, :mod:`.section`), so they need room to change sides:
+round yarns of 0.1 mm cannot pass over and under each other closer than about 0.40 mm, and a
+flat elliptical yarn (``semi_axes_mm``, §7) must bend down within the width of the yarn it
+crosses, which limits how wide it can be (e.g. 0.17 mm × 0.047 mm at 0.5 mm).  Every
 set of parameters is checked against the exact tubes (:mod:`.clearance`), and a refusal names
 the largest cross-section of the same shape that fits.  A yarn of several plies twisted at the
 medium's twist angle (:mod:`.plies`) fills the same tube, so the same checks hold for its plies;

@@ -275,6 +275,11 @@ def _direction(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
 LIGHTINGS = {"light 15° from −y, view from above": (_direction(15.0, -90.0), _direction(90.0, 0.0)),
              "light 15° from azimuth −60°, view 60° from +y": (_direction(15.0, -60.0), _direction(60.0, 90.0))}
 
+#: What the close-up samples that check the prediction change of the default close-up: the section of
+#: the crossings all along, since the prediction's helix winds on a section that does not change along
+#: the yarn (a relaxing section, :mod:`.section`, turns the mesh's lines by itself, twisted or not).
+TWIST_SAMPLE = {"section_relaxation": 0.0}
+
 
 def tilt_table(preset: str = "red_cotton", angles_deg=(0.0, 12.0, 24.0, 40.0), lightings=None) -> list[dict]:
     """The prediction against the measurement on the preset's close-up sample (8 × 8 yarns, swept at
@@ -291,7 +296,7 @@ def tilt_table(preset: str = "red_cotton", angles_deg=(0.0, 12.0, 24.0, 40.0), l
     for name, (light, view) in lightings.items():
         for angle in angles_deg:
             params = sheeting_weave(preset, twist_angle_deg=angle, warp_count=8, weft_count=8,
-                                    segments_per_crossing=32, segments_around=24)
+                                    segments_per_crossing=32, segments_around=24, **TWIST_SAMPLE)
             found = measure_highlights(build_woven_mesh(params), params, light, view)
             phase, predicted = predicted_highlights(found, light, view, angle, params.cross_section_mm)
             has = ~np.isnan(phase)

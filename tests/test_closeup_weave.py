@@ -355,3 +355,15 @@ def test_the_close_up_default_relaxes_its_section_between_crossings_and_clears(i
     mesh = build_woven_mesh(params)
     assert not meshes_cross(mesh, params)
     assert params.minimum_gap_mm > 0
+
+
+@pytest.mark.parametrize("interlacing", ["plain", "twill_2_2", "twill_3_1"])
+@pytest.mark.parametrize("yarns", [12, 24])
+def test_the_close_up_default_clears_at_sizes_where_a_larger_relaxation_does_not(interlacing, yarns):
+    """The relaxation that clears depends on the sample's size (it draws more jitters): 0.375 clears
+    16 × 16 but not 12 × 12, 0.5 not 24 × 24; the default must clear them all."""
+    params = sheeting_weave(warp_count=yarns, weft_count=yarns, interlacing=interlacing)
+    assert params.minimum_gap_mm > 0
+    with pytest.raises(WeaveParameterError) as refusal:
+        dataclasses.replace(params, section_relaxation=0.375 if yarns == 12 else 0.5)
+    assert refusal.value.name == "section_relaxation"

@@ -26,6 +26,8 @@ def main(argv=None) -> int:
     parser.add_argument("--exit-resolution", type=int, help="N_o of the cloth tables (default: the command's)")
     parser.add_argument("--pixels-per-patch", type=int, help="pixels along a region's patch (default: the command's)")
     parser.add_argument("--samples", type=int, help="Cycles samples per pixel (default: the command's)")
+    parser.add_argument("--threads-per-cm", type=int, help="warp and weft threads per cm of the measured weave "
+                                                           "(default: the validation weave's)")
     return run_worker(lambda: parser.parse_args(argv), _bake)
 
 
@@ -36,13 +38,14 @@ def _bake(args, _cancelled) -> dict:
     from precompute.errors import ParameterError
     from precompute.exit_codes import DeferredInterrupt
     from .blender.garment.bake import bake_cloth
+    from .blender.garment.density import weave_at_thread_count
     from .blender.garment.measure import GoniometerSettings
 
     if not pathlib.Path(args.tables).is_dir():
         raise ParameterError("tables", args.tables, "an existing yarn bake folder")
     chosen = {field.name: getattr(args, field.name) for field in dataclasses.fields(GoniometerSettings)
               if getattr(args, field.name, None) is not None}
-    settings = GoniometerSettings(**chosen)
+    settings = GoniometerSettings(**chosen, weave=weave_at_thread_count(args.threads_per_cm))
     events = ProgressEvents()
     held = DeferredInterrupt(note="")
 

@@ -32,6 +32,7 @@ import clothlight.validate as validate_cli
 import clothlight.validation.report as report_cli
 import precompute.__main__ as precompute_cli
 from clothlight import jobs, medium_settings, render_bounds
+from clothlight.blender.garment.density import THREADS_PER_CM
 from precompute.fit.measured_data import MeasurementFormatError
 from clothlight.weave import WeaveParameterError
 from precompute import bounds, exit_codes
@@ -227,6 +228,8 @@ BAD_INPUTS = [
      ["--incidence-resolution", "odd"]),
     ("garment", ["bake", "--tables", str(YARN_BAKE), "--out", "{root}/c", "--pixels-per-patch", "1000"],
      ["--pixels-per-patch", "[4, 64]"]),
+    *(("garment", ["bake", "--tables", str(YARN_BAKE), "--out", "{root}/c", f"--threads-per-cm={value}"],
+       ["--threads-per-cm", "[10, 24] threads/cm"]) for value in ("0", "-3", "25", "nan", "ten", "12.5")),
     ("report", ["{root}/missing.json"], ["RESULTS_JSON", "missing.json"]),
     ("report", ["{binary}"], ["RESULTS_JSON", "binary.toml"]),
     ("report", ["{empty_json}"], ["RESULTS_JSON", "materials"]),
@@ -472,7 +475,7 @@ def test_ctrl_c_while_the_colour_match_renders_its_response_exits_130(tmp_path, 
 # ---- bounds: one definition, read by the API, every command line and the panel ------------------
 
 PRECOMPUTE_BOUNDS = [value for value in vars(bounds).values() if isinstance(value, bounds.Bound)]
-ADDON_BOUNDS = [value for value in vars(render_bounds).values() if isinstance(value, bounds.Bound)]
+ADDON_BOUNDS = [value for value in vars(render_bounds).values() if isinstance(value, bounds.Bound)] + [THREADS_PER_CM]
 
 
 def _integers_in(bound):
@@ -558,6 +561,7 @@ NUMERIC_OPTIONS = [
     ("garment", ["bake", "--tables", str(YARN_BAKE), "--out", "{root}/c"], "--pixels-per-patch",
      render_bounds.GONIO_PIXELS_PER_PATCH),
     ("garment", ["bake", "--tables", str(YARN_BAKE), "--out", "{root}/c"], "--samples", render_bounds.GONIO_SAMPLES),
+    ("garment", ["bake", "--tables", str(YARN_BAKE), "--out", "{root}/c"], "--threads-per-cm", THREADS_PER_CM),
 ]
 
 

@@ -519,6 +519,7 @@ class CLOTHLIGHT_OT_bake_cloth(_ChildJobOperator, bpy.types.Operator):
         if warning:
             self.report({"WARNING"}, warning)
         return ClothBakeJob(folder, cache_dir=preferences.cache_directory(context), blender=bpy.app.binary_path,
+                            settings={"threads_per_cm": context.scene.clothlight.garment_threads_per_cm},
                             numba_cache_dir=preferences.numba_cache_directory(),
                             bytecode_cache_dir=preferences.bytecode_cache_directory())
 

@@ -31,6 +31,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorPro
                        StringProperty)
 
 from ..fit_job import FREE_PARAMETERS, FitRequest
+from .garment.density import DEFAULT_THREADS_PER_CM, THREADS_PER_CM
 from ..colour_match_job import ColourMatchOutcome
 from ..medium_settings import (
     CUSTOM_BASE,
@@ -641,6 +642,11 @@ def _is_sun(_self, obj) -> bool:
     return obj.type == "LIGHT" and obj.data.type == "SUN"
 
 
+def _forget_other_density(settings, _context) -> None:
+    """The Cloth Bake folder holds another density's cloth: Apply Garment Material must find or bake this one."""
+    settings.cloth_tables_dir = ""
+
+
 class ClothLightSceneSettings(bpy.types.PropertyGroup):
     weave: PointerProperty(type=ClothLightWeaveSettings)
     medium: PointerProperty(type=ClothLightMediumSettings)
@@ -660,6 +666,14 @@ class ClothLightSceneSettings(bpy.types.PropertyGroup):
         name="Cloth Bake", subtype="DIR_PATH",
         description="Folder of a cloth bake (python -m clothlight.garment bake): the cloth BSDF measured on "
                     "the woven sample, for garment meshes")
+    garment_threads_per_cm: IntProperty(
+        name="Thread Count", default=DEFAULT_THREADS_PER_CM, **THREADS_PER_CM.limits(),
+        update=_forget_other_density,
+        description="Density of the cloth's warp and weft, threads per cm (both alike; the validation weave's "
+                    f"yarns, spaced 10/N mm). {DEFAULT_THREADS_PER_CM}: the validation weave's, whose cloth "
+                    "tables ship with the shipped presets. Another count needs a new cloth response: Bake Cloth "
+                    "renders it once per density (about 45 min on 2 cores), then seconds per yarn. Changing it "
+                    "clears the Cloth Bake folder")
     garment_open_weave: BoolProperty(
         name="Open Weave", default=True,
         description="Let light through the gaps between yarns (a transparent closure weighted by the measured "

@@ -356,6 +356,7 @@ class CLOTHLIGHT_PT_garment(_SidebarPanel, bpy.types.Panel):
                 layout.label(text=job.stage)
         else:
             layout.operator("clothlight.bake_cloth", icon="RENDER_STILL")
+        layout.prop(settings, "garment_threads_per_cm")
         layout.prop(settings, "cloth_tables_dir")
         layout.prop(settings, "garment_open_weave")
         layout.prop(settings, "garment_transmission")

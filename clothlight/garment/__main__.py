@@ -46,6 +46,7 @@ def build_parser():
         GONIO_PIXELS_PER_PATCH,
         GONIO_SAMPLES,
     )
+    from ..blender.garment.density import DEFAULT_THREADS_PER_CM, THREADS_PER_CM
     from .goniometry import MEASUREMENT_METHODS
 
     parser = argparse.ArgumentParser(prog="python -m clothlight.garment", description=__doc__.split("\n")[0])
@@ -65,6 +66,12 @@ def build_parser():
                            f"(default {pixels})")
     bake.add_argument("--samples", type=GONIO_SAMPLES.argument("--samples"), default=samples,
                       help=f"Cycles samples per pixel, {GONIO_SAMPLES.allowed()} (default {samples})")
+    bake.add_argument("--threads-per-cm", type=THREADS_PER_CM.argument("--threads-per-cm"),
+                      default=DEFAULT_THREADS_PER_CM,
+                      help=f"warp and weft threads per cm of the measured weave (the validation weave's yarns at "
+                           f"a spacing of 10/N mm), {THREADS_PER_CM.allowed()} (default {DEFAULT_THREADS_PER_CM}, "
+                           "the validation weave's: the shipped cloth tables). Each density renders its own "
+                           "cloth response once (about 45 min on 2 cores), then seconds per yarn")
     bake.add_argument("--method", choices=MEASUREMENT_METHODS, default=MEASUREMENT_METHODS[0],
                       help="response: read the measurement off the weave's cloth response, rendered once per weave "
                            "and these settings (cached), seconds for each yarn; render: render it with this yarn, "
@@ -85,13 +92,15 @@ def _measure(args, interrupt):
     """The cloth bake's folder in the cache (measured now, or found), whether it was measured, and
     the summary reader."""
     from ..blender.garment.bake import bake_cloth, read_summary
+    from ..blender.garment.density import weave_at_thread_count
     from ..blender.garment.measure import GoniometerSettings
     from ..blender.scene_files import open_empty_file
 
     interrupt.check()
     settings = GoniometerSettings(incidence_resolution=args.incidence_resolution,
                                   exit_resolution=args.exit_resolution,
-                                  pixels_per_patch=args.pixels_per_patch, samples=args.samples)
+                                  pixels_per_patch=args.pixels_per_patch, samples=args.samples,
+                                  weave=weave_at_thread_count(args.threads_per_cm))
     open_empty_file()
     interrupt.check()
     start = time.perf_counter()
@@ -129,6 +138,7 @@ def _main(argv) -> int:
     from precompute.tables import folder as table_folder
     from precompute import outputs
     from .tables import CLOTH_FOLDER_FILES, check_cloth_table_folder
+    from ..blender.garment.density import MM_PER_CM
 
     # Before Blender and minutes of renders: the output folder, the cache, the yarn bake.
     table_folder.check_output_folder(args.out, CLOTH_FOLDER_FILES)
@@ -156,6 +166,8 @@ def _main(argv) -> int:
         sys.stdout.write(json.dumps(summary, indent=1) + "\n")
         return 0
     how = summary["measurement"]
+    # The density as the tables record it: their goniometer's weave spacing.
+    print(f"weave: {MM_PER_CM / summary['goniometer']['weave']['spacing_mm']:g} threads/cm")
     if how["method"] == "response":
         print(f"cloth tables: {out} (read off the weave's cloth response in {how['seconds']:.1f} s; the response's "
               f"{summary['seconds']['renders']:.0f} s of renders {'now' if measured else 'were cached'})")

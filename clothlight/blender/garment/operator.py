@@ -2,9 +2,9 @@
 
 Apply Garment Material finds its cloth tables by itself: the Cloth Bake folder when one is set
 (Bake Cloth sets it), else the cloth tables shipped with the extension for an unchanged shipped
-preset (:func:`clothlight.prebaked.prebaked_cloth_tables`, through their copy in the cache), else it
-starts Bake Cloth, which puts the material on the same meshes when it is done.  The yarns' scale
-comes from each mesh: weave repeats per UV unit from its size in the scene's units
+preset at the default Thread Count (:func:`clothlight.prebaked.prebaked_cloth_tables`, through their
+copy in the cache), else it starts Bake Cloth, which puts the material on the same meshes when it is
+done.  The yarns' scale comes from each mesh: weave repeats per UV unit from its size in the scene's units
 (:mod:`clothlight.garment.uv_scale`).  The material module (the cloth-table reader: OpenEXR,
 SciPy, numba's grids) is imported when the operator runs, not when the add-on is enabled.
 """
@@ -30,11 +30,13 @@ def _meshes(context):
 
 def shipped_cloth_tables(scene) -> pathlib.Path | None:
     """The copy in the cache of the cloth tables shipped for the panel's medium, when it is an
-    unchanged shipped preset read from its shipped yarn tables (no Tables folder set); else None."""
+    unchanged shipped preset read from its shipped yarn tables (no Tables folder set) at the
+    validation weave's thread count (the one they were measured at); else None."""
     from ...prebaked import prebaked_cloth_tables, user_copy
+    from .density import DEFAULT_THREADS_PER_CM
 
     medium = scene.clothlight.medium
-    if medium.tables_dir:
+    if medium.tables_dir or scene.clothlight.garment_threads_per_cm != DEFAULT_THREADS_PER_CM:
         return None
     try:
         shipped = prebaked_cloth_tables(medium.request())

@@ -8,15 +8,10 @@
   evaluated exactly, §5), and the virtual gonioreflectometer of §4 in the scene "ClothLight
   Gonioreflectometer": a copy of the sample, a sun at θi = 30° and an orthographic camera at
   θv = 0°, framed and set up for measurement (Cycles OSL on the CPU, no denoising, linear EXR).
-* ``draped_garment_general.blend`` — a square of the paper's plain-woven red cotton draped over
-  a sphere (Blender's cloth simulation, frozen), wearing the garment material: the cloth BSDF
-  measured on the woven sample (``python -m clothlight.garment bake``, paper §7) in general-
-  lighting mode, under a sun, with a lamp behind the cloth so that the back-lit fabric glows
-  (paper Figure 9b).  Its tables are in ``example_blends/tables/paper_2008_cloth/`` (measured with
-  the default gonioreflectometer).
-* ``twill_closeup_general.blend`` — a 2/2 twill of the same yarn close up, in general-lighting
-  mode (the closure mixture, §5, lit by everything Cycles has) under a physical sky: sun and
-  sky light from every direction, as an HDRI would give.
+* ``twill_closeup_general.blend`` — the default ``red_cotton`` close-up woven as a 2/2 twill (12 × 12
+  yarns, plies, twist, irregularity and flyaway fibres as in ``closeup_red_cotton.blend``) in its
+  general-mode yarn material (lobe table packed) under a physical sky: sun and sky light from every
+  direction, as an HDRI would give, with a macro lens's shallow focus band.
 * ``closeup_red_cotton.blend`` — the default close-up (``sheeting_weave("red_cotton")``: 2-ply
   yarns twisted at the preset's 24°, seeded irregularity, sheeting density, flyaway fibres in the
   hair BSDF of the preset's dye) in the fitted ``red_cotton`` yarn material, general mode (plain
@@ -31,10 +26,13 @@
   the same two scenes, a stop brighter.
   ``--denim-only`` writes it alone, ``--render-denim DIR`` renders its pictures.
 
-Both read the paper's red-cotton tables from ``example_blends/tables/paper_2008/`` through ``//``-relative
-paths, so the folder can be moved as a whole; the OSL shaders are embedded with their compiled
-bytecode.  The tables are the untouched preset's bake (``python -m precompute bake --preset
-paper_2008``; cached, so a re-run bakes nothing new).  Scenes are in millimetres
+``paper_sample_validation.blend`` is the paper's own case: it reads the ``paper_2008`` preset's tables
+from ``example_blends/tables/paper_2008/`` through ``//``-relative paths, so the folder can be moved as
+a whole; the OSL shaders are embedded with their compiled bytecode.  The tables are the untouched
+preset's bake (``python -m precompute bake --preset paper_2008``; cached, so a re-run bakes nothing
+new).  The others use the fitted presets (``red_cotton``, ``blue_cotton``, ``white_cotton``), their
+lobe tables packed in the file.  The garment example, the fitted presets draped, is
+``scripts/make_garment_example.py``'s.  Scenes are in millimetres
 (``unit_settings.scale_length = 0.001``): one Blender unit is one millimetre of cloth.
 """
 
@@ -54,9 +52,6 @@ if str(REPO_ROOT) not in sys.path:  # a development script: the installed extens
 import bpy  # noqa: E402
 from mathutils import Vector  # noqa: E402
 
-from clothlight.blender.garment.bake import bake_cloth  # noqa: E402
-from clothlight.blender.garment.drape import draped_cloth  # noqa: E402
-from clothlight.blender.garment.material import apply_garment_material, cloth_tables_from_bake  # noqa: E402
 from clothlight.jobs import BakeJob  # noqa: E402
 from clothlight.medium_settings import preset_request  # noqa: E402
 from clothlight.blender.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
@@ -72,8 +67,6 @@ TABLE_FILES = ("brdf.exr", "lobes.exr", "unscattered.exr", "summary.json")
 # Coarser tessellation than the default for the sample seen whole: the files stay small.
 PAPER_WEAVE = WeaveParameters(interlacing="plain", warp_count=12, weft_count=12, spacing_mm=0.5, yarn_radius_mm=0.1,
                               segments_per_crossing=6, segments_around=8)
-TWILL_WEAVE = WeaveParameters(interlacing="twill_2_2", warp_count=16, weft_count=16, spacing_mm=0.5,
-                              yarn_radius_mm=0.1)
 
 
 def example_tables(out_dir: pathlib.Path, preset: str = PRESET) -> pathlib.Path:
@@ -87,20 +80,6 @@ def example_tables(out_dir: pathlib.Path, preset: str = PRESET) -> pathlib.Path:
     folder.mkdir(parents=True, exist_ok=True)
     for name in TABLE_FILES:
         shutil.copy2(outcome.folder / name, folder / name)
-    return folder
-
-
-def example_cloth_tables(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pathlib.Path:
-    """The cloth BSDF of the paper's weave of that yarn (the default gonioreflectometer; cached),
-    copied next to the blends."""
-    measured, _ = bake_cloth(tables_dir, progress=lambda done, total, what: print(
-        f"\rmeasuring the cloth BSDF: {done}/{total}", end="", file=sys.stderr))
-    print(file=sys.stderr)
-    folder = out_dir / "tables" / f"{PRESET}_cloth"
-    folder.mkdir(parents=True, exist_ok=True)
-    for path in measured.iterdir():
-        if path.suffix in (".exr", ".json") and path.name != "entry.json":
-            shutil.copy2(path, folder / path.name)
     return folder
 
 
@@ -186,65 +165,12 @@ def paper_sample_validation(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> 
     return path
 
 
-def twill_closeup_general(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> pathlib.Path:
-    fresh_file()
-    scene = bpy.context.scene
-    scene.name = "Twill Close-Up"
-    millimetre_scene(scene)
-    scene.cycles.samples = 128
-    scene.render.resolution_x, scene.render.resolution_y = 640, 400
-    sample = build_sample_object(TWILL_WEAVE, collection=scene.collection)
-    material = build_yarn_material(yarn_tables_from_bake(tables_dir), "ClothLight Red Cotton", mode=GENERAL_MODE)
-    sample.data.materials.append(material)
-    relative_tables(material, out_dir)
-    camera = add_camera(scene, "Camera", (0.0, -6.0, 3.2), (0.0, 0.0, 0.0), lens_mm=60.0)
-    camera.data.dof.use_dof = True
-    camera.data.dof.focus_distance = (camera.location - Vector((0.0, 0.0, 0.0))).length
-    camera.data.dof.aperture_fstop = 0.6  # f-number of a macro shot at this scale: a shallow focus band
-
-    scene.world = physical_sky_world("Sky", sun_elevation_deg=35.0, sun_rotation_deg=120.0, strength=0.1)
-    path = out_dir / "twill_closeup_general.blend"
-    save(path)
-    return path
-
-
-def draped_garment_general(out_dir: pathlib.Path, cloth_dir: pathlib.Path) -> pathlib.Path:
-    fresh_file()
-    scene = bpy.context.scene
-    scene.name = "Draped Garment"
-    use_cycles_osl_on_cpu(scene)
-    scene.cycles.shading_system = False  # the garment's general mode is plain nodes: SVM, GPUs welcome
-    scene.cycles.samples = 128
-    scene.render.resolution_x, scene.render.resolution_y = 640, 480
-    # The paper's cotton reflects little (no light between yarns in its model, §7): exposed up.
-    scene.view_settings.exposure = 2.0
-    cloth, form = draped_cloth(scene)
-    apply_garment_material(cloth, cloth_tables_from_bake(cloth_dir), mode=GENERAL_MODE,
-                           name="ClothLight Red Cotton Garment")
-    relative_tables(cloth.data.materials[0], out_dir)
-    grey = bpy.data.materials.new("Form")
-    grey.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.6, 0.6, 0.6, 1.0)
-    form.data.materials.append(grey)
-    add_sun(scene, "Sun", (0.4, -0.6, 0.7), irradiance=8.0)
-    # A lamp low behind the cloth's left flap: the fabric between it and the camera glows (Figure 9b).
-    lamp = bpy.data.objects.new("Back Light", bpy.data.lights.new("Back Light", "AREA"))
-    lamp.data.energy = 1500.0
-    lamp.data.size = 0.6
-    lamp.location = (-0.9, 1.2, -0.1)
-    lamp.rotation_euler = (Vector((-0.35, 0.0, -0.1)) - lamp.location).to_track_quat("-Z", "Y").to_euler()
-    scene.collection.objects.link(lamp)
-    add_camera(scene, "Camera", (0.9, -2.3, 1.0), (0.0, 0.0, 0.05), lens_mm=45.0)
-    world = bpy.data.worlds.new("Studio")
-    world.color = (0.02, 0.02, 0.025)
-    scene.world = world
-    path = out_dir / "draped_garment_general.blend"
-    save(path)
-    return path
-
-
 CLOSEUP_PRESET = "red_cotton"
 #: Yarns each way in the close-up examples: half the default's 16, so the .blend stays small.
 CLOSEUP_YARNS = 8
+#: Yarns each way in the twill close-up: the most whose file stays a few MB, seen at an angle through a
+#: 75 mm lens that keeps its sides out of the picture.
+TWILL_YARNS = 12
 #: Names of the close-up examples' scenes (tests read them).
 FRONT_LIT, BACK_LIT = "Front-Lit", "Back-Lit"
 #: The Principled copy's offset along x (mm): the 8 × 8 sample at 0.40 mm is 3.2 mm wide.
@@ -476,6 +402,38 @@ def closeup_denim_twill(out_dir: pathlib.Path) -> pathlib.Path:
     return closeup_example(out_dir, DENIM_TWILL_CLOSEUP)
 
 
+def twill_closeup_general(out_dir: pathlib.Path) -> pathlib.Path:
+    """A 2/2 twill of the default yarn close up (``sheeting_weave(CLOSEUP_PRESET)`` woven as a twill, with
+    its flyaway fibres) in the general mode under a physical sky, with a shallow focus band."""
+    from clothlight.blender.flyaway_object import build_flyaway_object
+    from clothlight.weave.closeup import closeup_settings, sheeting_weave
+    from precompute.optics.medium import load_preset_config
+
+    fresh_file()
+    scene = bpy.context.scene
+    scene.name = "Twill Close-Up"
+    millimetre_scene(scene)
+    scene.cycles.shading_system = False  # the general mode is plain nodes: SVM, GPUs welcome
+    scene.cycles.samples = 128
+    scene.render.resolution_x, scene.render.resolution_y = 640, 400
+    params = sheeting_weave(CLOSEUP_PRESET, interlacing="twill_2_2", warp_count=TWILL_YARNS, weft_count=TWILL_YARNS)
+    sample = build_sample_object(params, collection=scene.collection)
+    build_flyaway_object(sample, params, closeup_settings(load_preset_config(CLOSEUP_PRESET)[0]), CLOSEUP_PRESET,
+                         collection=scene.collection)
+    sample.data.materials.clear()
+    sample.data.materials.append(packed_yarn_material(yarn_tables_from_bake(baked_yarn(CLOSEUP_PRESET)),
+                                                      RED_COTTON_CLOSEUP.material_name))
+    camera = add_camera(scene, "Camera", (0.0, -6.0, 3.2), (0.0, 0.0, 0.0), lens_mm=75.0)
+    camera.data.dof.use_dof = True
+    camera.data.dof.focus_distance = (camera.location - Vector((0.0, 0.0, 0.0))).length
+    camera.data.dof.aperture_fstop = 0.6  # f-number of a macro shot at this scale: a shallow focus band
+
+    scene.world = physical_sky_world("Sky", sun_elevation_deg=35.0, sun_rotation_deg=120.0, strength=0.1)
+    path = out_dir / "twill_closeup_general.blend"
+    save(path)
+    return path
+
+
 #: The docs pictures of the close-up examples: small, since they render on a shared 2-core machine.
 PICTURE_SIZE, PICTURE_SAMPLES = (320, 160), 64
 
@@ -567,10 +525,8 @@ def main(argv=None) -> None:
             measure_closeup(denim, args.measure.resolve())
     if args.closeup_only or args.denim_only:
         return
-    tables_dir = example_tables(out_dir)
-    paper_sample_validation(out_dir, tables_dir)
-    twill_closeup_general(out_dir, tables_dir)
-    draped_garment_general(out_dir, example_cloth_tables(out_dir, tables_dir))
+    paper_sample_validation(out_dir, example_tables(out_dir))
+    twill_closeup_general(out_dir)
 
 
 if __name__ == "__main__":

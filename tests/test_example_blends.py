@@ -17,7 +17,20 @@ pytestmark = [pytest.mark.blender, pytest.mark.render]
 
 def test_the_examples_are_there():
     assert {p.name for p in BLENDS} >= {"paper_sample_validation.blend", "twill_closeup_general.blend",
-                                        "draped_garment_general.blend", "closeup_red_cotton.blend"}
+                                        "closeup_red_cotton.blend", "closeup_denim_twill.blend",
+                                        "garment_red_cotton.blend"}
+
+
+@pytest.mark.parametrize("blend", [p for p in BLENDS if p.name != "paper_sample_validation.blend"],
+                         ids=lambda p: p.stem)
+def test_only_the_papers_own_case_uses_the_papers_yarn(blend):
+    """The examples show the fitted presets; the paper's literal, nearly clear yarn (``paper_2008``)
+    is the validation example's alone."""
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    assert not [path for path in _table_paths() if "paper_2008" in path]
+    yarn = [material for material in bpy.data.materials if material.name.startswith("ClothLight")]
+    assert yarn and not [material.name for material in yarn if "Paper" in material.name]
+    bpy.ops.wm.read_homefile(use_empty=True)
 
 
 def test_the_closeup_example_holds_the_sample_fibres_both_materials_and_both_lightings():

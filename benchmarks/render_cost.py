@@ -8,6 +8,8 @@ import bpy
 import numpy as np
 import OpenEXR
 
+from clothlight.blender.reference_material import principled_sheen
+
 REFERENCE = "Principled BSDF + sheen"
 
 
@@ -29,13 +31,8 @@ def light_and_camera(scene, camera_location, camera_rotation):
 
 
 def principled_with_sheen():
-    """The reference: a red Principled BSDF with full sheen, roughness 0.8."""
-    material = bpy.data.materials.new(REFERENCE)
-    node = material.node_tree.nodes["Principled BSDF"]
-    node.inputs["Base Color"].default_value = (0.5, 0.02, 0.03, 1.0)
-    node.inputs["Sheen Weight"].default_value = 1.0
-    node.inputs["Roughness"].default_value = 0.8
-    return material
+    """The reference: a red Principled BSDF with full sheen (:mod:`clothlight.blender.reference_material`)."""
+    return principled_sheen(REFERENCE, (0.5, 0.02, 0.03))
 
 
 def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: int = 5) -> dict:

@@ -55,6 +55,7 @@ from mathutils import Vector  # noqa: E402
 from clothlight.jobs import BakeJob  # noqa: E402
 from clothlight.medium_settings import preset_request  # noqa: E402
 from clothlight.blender.materials import GENERAL_MODE, SUN_MODE, build_yarn_material, sync_sun  # noqa: E402
+from clothlight.blender.reference_material import principled_sheen  # noqa: E402
 from clothlight.blender.render_setup import use_cycles_osl_on_cpu  # noqa: E402
 from clothlight.blender.sample_object import build_sample_object  # noqa: E402
 from clothlight.blender.sun_link import SUN_PROPERTY  # noqa: E402
@@ -275,16 +276,6 @@ def baked_yarn(preset: str) -> pathlib.Path:
         on_progress=lambda f: print(f"\rbaking {preset}: {f:.0%}", end="", file=sys.stderr))
     print(file=sys.stderr)
     return baked.folder
-
-
-def principled_sheen(name: str, colour) -> bpy.types.Material:
-    """Principled BSDF of base colour ``colour`` (linear RGB) with full sheen, roughness 0.8."""
-    material = bpy.data.materials.new(name)
-    node = material.node_tree.nodes["Principled BSDF"]
-    node.inputs["Base Color"].default_value = (*colour, 1.0)
-    node.inputs["Sheen Weight"].default_value = 1.0
-    node.inputs["Roughness"].default_value = 0.8
-    return material
 
 
 def weft_material_indices(sample) -> None:

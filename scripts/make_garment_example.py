@@ -41,6 +41,7 @@ from clothlight.blender.garment.bake import bake_cloth  # noqa: E402
 from clothlight.blender.garment.drape import draped_cloth  # noqa: E402
 from clothlight.blender.garment.material import apply_garment_material, cloth_tables_from_bake  # noqa: E402
 from clothlight.blender.materials import GENERAL_MODE  # noqa: E402
+from clothlight.blender.reference_material import principled_sheen  # noqa: E402
 from clothlight.jobs import BakeJob  # noqa: E402
 from clothlight.medium_settings import preset_request  # noqa: E402
 from make_example_blends import physical_sky_world, uniform_world  # noqa: E402  (this script's folder is on the path)
@@ -89,14 +90,6 @@ def normal_reflectance_rgb(cloth_dir: pathlib.Path) -> np.ndarray:
     return (exits[:, 2] * exit_grid.cell_solid_angle) @ rho
 
 
-def principled_with_sheen(name: str, base_color) -> bpy.types.Material:
-    material = bpy.data.materials.new(name)
-    node = material.node_tree.nodes["Principled BSDF"]
-    node.inputs["Base Color"].default_value = (*base_color, 1.0)
-    node.inputs["Sheen Weight"].default_value = 1.0
-    node.inputs["Roughness"].default_value = 0.8
-    return material
-
 
 def copy_beside(obj, offset_x: float, collection):
     copy = obj.copy()
@@ -139,7 +132,7 @@ def garment_example(preset: str, out_dir: pathlib.Path, cloth_dir: pathlib.Path)
     reference = copy_beside(cloth, SIDE_BY_SIDE_M, garments)
     reference.name = "Principled BSDF + Sheen"
     reference.data.materials.clear()
-    reference.data.materials.append(principled_with_sheen("Principled + Sheen", normal_reflectance_rgb(cloth_dir)))
+    reference.data.materials.append(principled_sheen("Principled + Sheen", normal_reflectance_rgb(cloth_dir)))
     copy_beside(form, SIDE_BY_SIDE_M, garments)
     grey = bpy.data.materials.new("Form")
     grey.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.5, 0.5, 0.5, 1.0)

@@ -1,12 +1,13 @@
 """Render cost of the close-up (issue 46): the default close-up sample (clothlight.weave.closeup:
 plied, irregular cotton sheeting) with the default red_cotton's yarn material and its flyaway fibres
 in Cycles' hair BSDF, against a Principled BSDF with sheen under Cycles' default SVM on the same
-geometry (the sample and its fibres), CPU, medians of interleaved renders.  Goals: at most 2x the
-reference, and the fibres at most 1.5x the close-up without them.  Writes each configuration's
+geometry (the sample and its fibres), CPU, interleaved renders; each ratio is the median over the
+rounds of that round's own ratio.  Goals: at most 2x the reference, and the fibres at most 1.5x the
+close-up without them.  Writes each configuration's
 last render as a PNG and prints the folder (a temporary one, or ``--out DIR``).
 
-    python benchmarks/bench_closeup.py                                   # 320² pixels, 64 samples, 5 repeats
-    python benchmarks/bench_closeup.py --quick                           # 160², 16 samples, 3 repeats
+    python benchmarks/bench_closeup.py                                   # 320² pixels, 64 samples, 7 rounds
+    python benchmarks/bench_closeup.py --quick                           # 160², 16 samples, 3 rounds
     python benchmarks/bench_closeup.py --out docs/images/closeup         # the renders of docs/closeups.md
 """
 
@@ -27,10 +28,10 @@ from clothlight.weave.closeup import closeup_settings, sheeting_weave
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.bake import bake
 from precompute.optics.medium import DEFAULT_PRESET, load_preset_config
-from render_cost import REFERENCE, light_and_camera, principled_with_sheen
+from render_cost import REFERENCE, light_and_camera, paired_ratio, principled_with_sheen
 
 QUICK = "--quick" in sys.argv
-PIXELS, SAMPLES, REPEATS = (160, 16, 3) if QUICK else (320, 64, 5)
+PIXELS, SAMPLES, REPEATS = (160, 16, 3) if QUICK else (320, 64, 7)
 
 if "--out" in sys.argv:
     out = pathlib.Path(sys.argv[sys.argv.index("--out") + 1]).resolve()
@@ -81,12 +82,11 @@ for round_index in range(REPEATS + 1):   # round 0 warms up: shader compile, BVH
 median = {label: sorted(seconds)[len(seconds) // 2] for label, seconds in runs.items()}
 print(f"{PIXELS}² pixels, {SAMPLES} samples per pixel, CPU, median of {REPEATS}")
 for label, seconds in median.items():
-    print(f"  {label:44s} {seconds:6.2f} s")
-reference_time = median[f"{REFERENCE}, sample and fibres"]
+    print(f"  {label:44s} {seconds:6.2f} s   (each round: {', '.join(f'{each:.2f}' for each in runs[label])})")
 print(f"close-up (yarn + fibres) / reference on the same geometry: "
-      f"{median['ClothLight yarn + hair fibres'] / reference_time:.2f}x (goal ≤ 2)")
+      f"{paired_ratio(runs, 'ClothLight yarn + hair fibres', f'{REFERENCE}, sample and fibres')} (goal ≤ 2)")
 print(f"yarn material / reference, sample only:                    "
-      f"{median['ClothLight yarn, sample only'] / median[f'{REFERENCE}, sample only']:.2f}x")
+      f"{paired_ratio(runs, 'ClothLight yarn, sample only', f'{REFERENCE}, sample only')}")
 print(f"with fibres / without (ClothLight):                        "
-      f"{median['ClothLight yarn + hair fibres'] / median['ClothLight yarn, sample only']:.2f}x (goal ≤ 1.5)")
+      f"{paired_ratio(runs, 'ClothLight yarn + hair fibres', 'ClothLight yarn, sample only')} (goal ≤ 1.5)")
 print(f"renders: {out}")

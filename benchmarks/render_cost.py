@@ -1,5 +1,5 @@
-"""Shared set-up of the material render-cost benchmarks (bench_yarn_material, bench_garment_material):
-the lit scene and the reference material they are timed against."""
+"""Shared set-up of the material render-cost benchmarks (bench_yarn_material, bench_garment_material,
+bench_closeup): the lit scene, the reference material they are timed against and their ratios."""
 
 import pathlib
 import time
@@ -57,8 +57,16 @@ def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: i
                 runs[label].append(time.perf_counter() - start)
     timings = {label: sorted(seconds)[len(seconds) // 2] for label, seconds in runs.items()}
     for label, seconds in timings.items():
-        print(f"{label:36s} {seconds:6.2f} s   {seconds / timings[REFERENCE]:4.2f}x   (median of {repeats})")
+        print(f"{label:36s} {seconds:6.2f} s   {paired_ratio(runs, label, REFERENCE)}   (median of {repeats})")
     return timings
+
+
+def paired_ratio(runs: dict, label: str, anchor: str) -> str:
+    """``label``'s render time over ``anchor``'s as the median over the rounds of each round's own
+    ratio, with their range (``runs``: label → seconds per round).  Renders seconds apart share the
+    machine's speed of the moment, which drifts by ±10 % between rounds on a shared 2-core machine."""
+    ratios = sorted(a / b for a, b in zip(runs[label], runs[anchor]))
+    return f"{ratios[len(ratios) // 2]:4.2f}x (rounds {ratios[0]:.2f}–{ratios[-1]:.2f})"
 
 
 def read_rgb(path: pathlib.Path) -> np.ndarray:

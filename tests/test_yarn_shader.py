@@ -330,6 +330,42 @@ def test_plain_nodes_render_the_woven_sample_as_the_osl_general_mode(tmp_path, s
 
 
 @pytest.mark.blender
+def test_plain_nodes_answer_a_shadow_ray_without_the_lobes(tmp_path, synthetic_tables):
+    # Cycles' SVM jumps over the input of a Mix Shader whose weight is zero, and the nodes only
+    # that input reads.  A shadow ray asks a yarn's near face only whether it passes: the lobe
+    # lookups and their math must sit behind a Mix on Is Shadow Ray whose shadow side is empty
+    # (benchmarks/bench_closeup.py), and nothing else may read them.
+    bpy.ops.wm.read_homefile(use_empty=True)
+    material = build_yarn_material(without_unscattered_light(synthetic_tables[0], tmp_path), mode=GENERAL_MODE,
+                                   plain_nodes=True)
+    nodes = material.node_tree.nodes
+
+    def upstream(node, stop=None):
+        seen, todo = set(), [node]
+        while todo:
+            current = todo.pop()
+            if current.name in seen:
+                continue
+            seen.add(current.name)
+            for socket in current.inputs:
+                if stop is not None and current == stop and socket == stop.inputs[1]:
+                    continue
+                todo += [link.from_node for link in socket.links]
+        return {nodes[name] for name in seen}
+
+    gates = [node for node in nodes if node.type == "MIX_SHADER" and node.inputs["Fac"].is_linked
+             and node.inputs["Fac"].links[0].from_socket.name == "Is Shadow Ray"]
+    assert len(gates) == 1
+    gate = gates[0]
+    assert not gate.inputs[2].is_linked
+    output = next(node for node in nodes if node.type == "OUTPUT_MATERIAL")
+    behind_the_gate = upstream(gate.inputs[1].links[0].from_node)
+    lookups = {node for node in nodes if node.type == "TEX_IMAGE"}
+    assert lookups and lookups <= behind_the_gate
+    assert not lookups & upstream(output, stop=gate)
+
+
+@pytest.mark.blender
 @pytest.mark.parametrize("mode, plain_nodes", [(SUN_MODE, False), (GENERAL_MODE, False), (GENERAL_MODE, True)],
                          ids=["sun", "general-osl", "general-plain-nodes"])
 def test_the_yarn_material_is_no_light_to_sample(tmp_path, synthetic_tables, mode, plain_nodes):

@@ -103,6 +103,11 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
     light_path = nodes.node("ShaderNodeLightPath", (200, -900))
     passes = nodes.math("GREATER_THAN", geometry.outputs["Backfacing"], light_path.outputs["Is Camera Ray"],
                         location=(400, -900))
+    # A shadow ray asks a near face only whether it passes (it does not): an empty closure answers that
+    # without the lobes.  SVM jumps over a Mix Shader's input of weight zero, so the lookups and math
+    # nodes that only the surface reads are not run for shadow rays (benchmarks/bench_closeup.py).
+    surface = nodes.node("ShaderNodeMixShader", (750, 0),
+                         (light_path.outputs["Is Shadow Ray"], surface, None)).outputs[0]
     transparent = nodes.node("ShaderNodeBsdfTransparent", (600, -1050))
     return nodes.node("ShaderNodeMixShader", (900, 0), (passes, surface, transparent.outputs[0])).outputs[0]
 

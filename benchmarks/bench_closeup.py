@@ -3,8 +3,8 @@ plied, irregular cotton sheeting) with the default red_cotton's yarn material an
 in Cycles' hair BSDF, against a Principled BSDF with sheen under Cycles' default SVM on the same
 geometry (the sample and its fibres), CPU, interleaved renders; each ratio is the median over the
 rounds of that round's own ratio.  Goals: at most 2x the reference, and the fibres at most 1.5x the
-close-up without them.  Writes each configuration's
-last render as a PNG and prints the folder (a temporary one, or ``--out DIR``).
+close-up without them.  Writes each configuration's last render as a PNG and prints the folder (a
+temporary one, or ``--out DIR``).
 
     python benchmarks/bench_closeup.py                                   # 320² pixels, 64 samples, 7 rounds
     python benchmarks/bench_closeup.py --quick                           # 160², 16 samples, 3 rounds

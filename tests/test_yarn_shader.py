@@ -333,7 +333,7 @@ def test_plain_nodes_render_the_woven_sample_as_the_osl_general_mode(tmp_path, s
 def test_plain_nodes_answer_a_shadow_ray_without_the_lobes(tmp_path, synthetic_tables):
     # Cycles' SVM jumps over the input of a Mix Shader whose weight is zero, and the nodes only
     # that input reads.  A shadow ray asks a yarn's near face only whether it passes: the lobe
-    # lookups and their math must sit behind a Mix on Is Shadow Ray whose shadow side is empty
+    # lookups must sit behind a Mix on Is Shadow Ray whose shadow side is empty
     # (benchmarks/bench_closeup.py), and nothing else may read them.
     bpy.ops.wm.read_homefile(use_empty=True)
     material = build_yarn_material(without_unscattered_light(synthetic_tables[0], tmp_path), mode=GENERAL_MODE,

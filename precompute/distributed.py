@@ -199,7 +199,13 @@ class ClusterExecutor:
                 except TimeoutError:
                     continue
                 except FuturesCancelledError as error:
-                    self._raise_cancelled(error)
+                    # dask's wait raises as soon as a future it waits on is cancelled (a worker
+                    # killed with the task's input on it leaves it "already forgotten"): those are
+                    # run again below, as the cancelled futures it returns.
+                    done = {future for future in pending if future.status == "cancelled"}
+                    if not done:
+                        self._raise_cancelled(error)
+                    pending = pending - done
                 for future in done:
                     i = position[future.key]
                     try:

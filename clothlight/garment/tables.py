@@ -28,6 +28,9 @@ and for both sides together:
 
 ``summary.json`` (schema :data:`SUMMARY_SCHEMA`) says how they were made and holds the checks:
 the energy balance per incidence cell and the fit errors.
+
+The measurement is the paper's single-scattering model; the tables add the light scattered between
+yarns to ρ (:func:`with_light_between_yarns`, :mod:`.between_yarns`), and the summary records it.
 """
 
 from __future__ import annotations
@@ -38,9 +41,13 @@ import math
 import pathlib
 import time
 
+import dataclasses
+
 import numpy as np
 
+from . import between_yarns
 from .goniometry import SIDES, side_to_world
+from .response_measurement import yarn_lookup
 
 from precompute.tables import exr as precompute_tables
 from precompute.tables import layout as table_layout
@@ -129,29 +136,29 @@ def coverage_along(coverage: np.ndarray, views: np.ndarray) -> np.ndarray:
     return table_layout.interpolate_exit_tile(tile, views)[..., 0]
 
 
-def energy_balance(rho: dict, coverage: dict, incidence_resolution: int) -> dict:
-    """Where the light arriving from each of the front side's incidence cells goes, per unit of
+def energy_balance(rho: dict, coverage: dict, incidence_resolution: int, side: str = "front") -> dict:
+    """Where the light arriving from each of ``side``'s incidence cells goes, per unit of
     incident flux: ``reflected`` (integral of ρ cos θ_o over the lit side's exits / |cos θ_i|),
     ``transmitted`` (the same over the other side's exits, read from that side's table as the
     shader reads it), ``open`` (1 − coverage along the light: the open weave), and ``total``;
-    each (N_i², 3) (open: (N_i²,)), indexed by the front side's incidence cells.  Light from
-    behind is in the front table's lower incidence cells, so every direction is checked once."""
+    each (N_i², 3) (open: (N_i²,)), indexed by ``side``'s incidence cells (by default the front's:
+    light from behind is in its lower cells, so every direction is checked once)."""
     n_i = incidence_resolution
     atlases = {side: table_layout.brdf_atlas(rho[side]) for side in SIDES}
     n_o = int(round(math.sqrt(rho["front"].shape[1])))
     exit_grid = AngularGrid("hemisphere", n_o)
     exits = exit_grid.cell_centers()
     weight = exits[:, 2] * exit_grid.cell_solid_angle
-    incident = side_to_world(AngularGrid("sphere", n_i).cell_centers(), "front")
+    incident = side_to_world(AngularGrid("sphere", n_i).cell_centers(), side)
     result = {"reflected": [], "transmitted": [], "open": [], "total": []}
     for direction in incident:
         lit = "front" if direction[2] > 0 else "back"
         dark = "back" if lit == "front" else "front"
         cos_i = abs(direction[2])
         parts = {}
-        for name, side in (("reflected", lit), ("transmitted", dark)):
-            local = side_to_world(direction, side)
-            values = table_layout.interpolate_rho(atlases[side], n_i, np.broadcast_to(local, exits.shape), exits)
+        for name, exit_side in (("reflected", lit), ("transmitted", dark)):
+            local = side_to_world(direction, exit_side)
+            values = table_layout.interpolate_rho(atlases[exit_side], n_i, np.broadcast_to(local, exits.shape), exits)
             parts[name] = weight @ values / cos_i
         toward_light = side_to_world(direction, lit)
         parts["open"] = 1.0 - float(coverage_along(coverage[lit], toward_light))
@@ -175,6 +182,33 @@ def check_energy(energy: dict, incidence_resolution: int) -> None:
         f"the yarn tables break energy conservation: the cloth measured with them reflects, transmits and lets "
         f"through {total[worst]:.4g} of the light arriving from {np.round(direction, 3).tolist()} (channel "
         f"{'RGB'[worst[1]]}), at most 1 + {ENERGY_TOLERANCE:g} allowed; were the tables' values scaled?")
+
+
+def with_light_between_yarns(measurement, yarn) -> tuple:
+    """``measurement`` (a :class:`.goniometry.ClothMeasurement`) with the light scattered between yarns
+    added to ρ (:mod:`.between_yarns`: the single-scattering cloth's energy without its specular term
+    times the gain of the yarn ``yarn``'s albedo, a :class:`.response_measurement.YarnLookup`), and
+    a record of it for the summary: the yarns' albedo under broad light, the weave's share lost to
+    yarns, the gain, and the light between yarns at normal incidence (its energy per unit flux, and
+    its ρ seen along the normal, 1/sr)."""
+    n_i = int(round(math.sqrt(measurement.rho["front"].shape[0])))
+    single = {side: np.maximum(measurement.rho[side] - measurement.specular[side][..., None], 0.0) for side in SIDES}
+    escaped = {}
+    for side in SIDES:
+        balance = energy_balance(single, measurement.coverage, n_i, side)
+        escaped[side] = balance["reflected"] + balance["transmitted"]
+    albedo = between_yarns.broad_light_albedo(yarn)
+    gain = between_yarns.between_yarns_gain(albedo)
+    added = between_yarns.between_yarns_rho(escaped, gain, between_yarns.broad_light_shape(single), n_i)
+    normal = int(np.argmax(AngularGrid("sphere", n_i).cell_centers()[:, 2]))
+    up = np.array([0.0, 0.0, 1.0])
+    record = {"yarn_albedo_broad_light_rgb": albedo.tolist(), "lost_to_yarns": between_yarns.LOST_TO_YARNS,
+              "gain_rgb": gain.tolist(),
+              "normal_incidence_energy_rgb": (escaped["front"][normal] * gain).tolist(),
+              "normal_incidence_and_view_rho_rgb":
+                  table_layout.interpolate_rho(table_layout.brdf_atlas(added["front"]), n_i, up, up).tolist()}
+    rho = {side: measurement.rho[side] + added[side] for side in SIDES}
+    return dataclasses.replace(measurement, rho=rho), record
 
 
 def mixture_weights(rho: np.ndarray, specular: np.ndarray, incidence_resolution: int,
@@ -209,9 +243,11 @@ def mixture_error(atlas: np.ndarray, incidence_resolution: int, weights: np.ndar
 
 
 def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key: str, code_digest: str) -> dict:
-    """Write the tables of a :class:`.goniometry.ClothMeasurement` into ``folder`` (created) and its
-    summary; returns the summary."""
+    """Write the tables of a :class:`.goniometry.ClothMeasurement` of the yarn of ``yarn_tables`` (a
+    :class:`clothlight.yarn_tables.YarnTableFiles`), with the light between yarns added, into
+    ``folder`` (created) and its summary; returns the summary."""
     start = time.perf_counter()
+    measurement, light_between_yarns = with_light_between_yarns(measurement, yarn_lookup(yarn_tables))
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     yarn = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").metadata
@@ -266,6 +302,7 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
         "closure_fit_relative_error_median_rgb": fit_error,
         "coverage_normal": {side: float(coverage_along(measurement.coverage[side], np.array([0.0, 0.0, 1.0])))
                             for side in SIDES},
+        "light_between_yarns": light_between_yarns,
         "energy": {
             "max_total": float(total.max()),
             "worst_incidence_front_frame":

@@ -225,11 +225,12 @@ def _main(argv) -> int:
                           f"{light[c]['max_at']['theta_i_deg']:g}°, θv = {light[c]['max_at']['theta_v_deg']:g}°"
                           for c in ("R", "G", "B") if light[c]))
     for kind, mode in (("garment", "sun mode"), ("garment_general", "general lighting")):
-        comparison = results.get(f"{kind}_vs_yarn")
-        if comparison:
-            print(f"garment material ({mode}, flat patch) vs yarn sample: RMS relative difference "
-                  f"{comparison['RGB']['relative_rms']:.1%} (red {comparison['R']['relative_rms']:.1%}) over "
-                  f"{comparison['views_compared']} views")
+        for sample, what in (("yarn", "yarn sample"), ("yarn_scene", "yarn sample in a scene")):
+            comparison = results.get(f"{kind}_vs_{sample}")
+            if comparison:
+                print(f"garment material ({mode}, flat patch) vs {what}: RMS relative difference "
+                      f"{comparison['RGB']['relative_rms']:.1%} (red {comparison['R']['relative_rms']:.1%}) over "
+                      f"{comparison['views_compared']} views")
     print(f"sweep: {results['seconds']['total']:.1f} s")
     return 0
 

@@ -274,12 +274,14 @@ CLOTH_N = 3
 def cloth_bake(tmp_path_factory, bakes):
     """A cloth bake folder written by the garment bake's own writers from a synthetic measurement, one
     that sends away less light than it receives (the writer refuses any other: check_energy)."""
+    from clothlight.garment.goniometry import ClothMeasurement
     from clothlight.garment.tables import DETAIL_FILE, write_cloth_summary, write_cloth_tables
+    from clothlight.yarn_tables import yarn_tables_from_bake
 
     folder = tmp_path_factory.mktemp("cloth") / "cloth"
     rng = np.random.default_rng(5)
     cells = (CLOTH_N**2, CLOTH_N**2)
-    measurement = types.SimpleNamespace(
+    measurement = ClothMeasurement(
         rho={side: rng.uniform(0.005, 0.05, (*cells, 3)) for side in ("front", "back")},
         specular={side: rng.uniform(0.0, 0.01, cells) for side in ("front", "back")},
         specular_visibility={side: rng.uniform(0.0, 1.0, cells) for side in ("front", "back")},
@@ -288,7 +290,9 @@ def cloth_bake(tmp_path_factory, bakes):
         half_thickness_mm=0.2, render_seconds=0.0)
     goniometer = types.SimpleNamespace(incidence_resolution=CLOTH_N, exit_resolution=CLOTH_N,
                                        to_dict=lambda: {"incidence_resolution": CLOTH_N, "exit_resolution": CLOTH_N})
-    yarn = types.SimpleNamespace(brdf_path=bakes["A", True] / "brdf.exr")
+    # A real yarn: the light between yarns reads its albedo (the random bakes' send away twice what they get).
+    yarn = yarn_tables_from_bake(pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables"
+                                 / "paper_2008")
     summary = write_cloth_tables(folder, measurement, goniometer, yarn, cache_key="c1" * 32, code_digest="test")
     detail = {"repeat_mm": 1.0, "mean_coverage": 0.75, "resolution": 8, "weave": {"pattern": "plain"},
               "encoding": "RGB (n + 1)/2, tangent space x = warp; A coverage"}

@@ -379,8 +379,11 @@ class ValidationRun:
             results["interreflection"] = interreflection(curves["yarn_scene"], curves["yarn_general"],
                                                          swatches.get("yarn_scene"), swatches.get("yarn_general"))
         for kind in GARMENT_MATERIALS:
-            if "yarn" in curves and kind in curves:
-                results[f"{kind}_vs_yarn"] = compare_sweeps(curves[kind], curves["yarn"])
+            # The yarn sample as the paper's model has it, and in a scene: the cloth tables carry the
+            # light between yarns that only the second has.
+            for sample in ("yarn", "yarn_scene"):
+                if sample in curves and kind in curves:
+                    results[f"{kind}_vs_{sample}"] = compare_sweeps(curves[kind], curves[sample])
         if self.measurement is not None:
             m = self.measurement
             results["measurement"] = {

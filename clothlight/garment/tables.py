@@ -35,13 +35,12 @@ yarns to ρ (:func:`with_light_between_yarns`, :mod:`.between_yarns`), and the s
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import math
 import pathlib
 import time
-
-import dataclasses
 
 import numpy as np
 

@@ -49,6 +49,7 @@ import re
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 
 from precompute.errors import ClusterError, ParameterError, SchedulerUnreachable, WorkerCodeMismatch
@@ -63,6 +64,10 @@ CONNECT_TIMEOUT_S = 10.0
 POLL_S = 0.25
 #: Times a task whose finished result was lost with its worker is run again before the job fails.
 MAX_RESUBMITS = 3
+#: Seconds to wait before running a task again, times its resubmissions so far: a resubmission made
+#: while the scheduler is still removing a dead worker can be cancelled with the rest of its work
+#: (a fresh-clone CI run on a loaded machine lost all three of a task's immediate resubmissions).
+RESUBMIT_BACKOFF_S = 1.0
 #: A scheduler address: protocol, host (a name, IPv4, or IPv6 in brackets) and port.
 _ADDRESS = re.compile(r"^(tcp|tls)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):\d{1,5}$")
 PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -220,6 +225,7 @@ class ClusterExecutor:
                                 resubmitted[i] >= MAX_RESUBMITS:
                             self._raise_cancelled(error)
                         resubmitted[i] += 1
+                        time.sleep(RESUBMIT_BACKOFF_S * resubmitted[i])
                         submit(i)
                         pending.add(returned[i])
                         continue

@@ -28,7 +28,7 @@ threads as the kernels' threads.
 Faults: a worker that dies mid-task has its tasks, and the results it held, recomputed elsewhere
 from their inputs (dask keeps the lineage of every result a job still holds), with the same result;
 a finished result that dask gives up fetching from a dead worker (its future left cancelled) is
-submitted again, up to MAX_RESUBMITS times;
+submitted again, up to MAX_RESUBMITS times, each after a longer wait (RESUBMIT_BACKOFF_S);
 a scheduler that does not answer within ``connect_timeout_s`` or is lost during the job raises
 :class:`~precompute.errors.SchedulerUnreachable` naming its address; an exception in a task, or a
 KeyboardInterrupt (Ctrl-C) or ``cancel()`` while waiting, cancels every future of the map before it

@@ -1,8 +1,9 @@
-"""The cloth response in Blender (clothlight/blender/garment/measure.py, measure_response) and the
-cloth tables baked from it (clothlight/blender/garment/bake.py): its lookups are what the sun-mode
-shader reads, sample by sample; the measurement read off it agrees with the one rendered with the
-yarn; its tables are cached per weave, the same bit for bit from a second render, and a new yarn
-renders nothing."""
+"""The cloth response rendered in Blender (clothlight/blender/garment/measure.py, measure_response) or
+traced (clothlight/garment/traced_response.py) and the cloth tables baked from it
+(clothlight/blender/garment/bake.py): the rendered lookups are what the sun-mode shader reads, sample
+by sample; the measurement read off either response agrees with the one rendered with the yarn; the
+tables are cached per weave, the same bit for bit from a second response, and a new yarn makes
+nothing again."""
 
 import dataclasses
 import hashlib
@@ -13,6 +14,7 @@ import pytest
 
 from clothlight.garment.goniometry import SIDES
 from clothlight.garment.response_measurement import measurement_from_response, yarn_lookup
+from clothlight.garment.traced_response import trace_response
 from clothlight.garment.tables import BRDF_FILES, LOBE_FILE, SPECULAR_VISIBILITY_FILES
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.fit.measured_data import relative_rms_error
@@ -29,6 +31,7 @@ from clothlight.blender.garment.measure import (  # noqa: E402
     GoniometerSettings,
     _emit_lookup,
     _GoniometerScene,
+    _sample_weave,
     measure_cloth,
     measure_response,
 )
@@ -90,14 +93,28 @@ def test_the_lookups_are_what_the_shader_reads_sample_by_sample(tmp_path):
         scene.close()
 
 
-def test_the_measurement_from_the_response_agrees_with_the_rendered_one(tmp_path, smooth_yarn):
-    """Two estimates of the same sums from different camera samples: the rendered one with 16 random
-    samples a pixel, so that its own error (~1.5 % at 4) does not hide the response's."""
+@pytest.fixture(scope="module")
+def rendered_smooth(tmp_path_factory, smooth_yarn):
+    """The smooth yarn's measurement rendered with 16 random samples a pixel, so that its own error
+    (~1.5 % at 4) does not hide the response's."""
+    return measure_cloth(yarn_tables_from_bake(smooth_yarn), dataclasses.replace(SETTINGS, samples=16),
+                         render_dir=tmp_path_factory.mktemp("rendered"))
+
+
+@pytest.mark.parametrize("method", ["rendered", "traced"])
+def test_the_measurement_from_the_response_agrees_with_the_rendered_one(tmp_path, smooth_yarn, rendered_smooth,
+                                                                         method):
+    """Two estimates of the same sums from different camera samples."""
     tables = yarn_tables_from_bake(smooth_yarn)
-    rendered = measure_cloth(tables, dataclasses.replace(SETTINGS, samples=16), render_dir=tmp_path)
-    response = measure_response(tables, SETTINGS, samples_per_side=garment_bake.RESPONSE_SAMPLES_PER_SIDE,
-                                render_dir=tmp_path)
+    if method == "rendered":
+        response = measure_response(tables, SETTINGS, samples_per_side=garment_bake.RESPONSE_SAMPLES_PER_SIDE,
+                                    render_dir=tmp_path)
+    else:
+        response = trace_response(_sample_weave(SETTINGS), SETTINGS.incidence_resolution, SETTINGS.exit_resolution,
+                                  samples_per_side=garment_bake.RESPONSE_SAMPLES_PER_SIDE,
+                                  pixels_per_patch=SETTINGS.pixels_per_patch)
     read = measurement_from_response(response, yarn_lookup(tables))
+    rendered = rendered_smooth
     for side in SIDES:
         assert relative_rms_error(read.rho[side], rendered.rho[side]) <= AGREEMENT, side
         for part in ("specular", "specular_visibility"):
@@ -116,18 +133,18 @@ def _table_bytes(folder) -> dict:
 @pytest.fixture(scope="module")
 @slow_fixture
 def response_bakes(tmp_path_factory):
-    """The shipped yarn's cloth tables from the response, baked in two caches (two renders)."""
+    """The shipped yarn's cloth tables from the response, baked in two caches (two responses made)."""
     caches = [tmp_path_factory.mktemp(f"cache{k}") for k in range(2)]
     return caches, [bake_cloth(YARN_BAKE, SETTINGS, cache_dir=cache) for cache in caches]
 
 
-def test_cloth_tables_from_the_response_are_the_same_bit_for_bit_from_another_render(response_bakes):
+def test_cloth_tables_from_the_response_are_the_same_bit_for_bit_from_another_response(response_bakes):
     _, ((first, rendered_first), (second, rendered_second)) = response_bakes
     assert rendered_first and rendered_second and first != second
     assert _table_bytes(first) == _table_bytes(second)
 
 
-def test_a_new_yarn_on_a_known_weave_renders_nothing(response_bakes, smooth_yarn):
+def test_a_new_yarn_on_a_known_weave_makes_no_response(response_bakes, smooth_yarn):
     (cache, _), ((shipped, _), _) = response_bakes
     folder, rendered = bake_cloth(smooth_yarn, SETTINGS, cache_dir=cache)
     assert not rendered and folder != shipped
@@ -142,14 +159,19 @@ def test_a_new_yarn_on_a_known_weave_renders_nothing(response_bakes, smooth_yarn
     assert bake_cloth(smooth_yarn, SETTINGS, cache_dir=cache) == (folder, False)
 
 
-def test_the_response_is_keyed_by_the_code_that_renders_it_not_by_what_reads_it():
+def test_the_response_is_keyed_by_how_it_is_made_and_the_code_that_makes_it_not_by_what_reads_it():
     from precompute.cache.sources import module_file, stage_sources
     from tests.test_sources import REPO, modules_called_from
 
-    response = set(stage_sources(REPO, **garment_bake.RESPONSE_SOURCES))
-    used = modules_called_from("clothlight/blender/garment/bake.py", ["render"])
-    assert "clothlight.blender.garment.measure" in used
-    assert {module_file(REPO, m).relative_to(REPO).as_posix() for m in used} <= response
-    assert {"clothlight/garment/response.py", "osl/cloth_yarn.osl"} <= response
-    # A new way to read the response, or to fit the tables, renders nothing again.
-    assert not {"clothlight/garment/response_measurement.py", "clothlight/garment/tables.py"} & response
+    assert garment_bake.response_method() == "traced"  # Embree is pinned with the rest
+    traced = set(stage_sources(REPO, **garment_bake.RESPONSE_SOURCES["traced"]))
+    rendered = set(stage_sources(REPO, **garment_bake.RESPONSE_SOURCES["rendered"]))
+    used = modules_called_from("clothlight/blender/garment/bake.py", ["make"])
+    assert {"clothlight.garment.traced_response", "clothlight.blender.garment.measure"} <= used
+    assert {module_file(REPO, m).relative_to(REPO).as_posix() for m in used} <= traced | rendered
+    assert "clothlight/garment/response.py" in traced and not {"osl/cloth_yarn.osl"} & traced
+    assert {"clothlight/garment/response.py", "osl/cloth_yarn.osl"} <= rendered
+    # A new way to read the response, or to fit the tables, makes no response again.
+    assert not {"clothlight/garment/response_measurement.py", "clothlight/garment/tables.py"} & (traced | rendered)
+    keys = {method: garment_bake.response_inputs(SETTINGS, method=method) for method in ("traced", "rendered")}
+    assert keys["traced"]["code_digest"] != keys["rendered"]["code_digest"]

@@ -38,6 +38,7 @@ Directions are unit 3-vectors; lengths are millimetres.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -46,6 +47,9 @@ import numpy as np
 
 from precompute.errors import ParameterError
 from precompute.tables.grids import AngularGrid
+
+from ..weave import WeaveParameters, build_woven_mesh
+from .patch_lattice import lattice_patch_counts
 
 SIDES = ("front", "back")
 #: Rotation taking a side's frame to the world: front = identity, back = half-turn about x.
@@ -144,6 +148,49 @@ def required_sample_half_size_mm(layout: RegionLayout, half_thickness_mm: float,
     return layout.half_extent_mm + h * view_tilt + 2.0 * h * light_tilt + edge_band_mm
 
 
+def woven_bounds(vertices) -> tuple[np.ndarray, np.ndarray]:
+    """Centre and half extents (3,) of a woven mesh's vertices as a Blender mesh holds them (float32), mm."""
+    stored = np.asarray(vertices, np.float32)
+    low, high = stored.min(axis=0).astype(float), stored.max(axis=0).astype(float)
+    return (low + high) / 2.0, (high - low) / 2.0
+
+
+@dataclass(frozen=True)
+class SamplePlan:
+    """The woven sample a gonioreflectometer sweep needs: ``weave`` with its yarn counts set, the
+    regions' ``layout`` (centred at the origin: a scene centres it on its sample), the weave's half
+    thickness, the patch side and how far the sample must reach from its centre, mm."""
+
+    weave: WeaveParameters
+    layout: RegionLayout
+    half_thickness_mm: float
+    patch_mm: float
+    half_size_mm: float
+
+
+def plan_sample(weave: WeaveParameters, incidence_resolution: int, exit_resolution: int, pixels_per_patch: int,
+                patch_repeats: int) -> SamplePlan:
+    """Regions for every incidence cell, guards for every view, and a sample that reaches past
+    every view and shadow ray from them (:func:`plan_regions`, :func:`required_sample_half_size_mm`),
+    for ``pixels_per_patch`` pixels across a patch's side at the most grazing view (the guards'
+    margin is two of them)."""
+    probe = build_woven_mesh(dataclasses.replace(weave, warp_count=4, weft_count=4))
+    half_thickness = float(woven_bounds(probe.vertices)[1][2])
+    spacing = float(weave.spacing_mm)
+    repeat = max(weave.interlacing.shape) * spacing
+    view_tilt = max(max_tilt(exit_directions(exit_resolution, side)) for side in SIDES)
+    light_tilt = max(max_tilt(incidence_directions(incidence_resolution, side)) for side in SIDES)
+    patch_mm = patch_repeats * repeat
+    least_cos = min(abs(d[2]) for side in SIDES for d in exit_directions(exit_resolution, side))
+    pixel_mm = patch_mm * least_cos / pixels_per_patch
+    layout = plan_regions(incidence_resolution**2, patch_mm, half_thickness, view_tilt, margin_mm=2.0 * pixel_mm)
+    half_size = required_sample_half_size_mm(layout, half_thickness, view_tilt, light_tilt, edge_band_mm=spacing)
+    # Whole repeats keep the sample symmetric about its centre, where the layout is centred.
+    yarns = int(math.ceil(2.0 * half_size / repeat)) * int(round(repeat / spacing))
+    return SamplePlan(dataclasses.replace(weave, warp_count=yarns, weft_count=yarns), layout, half_thickness,
+                      patch_mm, half_size)
+
+
 @dataclass(frozen=True)
 class OrthographicView:
     """An orthographic camera looking at ``center`` from ``toward_camera``: its image axes
@@ -227,20 +274,46 @@ def patch_weights(view: OrthographicView, layout: RegionLayout,
     mid-plane inside that patch, counted on a ``subsamples`` × ``subsamples`` lattice.
 
     Guards wider than a pixel keep any pixel from reaching two patches; ParameterError if not."""
-    offsets = (np.arange(subsamples) + 0.5) / subsamples
-    rows, columns = np.arange(view.height)[:, None], np.arange(view.width)[None, :]
-    index = np.full((view.height, view.width), -1)
-    count = np.zeros((view.height, view.width))
-    for dy in offsets:
-        for dx in offsets:
-            patch = layout.patch_of(view.midplane_points(columns + dx, rows + dy))
-            hit = patch >= 0
-            if np.any(hit & (index >= 0) & (index != patch)):
-                raise ParameterError("layout", f"guard {layout.pitch_mm - layout.patch_mm:.3g} mm",
-                                     f"guards wider than a pixel ({view.pixel_mm:.3g} mm)")
-            index = np.where(hit, patch, index)
-            count += hit
-    return index, count / subsamples**2
+    return patch_weights_at(view, layout, np.arange(view.height)[:, None], np.arange(view.width)[None, :],
+                            subsamples)
+
+
+def patch_weights_at(view: OrthographicView, layout: RegionLayout, rows, columns,
+                     subsamples: int = WEIGHT_SUBSAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`patch_weights` of the pixels (``rows``, ``columns``), broadcast together: the same
+    values, pixel by pixel, as the whole image's."""
+    rows, columns = np.broadcast_arrays(np.asarray(rows), np.asarray(columns))
+    w, r, u = (np.asarray(v, float) for v in (view.toward_camera, view.right, view.up))
+    # The image axes slid along the view onto the mid-plane (OrthographicView.midplane_points).
+    right, up = r[:2] - r[2] / w[2] * w[:2], u[:2] - u[2] / w[2] * w[:2]
+    index, hits, two_patches = lattice_patch_counts(
+        columns.ravel().astype(np.int64), rows.ravel().astype(np.int64), int(subsamples), view.width / 2.0,
+        view.height / 2.0, float(view.pixel_mm), float(view.pixel_mm * view.aspect),
+        np.asarray(view.center[:2], float), right, up, np.asarray(layout.center[:2], float), float(layout.pitch_mm),
+        int(layout.grid), layout.patch_mm / (2.0 * layout.pitch_mm))
+    if two_patches:
+        raise ParameterError("layout", f"guard {layout.pitch_mm - layout.patch_mm:.3g} mm",
+                             f"guards wider than a pixel ({view.pixel_mm:.3g} mm)")
+    return index.reshape(rows.shape), (hits / subsamples**2).reshape(rows.shape)
+
+
+def patch_pixels(view: OrthographicView, layout: RegionLayout) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, columns) of the pixels that see some patch of ``layout`` (and a few around them that
+    do not): the patches' bounding boxes in the image, each pixel once, in row-major order."""
+    # Image coordinates (column, row) of a mid-plane point, inverting the affine map of
+    # OrthographicView.midplane_points.
+    w, r, u, c = (np.asarray(v, float) for v in (view.toward_camera, view.right, view.up, view.center))
+    right, up = r[:2] - r[2] / w[2] * w[:2], u[:2] - u[2] / w[2] * w[:2]
+    to_image = np.linalg.inv(np.column_stack([right * view.pixel_mm, -up * view.pixel_mm * view.aspect]))
+    half = layout.patch_mm / 2.0
+    corners = layout.region_centers()[:, None, :] + half * np.array([[-1, -1], [-1, 1], [1, -1], [1, 1]])
+    image = (corners - c[:2]) @ to_image.T + np.array([view.width, view.height]) / 2.0
+    low = np.clip(np.floor(image.min(axis=1)).astype(int) - 1, 0, None)
+    high = np.minimum(np.ceil(image.max(axis=1)).astype(int) + 1, [view.width, view.height])
+    flat = np.unique(np.concatenate([
+        (np.arange(r0, r1)[:, None] * view.width + np.arange(c0, c1)[None, :]).ravel()
+        for (c0, r0), (c1, r1) in zip(low, high)]))
+    return flat // view.width, flat % view.width
 
 
 def patch_rho(pixels: np.ndarray, index: np.ndarray, weight: np.ndarray, view: OrthographicView,

@@ -139,7 +139,7 @@ def measurement_from_response(response: GarmentResponse, yarn: YarnLookup,
                               threads: int = DEFAULT_THREADS) -> ClothMeasurement:
     """The cloth measurement of the yarn ``yarn`` on ``response``'s weave: what
     ``clothlight.blender.garment.measure.measure_cloth`` renders, from the response's samples.
-    Its ``render_seconds`` are the response's, rendered once for every yarn."""
+    Its ``render_seconds`` are the response's renders, once for every yarn (none where it was traced)."""
     rho = response_rho(response, yarn, threads)
     specular, visibility = response_specular(response, **yarn.specular)
     return ClothMeasurement({side: rho[side] + specular[side][..., None] for side in SIDES}, specular, visibility,

@@ -24,6 +24,9 @@ top row first (``t = 0`` is the top row for OSL ``texture()``).
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 from precompute.optics import ballistic
@@ -144,15 +147,47 @@ def incidence_corners(incidence_resolution: int, wi: np.ndarray):
 def rho_taps(incidence_resolution: int, exit_resolution: int, wi: np.ndarray, wo: np.ndarray):
     """The 16 atlas pixels that the shader blends for ρ(ω_i, ω_o) and their weights: flat pixel
     indices ``row · (N_i·N_o) + column`` (…, 16) and weights (…, 16) summing to 1.  ρ is linear in
-    the atlas, so these taps are all a renderer's use of the table (:func:`interpolate_rho`)."""
+    the atlas, so these taps are all a renderer's use of the table (:func:`interpolate_rho`): the
+    four incidence corners (:func:`incidence_corners`), each a tile read bilinearly between its
+    pixel centres (:func:`_tile_taps`)."""
     n_i, n_o = incidence_resolution, exit_resolution
     wi, wo = np.broadcast_arrays(np.asarray(wi, float), np.asarray(wo, float))
-    columns, rows, corner_weights = incidence_corners(n_i, wi)
-    st_o = AngularGrid("hemisphere", n_o).direction_to_square(wo)
-    taps = [_tile_taps(columns[..., k], rows[..., k], n_o, st_o[..., 0], st_o[..., 1]) for k in range(4)]
-    index = np.concatenate([r * (n_i * n_o) + c for r, c, _ in taps], axis=-1)
-    weights = np.concatenate([corner_weights[..., k, None] * w for k, (_, _, w) in enumerate(taps)], axis=-1)
-    return index, weights
+    st_i = AngularGrid("sphere", n_i).direction_to_square(wi).reshape(-1, 2)
+    st_o = AngularGrid("hemisphere", n_o).direction_to_square(wo).reshape(-1, 2)
+    index = np.empty((len(st_i), 16), np.int64)
+    weights = np.empty((len(st_i), 16))
+    _rho_taps_kernel(st_i, st_o, n_i, n_o, index, weights)
+    return index.reshape(wi.shape[:-1] + (16,)), weights.reshape(wi.shape[:-1] + (16,))
+
+
+@numba.njit(cache=True)
+def _rho_taps_kernel(st_i, st_o, n_i, n_o, index, weights):
+    """:func:`rho_taps` from the square coordinates of ω_i and ω_o, with the arithmetic of
+    :func:`incidence_corners` and :func:`_tile_taps` (the same values, bit for bit)."""
+    half = 0.5 / n_o
+    for p in range(st_i.shape[0]):
+        fx = min(max(st_i[p, 0] * n_i - 0.5, 0.0), n_i - 1.0)
+        fy = min(max(st_i[p, 1] * n_i - 0.5, 0.0), n_i - 1.0)
+        i0, j0 = int(math.floor(fx)), int(math.floor(fy))
+        i1, j1 = min(i0 + 1, n_i - 1), min(j0 + 1, n_i - 1)
+        ax, ay = fx - i0, fy - j0
+        corner_columns = (i0, i1, i0, i1)
+        corner_rows = (j0, j0, j1, j1)
+        corner_weights = ((1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay)
+        x = min(max(st_o[p, 0], half), 1.0 - half) * n_o - 0.5
+        y = min(max(st_o[p, 1], half), 1.0 - half) * n_o - 0.5
+        x0 = min(max(int(math.floor(x)), 0), n_o - 1)
+        y0 = min(max(int(math.floor(y)), 0), n_o - 1)
+        x1, y1 = min(x0 + 1, n_o - 1), min(y0 + 1, n_o - 1)
+        bx, by = x - x0, y - y0
+        tap_x = (x0, x1, x0, x1)
+        tap_y = (y0, y0, y1, y1)
+        tap_weights = ((1 - bx) * (1 - by), bx * (1 - by), (1 - bx) * by, bx * by)
+        for k in range(4):
+            row0, column0 = corner_rows[k] * n_o, corner_columns[k] * n_o
+            for m in range(4):
+                index[p, 4 * k + m] = (row0 + tap_y[m]) * (n_i * n_o) + column0 + tap_x[m]
+                weights[p, 4 * k + m] = corner_weights[k] * tap_weights[m]
 
 
 def interpolate_rho(atlas: np.ndarray, incidence_resolution: int, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:

@@ -3,9 +3,11 @@
 Two ways to measure, the same quantity (:mod:`clothlight.garment.response_measurement`):
 
 * ``response`` (the default): the weave's cloth response (``cloth_response/<key>``: ``response.npz``,
-  what every camera sample of every view sees in the yarn's frame), rendered once per weave and
-  gonioreflectometer settings and keyed by them and the code that renders it, whatever the yarn; a
-  yarn's measurement is then read off it in seconds, inside the tables' entry.
+  what every camera sample of every view sees in the yarn's frame), made once per weave and
+  gonioreflectometer settings and keyed by them, how it was made and the code that makes it, whatever
+  the yarn: traced without Blender in seconds (:mod:`clothlight.garment.traced_response`) where
+  Embree (``embreex``) is installed, rendered by Cycles otherwise (:func:`.measure.measure_response`,
+  about an hour); a yarn's measurement is then read off it in seconds, inside the tables' entry.
 * ``render``: the measurement rendered with the yarn itself (``cloth_measurement/<key>``:
   ``measurement.npz``, ρ per side and coverage), keyed by the yarn's ρ, host index and specular term,
   the gonioreflectometer's settings (weave included) and the code that measures (the yarn shader
@@ -30,6 +32,7 @@ from ...yarn_tables import yarn_tables_from_bake
 from ...garment.goniometry import MEASUREMENT_METHODS, SIDES, ClothMeasurement
 from ...garment.response import GarmentResponse
 from ...garment.response_measurement import measurement_from_response, yarn_lookup
+from ...garment.traced_response import trace_response
 from ...garment.tables import DETAIL_FILE, SUMMARY_FILE, write_cloth_summary, write_cloth_tables
 from .detail import render_weave_detail
 from .measure import GoniometerSettings, _sample_weave, measure_cloth, measure_response
@@ -53,11 +56,13 @@ _ROOT = pathlib.Path(__file__).resolve().parents[3]
 #: every project module they import, transitively, with the OSL shaders they compile.  The
 #: measurement runs :mod:`.measure` on the yarn tables :mod:`clothlight.yarn_tables` finds, and of
 #: this file what stores it, without the fit this file imports (tests/test_sources.py checks that
-#: what it calls here comes from those modules).  The response is rendered and stored by
-#: :mod:`.measure` alone (tests/test_garment_response_render.py checks it), not by what reads it.
+#: what it calls here comes from those modules).  The response is traced by
+#: :mod:`clothlight.garment.traced_response`, or rendered by :mod:`.measure`, and stored by them alone
+#: (tests/test_garment_response_render.py checks it), not by what reads it.
 MEASUREMENT_SOURCES = {"entries": ("clothlight.blender.garment.measure", "clothlight.yarn_tables"),
                        "files": ("clothlight/blender/garment/bake.py",)}
-RESPONSE_SOURCES = {"entries": ("clothlight.blender.garment.measure",)}
+RESPONSE_SOURCES = {"traced": {"entries": ("clothlight.garment.traced_response",)},
+                    "rendered": {"entries": ("clothlight.blender.garment.measure",)}}
 TABLE_SOURCES = {"entries": ("clothlight.blender.garment.bake",)}
 
 
@@ -82,11 +87,22 @@ def yarn_inputs(yarn_tables) -> dict:
             "specular": None if specular is None else {key: float(specular[key]) for key in ("weight", "slope")}}
 
 
-def response_inputs(settings: GoniometerSettings, samples_per_side: int = RESPONSE_SAMPLES_PER_SIDE) -> dict:
+def response_method() -> str:
+    """How this Python makes a cloth response: ``traced`` where Embree (``embreex``) can be imported,
+    else ``rendered`` (module docstring)."""
+    import importlib.util
+
+    return "traced" if importlib.util.find_spec("embreex") is not None else "rendered"
+
+
+def response_inputs(settings: GoniometerSettings, samples_per_side: int = RESPONSE_SAMPLES_PER_SIDE,
+                    method: str | None = None) -> dict:
     """Everything a cloth response depends on (its cache key is their hash): the gonioreflectometer's
-    settings (weave included), the samples along a patch's side and the code that renders it — no yarn."""
-    return {"goniometer": settings.to_dict(), "samples_per_side": int(samples_per_side),
-            "code_digest": sources.stage_digest(_ROOT, **RESPONSE_SOURCES)}
+    settings (weave included), the samples along a patch's side, how it is made (``method``, default
+    :func:`response_method`) and the code that makes it — no yarn."""
+    method = method or response_method()
+    return {"goniometer": settings.to_dict(), "samples_per_side": int(samples_per_side), "method": method,
+            "code_digest": sources.stage_digest(_ROOT, **RESPONSE_SOURCES[method])}
 
 
 #: The per-side arrays of a :class:`ClothMeasurement`, as the cache stores them.
@@ -116,23 +132,31 @@ def load_measurement(path) -> ClothMeasurement:
 def cloth_response(settings: GoniometerSettings, tables, *, cache_dir,
                    samples_per_side: int = RESPONSE_SAMPLES_PER_SIDE,
                    progress: Callable[[int, int, str], None] | None = None, scheduler: str | None = None,
-                   table_folder=None) -> tuple[pathlib.Path, str, bool]:
+                   table_folder=None, method: str | None = None) -> tuple[pathlib.Path, str, bool]:
     """The cache folder of the cloth response of ``settings`` (``response.npz``), its key, and
-    whether this call rendered it.  ``tables`` (and ``table_folder``, their
-    bake folder, for a ``scheduler``): any yarn's, to render the lookups with."""
-    inputs = response_inputs(settings, samples_per_side)
+    whether this call made it, by ``method`` (:func:`response_method`'s by default).  ``tables``
+    (and ``table_folder``, their bake folder, for a ``scheduler``): any yarn's, to render the
+    lookups with; tracing needs neither."""
+    inputs = response_inputs(settings, samples_per_side, method)
     key = cache.cache_key(inputs)
     folder = cache.lookup(cache_dir, RESPONSE_NAMESPACE, key)
     if folder is not None:
         return folder, key, False
 
-    def render(target: pathlib.Path) -> None:
+    def make(target: pathlib.Path) -> None:
+        if inputs["method"] == "traced":
+            response = trace_response(_sample_weave(settings), settings.incidence_resolution,
+                                      settings.exit_resolution, samples_per_side=samples_per_side,
+                                      pixels_per_patch=settings.pixels_per_patch,
+                                      patch_repeats=settings.patch_repeats, seed=settings.seed, progress=progress)
+            response.save(target / RESPONSE_FILE)
+            return
         with tempfile.TemporaryDirectory(prefix="clothlight-gonio-") as renders:
             measure_response(tables, settings, samples_per_side=samples_per_side, render_dir=renders,
                              progress=progress, scheduler=scheduler, table_folder=table_folder
                              ).save(target / RESPONSE_FILE)
 
-    folder, _ = cache.store(cache_dir, RESPONSE_NAMESPACE, key, inputs, render)
+    folder, _ = cache.store(cache_dir, RESPONSE_NAMESPACE, key, inputs, make)
     return folder, key, True
 
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 import atexit
 import contextlib
 import dataclasses
-import math
 import pathlib
 import time
 from collections.abc import Callable
@@ -55,11 +54,9 @@ from ...garment.goniometry import (
     ParameterError,
     exit_directions,
     incidence_directions,
-    max_tilt,
     patch_rho,
     patch_weights,
-    plan_regions,
-    required_sample_half_size_mm,
+    plan_sample,
     view_of,
 )
 from ...garment.response import GarmentResponse, ResponseView, view_samples
@@ -126,21 +123,6 @@ def _sample_weave(settings: GoniometerSettings) -> WeaveParameters:
     return settings.weave or VALIDATION_WEAVE
 
 
-def _half_thickness(weave: WeaveParameters) -> tuple[float, float, float]:
-    """(half thickness, spacing, repeat) of ``weave``, mm, from a small sample built and removed."""
-    probe = build_sample_object(dataclasses.replace(weave, warp_count=4, weft_count=4),
-                                name="ClothLight Thickness Probe", collection=bpy.data.collections.new("probe"))
-    try:
-        bounds = sample_bounds(probe)
-        return bounds.half_thickness, float(weave.spacing_mm), max(bounds.period)
-    finally:
-        collection = probe.users_collection[0]
-        mesh = probe.data
-        bpy.data.objects.remove(probe)
-        bpy.data.meshes.remove(mesh)
-        bpy.data.collections.remove(collection)
-
-
 class _GoniometerScene:
     """The measurement's scene (sample, yarn material driven per face, camera), built for one yarn
     and ``settings`` and removed by :meth:`close`: :meth:`render_view` measures one exit cell.
@@ -150,28 +132,18 @@ class _GoniometerScene:
     pixel on an N × N grid of pixels per patch, each pixel a square on the cloth in every view."""
 
     def __init__(self, tables, settings: GoniometerSettings, response_samples: int | None = None):
-        weave = _sample_weave(settings)
         self.n_i, self.n_o = n_i, n_o = settings.incidence_resolution, settings.exit_resolution
         self.lookups = response_samples is not None
         self.pixels_per_patch = response_samples if self.lookups else settings.pixels_per_patch
-        self.half_thickness, spacing, repeat = _half_thickness(weave)
-        view_tilt = max(max_tilt(exit_directions(n_o, side)) for side in SIDES)
-        light_tilt = max(max_tilt(incidence_directions(n_i, side)) for side in SIDES)
-        self.patch_mm = settings.patch_repeats * repeat
-        least_cos = min(abs(d[2]) for side in SIDES for d in exit_directions(n_o, side))
-        pixel_mm = self.patch_mm * least_cos / settings.pixels_per_patch
-        layout = plan_regions(n_i * n_i, self.patch_mm, self.half_thickness, view_tilt, margin_mm=2.0 * pixel_mm)
+        plan = plan_sample(_sample_weave(settings), n_i, n_o, settings.pixels_per_patch, settings.patch_repeats)
+        self.half_thickness, self.patch_mm, layout, weave = (plan.half_thickness_mm, plan.patch_mm, plan.layout,
+                                                             plan.weave)
         # The largest image of the sweep (the most grazing view is the widest), before any render.
         largest = max(view.width * view.height
                       for view in (view_of(d, layout, self.pixels_per_patch, pixels_square_on_cloth=self.lookups)
                                    for side in SIDES for d in exit_directions(n_o, side)))
         check_render_memory(largest, "exit_resolution, incidence_resolution, pixels_per_patch, patch_repeats",
                             (n_o, n_i, settings.pixels_per_patch, settings.patch_repeats))
-        half_size = required_sample_half_size_mm(layout, self.half_thickness, view_tilt, light_tilt,
-                                                 edge_band_mm=spacing)
-        # Whole repeats keep the sample symmetric about its centre, where the layout is centred.
-        yarns = int(math.ceil(2.0 * half_size / repeat)) * int(round(repeat / spacing))
-        weave = dataclasses.replace(weave, warp_count=yarns, weft_count=yarns)
 
         self.scene = scene = bpy.data.scenes.new(SCENE_NAME)
         self._created = [scene]
@@ -215,7 +187,7 @@ class _GoniometerScene:
             # Faces outside the regions are never measured; any sun will do for them.
             self._region = np.where((region >= 0) & (region < n_i * n_i), region, 0)
             self._side = None
-            self._distance = 10.0 + 2.0 * half_size
+            self._distance = 10.0 + 2.0 * plan.half_size_mm
             self._camera = add_orthographic_camera(scene, f"{SCENE_NAME} Camera", clip_end=2.0 * self._distance)
             self._created += [self._camera.data, self._camera]
             self._warm_up()

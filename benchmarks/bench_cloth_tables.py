@@ -30,6 +30,10 @@ beside the render-based measurement; a new weave's, response and all.
 6. With ``--new-weave N``: a weave the cache has not seen, N threads per cm: the first yarn's cloth
    tables by ``python -m clothlight.garment bake --threads-per-cm N`` in a new process into an empty
    cache, timed end to end (its response traced, then the tables as in 2; the issue's goal: 60 s).
+7. With ``--compare-responses``: the traced response against the one Cycles renders (an hour at the
+   defaults on two cores; cached): each yarn's measurement read off both, relative RMS of ρ per side
+   (RGB together, then per channel) and the ratio of their means, over all regions and over the
+   regions inside the grid (the edge regions' figures differ; docs/garment.md).
 
 No figure is asserted: the tests hold the response to the rendered measurement at small settings
 (tests/test_garment_response_render.py).
@@ -119,6 +123,8 @@ def main() -> None:
                         help="the sampling study (item 5) with these samples along a patch's side")
     parser.add_argument("--new-weave", type=int, default=None, metavar="N",
                         help="also a new weave of N threads per cm, end to end into an empty cache (item 6)")
+    parser.add_argument("--compare-responses", action="store_true",
+                        help="also the traced response against the rendered one (item 7; an hour at the defaults)")
     parser.add_argument("--cache-dir", type=pathlib.Path, default=None, help="default: the user cache")
     args = parser.parse_args()
 
@@ -207,6 +213,45 @@ def main() -> None:
         _light_between_yarns(name, yarn, cloth)
     if args.sampling:
         _sampling_study(args.sampling, settings, yarns, cache_dir)
+    if args.compare_responses:
+        _compare_responses(settings, yarns, cache_dir, response)
+
+
+def _compare_responses(settings, yarns: dict, cache_dir, traced) -> None:
+    import numpy as np
+
+    from clothlight.blender.garment.bake import RESPONSE_FILE, cloth_response
+    from clothlight.garment.goniometry import SIDES
+    from clothlight.garment.response import GarmentResponse
+    from clothlight.garment.response_measurement import measurement_from_response, yarn_lookup
+    from clothlight.yarn_tables import yarn_tables_from_bake
+    from precompute.fit.measured_data import relative_rms_error
+
+    first = next(iter(yarns.values()))
+    folder, _, made = cloth_response(settings, yarn_tables_from_bake(first), cache_dir=cache_dir, table_folder=first,
+                                     method="rendered",
+                                     progress=lambda done, total, what: print(f"\r[{done}/{total}] {what:<32}",
+                                                                              end="", flush=True))
+    rendered = GarmentResponse.load(folder / RESPONSE_FILE)
+    print(f"\nrendered response: {'rendered now' if made else 'from the cache'} "
+          f"({rendered.metadata['render_seconds']:.0f} s of renders); lit samples: traced "
+          f"{traced.sample_count / 1e6:.2f} M, rendered {rendered.sample_count / 1e6:.2f} M")
+    n_i = settings.incidence_resolution
+    row, column = np.divmod(np.arange(n_i * n_i), n_i)
+    inside = (row > 0) & (row < n_i - 1) & (column > 0) & (column < n_i - 1)
+    for name, yarn in yarns.items():
+        lookup = yarn_lookup(yarn_tables_from_bake(yarn))
+        a, b = measurement_from_response(traced, lookup), measurement_from_response(rendered, lookup)
+        for side in SIDES:
+            channels = ", ".join(f"{c} {relative_rms_error(a.rho[side][..., k], b.rho[side][..., k]):.2%}"
+                                 for k, c in enumerate("RGB"))
+            ratio = " ".join(f"{r:.4f}" for r in a.rho[side].mean(axis=(0, 1)) / b.rho[side].mean(axis=(0, 1)))
+            rgb = relative_rms_error(a.rho[side], b.rho[side])
+            print(f"{name}, {side}: traced vs rendered response, ρ relative RMS {rgb:.2%} ({channels}), "
+                  f"means traced / rendered {ratio}; regions inside the grid "
+                  f"{relative_rms_error(a.rho[side][inside], b.rho[side][inside]):.2%}, means "
+                  + " ".join(f"{r:.4f}" for r in a.rho[side][inside].mean(axis=(0, 1))
+                             / b.rho[side][inside].mean(axis=(0, 1))))
 
 
 def _light_between_yarns(name: str, yarn: pathlib.Path, cloth: pathlib.Path) -> None:

@@ -59,8 +59,11 @@ BAKE_DEPENDENCIES = {
 #: What the medium fit needs beyond the bake's: its optimiser, CMA-ES (pure Python).  Its report's
 #: figures need matplotlib, which is not bundled: without it the fit folder holds no plots.
 FIT_DEPENDENCIES = {**BAKE_DEPENDENCIES, "cma": "cma"}
-#: Every distribution the extension bundles as a wheel (scripts/build_extension.py).
+#: Every distribution the extension bundles as a wheel (scripts/build_extension.py), all or none.
 BUNDLED_DEPENDENCIES = {**BAKE_DEPENDENCIES, **FIT_DEPENDENCIES}
+#: What Bake Cloth traces a new weave's cloth response with (clothlight/garment/traced_response.py, seconds):
+#: bundled on its own wherever its platform has a wheel; without it the response is rendered (about an hour).
+CLOTH_TRACE_DEPENDENCIES = {"embreex": "embreex"}
 
 
 def missing_dependencies(dependencies: dict[str, str]) -> list[str]:

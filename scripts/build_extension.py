@@ -11,7 +11,9 @@ What a zip holds, and why:
 * **wheels** of what the in-Blender bake and fit import and Blender does not ship
   (:data:`clothlight.jobs.BUNDLED_DEPENDENCIES`: numba, llvmlite, scipy, colour-science,
   typing-extensions, miepython, OpenEXR, platformdirs, and the fit's optimiser cma, pure Python),
-  for CPython 3.11 and the zip's platform.
+  for CPython 3.11 and the zip's platform; with them, where the platform has a wheel of it, Embree's
+  ``embreex`` (:data:`clothlight.jobs.CLOTH_TRACE_DEPENDENCIES`), with which Bake Cloth traces a new
+  weave's cloth response in seconds (no macOS 12 wheel: there it renders it).
   Never numpy: all extensions' wheels share one folder that comes before Blender's own
   site-packages, so a bundled numpy would replace Blender's.  Versions come from
   ``requirements.txt`` (the one place for pins); a dependency it does not pin (numba's llvmlite,
@@ -51,8 +53,8 @@ REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(REPO_ROOT) not in sys.path:  # a script in scripts/: make the repository's packages importable
     sys.path.insert(0, str(REPO_ROOT))
 
-from clothlight.jobs import (BUNDLED_DEPENDENCIES, BakeCancelled, BakeFailed, BakeJob, ClothBakeJob,  # noqa: E402
-                             JobCancelled, JobFailed)
+from clothlight.jobs import (BUNDLED_DEPENDENCIES, CLOTH_TRACE_DEPENDENCIES, BakeCancelled, BakeFailed,  # noqa: E402
+                             BakeJob, ClothBakeJob, JobCancelled, JobFailed)
 from clothlight.medium_settings import preset_request  # noqa: E402
 
 #: pip's platform tags for each Blender platform: Blender 5.0 needs glibc 2.28 on Linux and
@@ -92,11 +94,12 @@ def requirement_pins(path: pathlib.Path = REPO_ROOT / "requirements.txt") -> dic
     return pins
 
 
-def bundled_versions() -> tuple[dict[str, str], list[str]]:
-    """Version of every bundled distribution, and notes on those requirements.txt does not pin."""
+def bundled_versions(dependencies: dict[str, str] = BUNDLED_DEPENDENCIES) -> tuple[dict[str, str], list[str]]:
+    """Version of every distribution of ``dependencies`` (import name → distribution), and notes on those
+    requirements.txt does not pin."""
     pins = requirement_pins()
     versions, notes = {}, []
-    for dist in BUNDLED_DEPENDENCIES.values():
+    for dist in dependencies.values():
         if _normalise(dist) == "numpy":
             raise SystemExit("numpy must never be bundled: it would replace Blender's")
         version = pins.get(_normalise(dist))
@@ -272,7 +275,8 @@ def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = (
             _run_tool(tool, "validate", str(zip_path))
             return [zip_path]
         versions, notes = bundled_versions()
-        for note in notes:
+        tracer_versions, tracer_notes = bundled_versions(CLOTH_TRACE_DEPENDENCIES)
+        for note in notes + tracer_notes:
             print(f"note: {note}", file=sys.stderr)
         for platform in platforms:
             wheels, missing = platform_wheels(platform, versions, wheelhouse)
@@ -280,6 +284,12 @@ def build_extension(output_dir: pathlib.Path, *, platforms: list[str] | None = (
                 print(f"warning: {platform}: no wheel for {', '.join(missing)}; its zip bundles no wheels, so "
                       "Bake is unavailable there and the pre-baked tables are used", file=sys.stderr)
                 wheels = []
+            else:
+                tracer, missing = platform_wheels(platform, tracer_versions, wheelhouse)
+                if missing:
+                    print(f"note: {platform}: no wheel for {', '.join(missing)}; Bake Cloth renders a new weave's "
+                          "cloth response there (about an hour) instead of tracing it", file=sys.stderr)
+                wheels += tracer
             wheel_dir = stage / "wheels"
             shutil.rmtree(wheel_dir, ignore_errors=True)
             wheel_dir.mkdir()

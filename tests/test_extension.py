@@ -13,7 +13,7 @@ import zipfile
 
 import pytest
 
-from clothlight.jobs import BUNDLED_DEPENDENCIES
+from clothlight.jobs import BUNDLED_DEPENDENCIES, CLOTH_TRACE_DEPENDENCIES
 from clothlight.medium_settings import BakeRequest, preset_request
 from tests.helpers import PREBAKED_PRESET, PREBAKED_TRANSPORT
 
@@ -64,7 +64,8 @@ def test_manifest_lists_linux_wheels_of_every_bake_and_fit_dependency_at_the_pin
     wheels = [pathlib.PurePosixPath(w).name for w in manifest["wheels"]]
     assert all(f"wheels/{w}" in names for w in wheels)
     bundled = dict(_wheel_name_version(w) for w in wheels)
-    assert set(bundled) == {re.sub(r"[-_.]+", "-", d).lower() for d in BUNDLED_DEPENDENCIES.values()}
+    assert set(bundled) == {re.sub(r"[-_.]+", "-", d).lower()
+                            for d in (*BUNDLED_DEPENDENCIES.values(), *CLOTH_TRACE_DEPENDENCIES.values())}
     assert "numpy" not in bundled and "cma" in bundled  # the fit's optimiser, a pure-Python wheel
     pins = build_extension.requirement_pins()
     for name, version in bundled.items():

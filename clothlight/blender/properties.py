@@ -672,8 +672,8 @@ class ClothLightSceneSettings(bpy.types.PropertyGroup):
         description="Density of the cloth's warp and weft, threads per cm (both alike; the validation weave's "
                     f"yarns, spaced 10/N mm). {DEFAULT_THREADS_PER_CM}: the validation weave's, whose cloth "
                     "tables ship with the shipped presets. Another count needs a new cloth response: Bake Cloth "
-                    "renders it once per density (about 45 min on 2 cores), then seconds per yarn. Changing it "
-                    "clears the Cloth Bake folder")
+                    "traces it once per density (about 30 s on 2 cores; where Embree is missing it renders it, "
+                    "about 45 min), then seconds per yarn. Changing it clears the Cloth Bake folder")
     garment_open_weave: BoolProperty(
         name="Open Weave", default=True,
         description="Let light through the gaps between yarns (a transparent closure weighted by the measured "

@@ -1,7 +1,7 @@
 """``python -m clothlight.garment bake``: measure a cloth BSDF on the woven sample and bake it.
 
-By default the measurement is read off the weave's cloth response (rendered once per weave and
-gonioreflectometer settings, cached, then seconds for any yarn); ``--method render`` renders the
+By default the measurement is read off the weave's cloth response (traced once per weave and
+gonioreflectometer settings, in seconds, cached; then seconds for any yarn); ``--method render`` renders the
 measurement with the yarn itself, the response's check (docs/garment.md).
 
 Example::
@@ -70,10 +70,10 @@ def build_parser():
                       default=DEFAULT_THREADS_PER_CM,
                       help=f"warp and weft threads per cm of the measured weave (the validation weave's yarns at "
                            f"a spacing of 10/N mm), {THREADS_PER_CM.allowed()} (default {DEFAULT_THREADS_PER_CM}, "
-                           "the validation weave's: the shipped cloth tables). Each density renders its own "
-                           "cloth response once (about 45 min on 2 cores), then seconds per yarn")
+                           "the validation weave's: the shipped cloth tables). Each density traces its own "
+                           "cloth response once (about 30 s on 2 cores), then seconds per yarn")
     bake.add_argument("--method", choices=MEASUREMENT_METHODS, default=MEASUREMENT_METHODS[0],
-                      help="response: read the measurement off the weave's cloth response, rendered once per weave "
+                      help="response: read the measurement off the weave's cloth response, traced once per weave "
                            "and these settings (cached), seconds for each yarn; render: render it with this yarn, "
                            "the response's check (default: %(default)s)")
     from precompute import distributed
@@ -169,8 +169,10 @@ def _main(argv) -> int:
     # The density as the tables record it: their goniometer's weave spacing.
     print(f"weave: {MM_PER_CM / summary['goniometer']['weave']['spacing_mm']:g} threads/cm")
     if how["method"] == "response":
-        print(f"cloth tables: {out} (read off the weave's cloth response in {how['seconds']:.1f} s; the response's "
-              f"{summary['seconds']['renders']:.0f} s of renders {'now' if measured else 'were cached'})")
+        made = (f"traced in {how['traced_seconds']:.1f} s" if "traced_seconds" in how
+                else f"{how.get('render_seconds', 0.0):.0f} s of renders")
+        print(f"cloth tables: {out} (read off the weave's cloth response in {how['seconds']:.1f} s; the response "
+              f"{made}, {'now' if measured else 'cached'})")
     else:
         print(f"cloth tables: {out} ({'measured' if measured else 'from the cache'}, "
               f"{summary['seconds']['renders']:.0f} s of renders)")

@@ -3,10 +3,11 @@
 yarn sample's").
 
     python benchmarks/bench_cloth_energy.py [--yarn PRESET_OR_BAKE ...] [--exit-resolution 8]
-        [--samples 16] [--pixels-per-patch 12] [--cache-dir DIR]
+        [--samples 16] [--pixels-per-patch 12] [--threads-per-cm 20] [--cache-dir DIR]
 
 For each yarn (a preset's name, baked with ``python -m precompute bake``'s defaults and cached, or a
-yarn bake folder; default ``red_cotton`` and ``white_cotton``):
+yarn bake folder; default ``red_cotton`` and ``white_cotton``), on the validation weave at
+``--threads-per-cm`` (default 20, the validation weave itself):
 
 1. **The path-traced sample** (``clothlight.blender.garment.path_traced``): the cloth
    gonioreflectometer's woven sample in the yarn's general-lighting material under one sun along
@@ -16,13 +17,12 @@ yarn bake folder; default ``red_cotton`` and ``white_cotton``):
    angles, the open weave 1 − the coverage along the normal.  G = with / without, per channel: what
    the light between yarns adds.
 2. **The cloth tables** (``python -m clothlight.garment bake``'s defaults: read off the weave's
-   cloth response, rendered once per weave and cached — about 45 min the first time — then seconds):
+   cloth response, traced once per weave and cached, then seconds):
    the summary's energy at normal incidence, with the light between yarns
    (``clothlight.garment.between_yarns``) and without it.
 3. **The model's share q** of yarn-scattered light that meets another yarn, as this run measures
    it: q = (G − 1) / (G a), a the yarn's albedo under broad light from its tables, per channel
-   where a is large enough to say (the red of a red yarn); ``between_yarns.LOST_TO_YARNS`` holds
-   the value used.
+   where a is large enough to say (the red of a red yarn); and the q the tables used.
 
 No figure is asserted (tests/test_between_yarns.py holds the model to closed forms).
 """
@@ -76,6 +76,8 @@ def main() -> None:
                              "many pixels at 81° and five times as long)")
     parser.add_argument("--samples", type=int, default=16, help="Cycles samples per pixel (default 16)")
     parser.add_argument("--pixels-per-patch", type=int, default=12)
+    parser.add_argument("--threads-per-cm", type=int, default=None,
+                        help="warp and weft threads per cm of the validation weave (default: its own, 20)")
     parser.add_argument("--cache-dir", type=pathlib.Path, default=None, help="default: the user cache")
     args = parser.parse_args()
 
@@ -85,6 +87,7 @@ def main() -> None:
     import numpy as np
 
     from clothlight.blender.garment.bake import bake_cloth
+    from clothlight.blender.garment.density import weave_at_thread_count
     from clothlight.blender.garment.measure import GoniometerSettings
     from clothlight.blender.garment.path_traced import measure_path_traced
     from clothlight.blender.scene_files import open_empty_file
@@ -97,10 +100,12 @@ def main() -> None:
     cache_dir = args.cache_dir or default_cache_dir()
     # The path-traced sample on the cloth gonioreflectometer's weave and framing (3 × 3 regions: every
     # patch sees the same sun, and a view's ρ is their mean).
+    weave = weave_at_thread_count(args.threads_per_cm)
     traced = GoniometerSettings(incidence_resolution=3, exit_resolution=args.exit_resolution,
-                                pixels_per_patch=args.pixels_per_patch, samples=args.samples)
+                                pixels_per_patch=args.pixels_per_patch, samples=args.samples, weave=weave)
     print(f"path-traced: N_o {traced.exit_resolution} a side, {traced.pixels_per_patch} px a patch, "
-          f"{traced.samples} spp; sun along the front normal, 1 W/m²; LOST_TO_YARNS = {between_yarns.LOST_TO_YARNS}")
+          f"{traced.samples} spp; sun along the front normal, 1 W/m²; weave "
+          f"{traced.to_dict()['weave']['spacing_mm']} mm spacing")
     for yarn in args.yarn:
         folder = _yarn_folder(yarn, cache_dir)
         tables = yarn_tables_from_bake(folder)
@@ -125,8 +130,9 @@ def main() -> None:
               f"{_rgb(predicted)} (a {_rgb(albedo)}); q this run implies "
               + ", ".join(f"{c} {v:.3f}" for c, v, a in zip("RGB", q, albedo) if a >= LEAST_ALBEDO_FOR_Q))
 
-        cloth, _ = bake_cloth(folder, cache_dir=cache_dir)
+        cloth, _ = bake_cloth(folder, GoniometerSettings(weave=weave), cache_dir=cache_dir)
         summary = json.loads((cloth / "summary.json").read_text())
+        print(f"{yarn}, cloth tables: q {summary['light_between_yarns']['lost_to_yarns']:.3f}")
         normal = int(np.argmax(AngularGrid("sphere", summary["incidence_resolution"]).cell_centers()[:, 2]))
         with_between = np.array(summary["energy"]["per_incidence_total_rgb"][normal])
         between = np.array(summary["light_between_yarns"]["normal_incidence_energy_rgb"])

@@ -87,7 +87,8 @@ class WovenTracer:
         faces = traced.faces
         self.normals, self.face_normals = _smooth_normals(vertices, faces)
         self.tangents = np.asarray(traced.tangent, np.float32).astype(float)
-        self.faces = faces
+        self.vertices, self.faces = vertices, faces
+        self.face_yarn = np.repeat(np.arange(len(traced.yarn_faces)), [stop - start for start, stop in traced.yarn_faces])
         self.face_centers = vertices[faces].mean(axis=1)
         # The tile's centre is the sample's (both symmetric about their own, and the tile's yarn counts
         # differ from the sample's by whole repeats on each side).

@@ -221,7 +221,7 @@ def _compare_responses(settings, yarns: dict, cache_dir, traced) -> None:
     import numpy as np
 
     from clothlight.blender.garment.bake import RESPONSE_FILE, cloth_response
-    from clothlight.garment.goniometry import SIDES
+    from clothlight.garment.goniometry import SIDES, incidence_directions
     from clothlight.garment.response import GarmentResponse
     from clothlight.garment.response_measurement import measurement_from_response, yarn_lookup
     from clothlight.yarn_tables import yarn_tables_from_bake
@@ -239,6 +239,18 @@ def _compare_responses(settings, yarns: dict, cache_dir, traced) -> None:
     n_i = settings.incidence_resolution
     row, column = np.divmod(np.arange(n_i * n_i), n_i)
     inside = (row > 0) & (row < n_i - 1) & (column > 0) & (column < n_i - 1)
+
+    def lit(response) -> np.ndarray:
+        """Each region's lit share over every view of both sides."""
+        return sum(np.bincount(v.patch, v.weight, n_i * n_i) / v.counted for v in response.views)
+
+    share = lit(rendered) / lit(traced)
+    suns = incidence_directions(n_i, "front")
+    lowest = np.argsort(share)[:8]
+    print("lit share, rendered / traced, per region: median inside the grid "
+          f"{np.median(share[inside]):.3f}, at its edge {np.median(share[~inside]):.3f}; lowest: "
+          + ", ".join(f"region ({row[k]}, {column[k]}) sun {np.round(suns[k], 2).tolist()} {share[k]:.3f}"
+                      for k in lowest))
     for name, yarn in yarns.items():
         lookup = yarn_lookup(yarn_tables_from_bake(yarn))
         a, b = measurement_from_response(traced, lookup), measurement_from_response(rendered, lookup)

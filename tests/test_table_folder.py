@@ -288,7 +288,7 @@ def cloth_bake(tmp_path_factory, bakes):
         coverage={side: rng.uniform(0.5, 0.9, CLOTH_N**2) for side in ("front", "back")},
         specular_parameters={"weight": 1.0, "slope": 0.8, "ior": 1.557}, patch_mm=1.0, sample_size_mm=(4.0, 4.0),
         half_thickness_mm=0.2, render_seconds=0.0)
-    goniometer = types.SimpleNamespace(incidence_resolution=CLOTH_N, exit_resolution=CLOTH_N,
+    goniometer = types.SimpleNamespace(incidence_resolution=CLOTH_N, exit_resolution=CLOTH_N, weave=None,
                                        to_dict=lambda: {"incidence_resolution": CLOTH_N, "exit_resolution": CLOTH_N})
     # A real yarn: the light between yarns reads its albedo (the random bakes' send away twice what they get).
     yarn = yarn_tables_from_bake(pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "tables"

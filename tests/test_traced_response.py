@@ -1,8 +1,9 @@
 """The cloth response traced without Blender (clothlight/garment/traced_response.py): a regular
 weave's tile is its sample's own geometry, the tile and the whole sample trace the same samples,
 the response is the same bit for bit whatever the threads, and what it sees is the weave's: its
-coverage along the normal, every seen point lit when the sun is behind the camera.  Its agreement
-with the Cycles measurement is in test_garment_response_render.py."""
+coverage along the normal, every seen point lit when the sun is behind the camera; and the share of
+yarn light that meets another yarn, which scales the light between yarns with the density.  Its
+agreement with the Cycles measurement is in test_garment_response_render.py."""
 
 import dataclasses
 
@@ -10,13 +11,16 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from clothlight.garment import between_yarns
 from clothlight.garment.goniometry import plan_sample
+from clothlight.garment.tables import lost_to_yarns
 from clothlight.garment.traced_response import (
     WovenTracer,
     periodic_repeat_mm,
     tile_of,
     trace_response,
     trace_view,
+    yarn_to_yarn_share,
 )
 from clothlight.weave import WeaveParameters, build_woven_mesh
 from clothlight.weave.patterns import twill
@@ -109,3 +113,18 @@ def test_with_the_sun_behind_the_camera_every_seen_point_is_lit(traced):
     assert lit == pytest.approx(normal_view.covered[normal_sun], rel=5e-3)
     difference = np.abs(normal_view.incidence[in_patch] - normal_view.exit[in_patch]).max(axis=1)
     assert np.quantile(difference, 0.99) < 1e-3  # but at silhouettes, where the view is clamped onto the tables
+
+
+def test_the_share_of_yarn_light_meeting_another_yarn_grows_with_the_thread_count():
+    """Yarns packed closer see more of each other; the validation weave keeps its path-traced q, and
+    another density scales it by the two weaves' shares (a 14 threads/cm sample path-traced implied
+    0.158 where this gives 0.154, docs/garment.md)."""
+    shares = [yarn_to_yarn_share(dataclasses.replace(VALIDATION_WEAVE, spacing_mm=10.0 / n)) for n in (12, 16, 24)]
+    assert shares[0] < shares[1] < shares[2] < 1.0
+    assert yarn_to_yarn_share(VALIDATION_WEAVE) == yarn_to_yarn_share(VALIDATION_WEAVE)
+    assert lost_to_yarns(None) == (between_yarns.LOST_TO_YARNS, {"scaled_by_geometry": False})
+    assert lost_to_yarns(VALIDATION_WEAVE)[0] == between_yarns.LOST_TO_YARNS
+    sparse, how = lost_to_yarns(dataclasses.replace(VALIDATION_WEAVE, spacing_mm=10.0 / 12))
+    assert sparse == pytest.approx(between_yarns.LOST_TO_YARNS * shares[0] / how["yarn_to_yarn_share"]
+                                   ["validation_weave"])
+    assert sparse < between_yarns.LOST_TO_YARNS

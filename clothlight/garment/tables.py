@@ -44,9 +44,11 @@ import time
 
 import numpy as np
 
+from ..weave import WeaveParameters
 from . import between_yarns
 from .goniometry import SIDES, side_to_world
 from .response_measurement import yarn_lookup
+from .traced_response import yarn_to_yarn_share
 
 from precompute.tables import exr as precompute_tables
 from precompute.tables import layout as table_layout
@@ -183,13 +185,28 @@ def check_energy(energy: dict, incidence_resolution: int) -> None:
         f"{'RGB'[worst[1]]}), at most 1 + {ENERGY_TOLERANCE:g} allowed; were the tables' values scaled?")
 
 
-def with_light_between_yarns(measurement, yarn) -> tuple:
+def lost_to_yarns(weave: WeaveParameters | None) -> tuple[float, dict]:
+    """q of ``weave`` (None: the validation weave) and how it was found: the path-traced share of the
+    validation weave (:data:`.between_yarns.LOST_TO_YARNS`) times the ratio of the two weaves'
+    geometric shares (:func:`.traced_response.yarn_to_yarn_share`); the validation weave's own where
+    Embree is missing (it traces them)."""
+    import importlib.util
+
+    if weave is None or importlib.util.find_spec("embreex") is None:
+        return between_yarns.LOST_TO_YARNS, {"scaled_by_geometry": False}
+    # The validation weave: WeaveParameters' defaults (its yarn counts do not matter here).
+    shares = {"weave": yarn_to_yarn_share(weave), "validation_weave": yarn_to_yarn_share(WeaveParameters())}
+    return between_yarns.LOST_TO_YARNS * shares["weave"] / shares["validation_weave"], {
+        "scaled_by_geometry": True, "yarn_to_yarn_share": shares}
+
+
+def with_light_between_yarns(measurement, yarn, weave: WeaveParameters | None = None) -> tuple:
     """``measurement`` (a :class:`.goniometry.ClothMeasurement`) with the light scattered between yarns
     added to ρ (:mod:`.between_yarns`: the single-scattering cloth's energy without its specular term
-    times the gain of the yarn ``yarn``'s albedo, a :class:`.response_measurement.YarnLookup`), and
-    a record of it for the summary: the yarns' albedo under broad light, the weave's share lost to
-    yarns, the gain, and the light between yarns at normal incidence (its energy per unit flux, and
-    its ρ seen along the normal, 1/sr)."""
+    times the gain of the yarn ``yarn``'s albedo, a :class:`.response_measurement.YarnLookup`, on
+    ``weave``, :func:`lost_to_yarns`), and a record of it for the summary: the yarns' albedo under
+    broad light, the weave's share lost to yarns, the gain, and the light between yarns at normal
+    incidence (its energy per unit flux, and its ρ seen along the normal, 1/sr)."""
     n_i = int(round(math.sqrt(measurement.rho["front"].shape[0])))
     single = {side: np.maximum(measurement.rho[side] - measurement.specular[side][..., None], 0.0) for side in SIDES}
     escaped = {}
@@ -197,11 +214,12 @@ def with_light_between_yarns(measurement, yarn) -> tuple:
         balance = energy_balance(single, measurement.coverage, n_i, side)
         escaped[side] = balance["reflected"] + balance["transmitted"]
     albedo = between_yarns.broad_light_albedo(yarn)
-    gain = between_yarns.between_yarns_gain(albedo)
+    lost, how = lost_to_yarns(weave)
+    gain = between_yarns.between_yarns_gain(albedo, lost)
     added = between_yarns.between_yarns_rho(escaped, gain, between_yarns.broad_light_shape(single), n_i)
     normal = int(np.argmax(AngularGrid("sphere", n_i).cell_centers()[:, 2]))
     up = np.array([0.0, 0.0, 1.0])
-    record = {"yarn_albedo_broad_light_rgb": albedo.tolist(), "lost_to_yarns": between_yarns.LOST_TO_YARNS,
+    record = {"yarn_albedo_broad_light_rgb": albedo.tolist(), "lost_to_yarns": lost, "lost_to_yarns_found": how,
               "gain_rgb": gain.tolist(),
               "normal_incidence_energy_rgb": (escaped["front"][normal] * gain).tolist(),
               "normal_incidence_and_view_rho_rgb":
@@ -246,7 +264,7 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
     :class:`clothlight.yarn_tables.YarnTableFiles`), with the light between yarns added, into
     ``folder`` (created) and its summary; returns the summary."""
     start = time.perf_counter()
-    measurement, light_between_yarns = with_light_between_yarns(measurement, yarn_lookup(yarn_tables))
+    measurement, light_between_yarns = with_light_between_yarns(measurement, yarn_lookup(yarn_tables), settings.weave)
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     yarn = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").metadata

@@ -38,6 +38,11 @@ import numpy as np
 
 from precompute.errors import ParameterError
 
+from ..render_bounds import (
+    DEFAULT_GONIO_EXIT_RESOLUTION,
+    DEFAULT_GONIO_INCIDENCE_RESOLUTION,
+    DEFAULT_GONIO_PIXELS_PER_PATCH,
+)
 from ..weave import WeaveParameters, build_woven_mesh
 from .goniometry import (
     SIDES,
@@ -60,6 +65,8 @@ RAY_OFFSET_MM = 1e-4
 ENTRY_MARGIN_MM = 0.01
 #: Threads that trace the views: Embree releases the GIL, and each view is traced alone.
 DEFAULT_THREADS = 2
+#: Rays that :func:`yarn_to_yarn_share` casts: its share to ±0.002.
+YARN_TO_YARN_RAYS = 100_000
 
 
 class WovenTracer:
@@ -88,7 +95,8 @@ class WovenTracer:
         self.normals, self.face_normals = _smooth_normals(vertices, faces)
         self.tangents = np.asarray(traced.tangent, np.float32).astype(float)
         self.vertices, self.faces = vertices, faces
-        self.face_yarn = np.repeat(np.arange(len(traced.yarn_faces)), [stop - start for start, stop in traced.yarn_faces])
+        self.face_yarn = np.repeat(np.arange(len(traced.yarn_faces)),
+                                   [stop - start for start, stop in traced.yarn_faces])
         self.face_centers = vertices[faces].mean(axis=1)
         # The tile's centre is the sample's (both symmetric about their own, and the tile's yarn counts
         # differ from the sample's by whole repeats on each side).
@@ -256,3 +264,39 @@ def trace_response(weave: WeaveParameters, incidence_resolution: int, exit_resol
     return GarmentResponse(traced, incidence_resolution, exit_resolution, shape,
                            {"samples_per_side": samples_per_side, "seed": seed,
                             "traced_seconds": time.perf_counter() - start})
+
+
+def yarn_to_yarn_share(weave: WeaveParameters, rays: int = YARN_TO_YARN_RAYS, seed: int = 0) -> float:
+    """The share of the light leaving ``weave``'s yarns that meets another yarn, as geometry alone
+    has it: rays from points spread uniformly over the yarns' surface (one weave repeat of the
+    default gonioreflectometer's tile), cosine-distributed about the smooth normal (a yarn's exit
+    light under broad light), traced to their first hit.  The light between yarns scales the
+    path-traced share of the validation weave by it (:func:`clothlight.garment.tables.lost_to_yarns`)."""
+    if not (isinstance(rays, int) and rays > 0):
+        raise ParameterError("rays", rays, "an integer > 0")
+    plan = plan_sample(weave, DEFAULT_GONIO_INCIDENCE_RESOLUTION, DEFAULT_GONIO_EXIT_RESOLUTION,
+                       DEFAULT_GONIO_PIXELS_PER_PATCH, 1)
+    tracer = WovenTracer(plan, DEFAULT_GONIO_INCIDENCE_RESOLUTION, DEFAULT_GONIO_EXIT_RESOLUTION)
+    repeat = max(weave.interlacing.shape) * float(weave.spacing_mm)
+    offset = np.abs(tracer.face_centers[:, :2] - tracer.center[:2])
+    faces = np.nonzero(np.all(offset < repeat / 2.0, axis=1))[0]
+    corners = tracer.vertices[tracer.faces[faces]]
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    rng = np.random.default_rng(seed)
+    face = faces[rng.choice(len(faces), rays, p=area / area.sum())]
+    # Uniform over each triangle (square-root warp of the barycentrics), then cosine-weighted.
+    root, along, radius, angle = np.sqrt(rng.random(rays)), rng.random(rays), np.sqrt(rng.random(rays)), \
+        2.0 * np.pi * rng.random(rays)
+    barycentric = np.stack([1.0 - root, root * (1.0 - along), root * along], axis=-1)
+    points = np.einsum("sk,skc->sc", barycentric, tracer.vertices[tracer.faces[face]])
+    normal = np.einsum("sk,skc->sc", barycentric, tracer.normals[tracer.faces[face]])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    helper = np.where(np.abs(normal[:, :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    first = np.cross(normal, helper)
+    first /= np.linalg.norm(first, axis=1, keepdims=True)
+    second = np.cross(normal, first)
+    directions = (radius * np.cos(angle))[:, None] * first + (radius * np.sin(angle))[:, None] * second \
+        + np.sqrt(1.0 - radius**2)[:, None] * normal
+    hit, *_ = tracer.first_hit(points + RAY_OFFSET_MM * directions, directions)
+    other = (hit >= 0) & (tracer.face_yarn[np.maximum(hit, 0)] != tracer.face_yarn[face])
+    return float(np.mean(other))

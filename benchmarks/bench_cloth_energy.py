@@ -92,6 +92,7 @@ def main() -> None:
     from clothlight.blender.garment.path_traced import measure_path_traced
     from clothlight.blender.scene_files import open_empty_file
     from clothlight.garment import between_yarns
+    from clothlight.garment.tables import lost_to_yarns
     from clothlight.garment.response_measurement import yarn_lookup
     from clothlight.yarn_tables import yarn_tables_from_bake
     from precompute.cache.entries import default_cache_dir
@@ -124,10 +125,11 @@ def main() -> None:
         scattered = {bounces: energies[bounces][0] + energies[bounces][1] for bounces in energies}
         gain = scattered[True] / scattered[False]
         albedo = between_yarns.broad_light_albedo(yarn_lookup(tables))
-        predicted = 1.0 + between_yarns.between_yarns_gain(albedo)
+        lost, _ = lost_to_yarns(weave)
+        predicted = 1.0 + between_yarns.between_yarns_gain(albedo, lost)
         q = (gain - 1.0) / (gain * albedo)
         print(f"{yarn}: G (with / without light between yarns) {_rgb(gain)}; the model's 1 + g "
-              f"{_rgb(predicted)} (a {_rgb(albedo)}); q this run implies "
+              f"{_rgb(predicted)} (a {_rgb(albedo)}, q {lost:.4f}); q this run implies "
               + ", ".join(f"{c} {v:.3f}" for c, v, a in zip("RGB", q, albedo) if a >= LEAST_ALBEDO_FOR_Q))
 
         cloth, _ = bake_cloth(folder, GoniometerSettings(weave=weave), cache_dir=cache_dir)

@@ -56,7 +56,7 @@ from .goniometry import (
     view_of,
     woven_bounds,
 )
-from .response import GarmentResponse, view_samples
+from .response import GarmentResponse, ResponseView, view_samples
 
 #: How far past a surface a ray starts, mm: clear of the triangle it leaves in Embree's float32
 #: (Cycles skips that triangle; the shader's own ``mindist`` is 1e-5), far below a yarn's size.
@@ -131,8 +131,10 @@ class WovenTracer:
             k = np.nonzero(behind)[0]
             face, distance, *_ = self.first_hit(points[k] + RAY_OFFSET_MM * suns[k], suns[k])
             # A ray that leaves no yarn (its own is open there) reaches the sun.
-            blocked[k[face < 0]] = False
-            origins[k] = points[k] + (distance + 2.0 * RAY_OFFSET_MM)[:, None] * suns[k]
+            left = face >= 0
+            blocked[k[~left]] = False
+            k = k[left]
+            origins[k] = points[k] + (distance[left] + 2.0 * RAY_OFFSET_MM)[:, None] * suns[k]
         face, *_ = self.first_hit(origins + RAY_OFFSET_MM * suns, suns)
         return blocked & (face >= 0)
 
@@ -178,7 +180,7 @@ def _smooth_normals(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray
 
 
 def trace_view(tracer: WovenTracer, side: str, exit_cell: int, exit_resolution: int, samples_per_side: int,
-               seed) -> object:
+               seed) -> ResponseView:
     """The response's :class:`.response.ResponseView` of exit cell ``exit_cell`` of ``side``:
     what ``clothlight.blender.garment.measure._GoniometerScene.render_lookups`` renders."""
     layout, n_i = tracer.layout, tracer.incidence_resolution

@@ -1,8 +1,9 @@
 """Where the cloth gonioreflectometer looks and how its pixels become a cloth BSDF (paper §7).
 
-Pure NumPy, no Blender.  The yarn-scale rig (:mod:`clothlight.validation`) measures in the plane
-of incidence; a garment material needs the cloth's whole BSDF: incidence over the sphere,
-views over both sides, azimuths included.  This module lays that measurement out.
+No Blender (NumPy, and the patch weights in numba: :mod:`.patch_lattice`).  The yarn-scale rig
+(:mod:`clothlight.validation`) measures in the plane of incidence; a garment material needs the
+cloth's whole BSDF: incidence over the sphere, views over both sides, azimuths included.  This
+module lays that measurement out.
 
 Frames.  The cloth lies in the x-y plane with its macroscopic normal +z and its warp along +x
 (:mod:`clothlight.weave.geometry`).  The *front* frame is the world frame; the *back* frame is
@@ -227,17 +228,23 @@ class OrthographicView:
         matrix[:3, 3] = np.asarray(self.center) + distance * w
         return matrix
 
+    def midplane_axes(self) -> tuple[np.ndarray, np.ndarray]:
+        """The image axes ``right`` and ``up`` slid along the view onto the mid-plane: (2,) each, the
+        x, y a unit step along them moves the point where a ray crosses the plane z = centre z."""
+        w, r, u = (np.asarray(v, float) for v in (self.toward_camera, self.right, self.up))
+        return r[:2] - r[2] / w[2] * w[:2], u[:2] - u[2] / w[2] * w[:2]
+
     def midplane_points(self, columns, rows) -> np.ndarray:
         """Where the rays through image points (``columns``, ``rows``: pixel units from the
         top-left corner, so pixel (i, j) has its centre at (i + ½, j + ½)) cross the plane z =
         centre z: (…, 2) x, y, mm."""
-        w, r, u, c = (np.asarray(v, float) for v in (self.toward_camera, self.right, self.up, self.center))
+        c = np.asarray(self.center, float)
         a = (np.asarray(columns, float) - self.width / 2.0) * self.pixel_mm
         b = (self.height / 2.0 - np.asarray(rows, float)) * self.pixel_mm * self.aspect
         # The point c + a r + b u of the image plane slid along the view direction back to the
         # mid-plane: an affine map of (a, b), taken per coordinate so that a row of columns and a
         # column of rows broadcast to the image without (…, 3) temporaries.
-        right, up = r[:2] - r[2] / w[2] * w[:2], u[:2] - u[2] / w[2] * w[:2]
+        right, up = self.midplane_axes()
         x, y = (c[i] + a * right[i] + b * up[i] for i in range(2))
         return np.stack(np.broadcast_arrays(x, y), axis=-1)
 
@@ -283,9 +290,7 @@ def patch_weights_at(view: OrthographicView, layout: RegionLayout, rows, columns
     """:func:`patch_weights` of the pixels (``rows``, ``columns``), broadcast together: the same
     values, pixel by pixel, as the whole image's."""
     rows, columns = np.broadcast_arrays(np.asarray(rows), np.asarray(columns))
-    w, r, u = (np.asarray(v, float) for v in (view.toward_camera, view.right, view.up))
-    # The image axes slid along the view onto the mid-plane (OrthographicView.midplane_points).
-    right, up = r[:2] - r[2] / w[2] * w[:2], u[:2] - u[2] / w[2] * w[:2]
+    right, up = view.midplane_axes()
     index, hits, two_patches = lattice_patch_counts(
         columns.ravel().astype(np.int64), rows.ravel().astype(np.int64), int(subsamples), view.width / 2.0,
         view.height / 2.0, float(view.pixel_mm), float(view.pixel_mm * view.aspect),
@@ -302,8 +307,8 @@ def patch_pixels(view: OrthographicView, layout: RegionLayout) -> tuple[np.ndarr
     do not): the patches' bounding boxes in the image, each pixel once, in row-major order."""
     # Image coordinates (column, row) of a mid-plane point, inverting the affine map of
     # OrthographicView.midplane_points.
-    w, r, u, c = (np.asarray(v, float) for v in (view.toward_camera, view.right, view.up, view.center))
-    right, up = r[:2] - r[2] / w[2] * w[:2], u[:2] - u[2] / w[2] * w[:2]
+    c = np.asarray(view.center, float)
+    right, up = view.midplane_axes()
     to_image = np.linalg.inv(np.column_stack([right * view.pixel_mm, -up * view.pixel_mm * view.aspect]))
     half = layout.patch_mm / 2.0
     corners = layout.region_centers()[:, None, :] + half * np.array([[-1, -1], [-1, 1], [1, -1], [1, 1]])

@@ -4,8 +4,9 @@ panel's Bake Cloth; :class:`clothlight.jobs.ClothBakeJob`).
 The cloth tables of ``python -m clothlight.garment bake`` (:func:`clothlight.blender.garment.bake.bake_cloth`,
 cached by content) for a yarn bake folder, written into the cache only: the add-on reads them there.
 Events, the stdin watch and the exit codes are :mod:`clothlight.worker_io`'s: JSON lines on stdout
-— ``{"event": "progress", "fraction": f, "stage": "renders k/N"}``, then ``done`` (the folder and
-whether it rendered), ``error`` or ``cancelled`` — 0 done, 2 bad input, 130 cancelled (nothing
+— ``{"event": "progress", "fraction": f, "stage": "views k/N"}`` (the response's views, traced or
+rendered), then ``done`` (the folder and whether it made the response or the measurement),
+``error`` or ``cancelled`` — 0 done, 2 bad input, 130 cancelled (nothing
 written: the cache stores an entry whole), 1 any other failure.  A cancel that comes while Blender
 renders is held until the render ends (Blender swallows an exception raised inside one).
 """
@@ -51,7 +52,7 @@ def _bake(args, _cancelled) -> dict:
 
     def progress(done: int, total: int, _what: str) -> None:
         held.check()  # a cancel during a render, held until it ended
-        events(done / max(total, 1), stage=f"renders {done}/{total}")
+        events(done / max(total, 1), stage=f"views {done}/{total}")
 
     events(0.0, stage="starting")
     with held:

@@ -27,13 +27,14 @@ def test_bake_cloth_measures_once_with_progress_then_finds_the_cache(tmp_path):
     assert outcome.rendered and outcome.folder.is_relative_to(tmp_path / "cache")
     check_cloth_table_folder(outcome.folder)
     assert fractions == sorted(fractions) and fractions[-1] == pytest.approx(1.0) and len(fractions) >= 3
-    assert job.stage == f"renders {2 * 2**2}/{2 * 2**2}"
+    assert job.stage == f"views {2 * 2**2}/{2 * 2**2}"
     again = ClothBakeJob(YARN_BAKE, cache_dir=tmp_path / "cache", settings=TINY).wait()
     assert again.folder == outcome.folder and not again.rendered
 
 
 def test_a_cancelled_cloth_bake_writes_no_tables(tmp_path):
-    job = ClothBakeJob(YARN_BAKE, cache_dir=tmp_path / "cache", settings=TINY)
+    # 2 · 8² views: a traced response takes seconds, so the cancel reaches the worker while it traces.
+    job = ClothBakeJob(YARN_BAKE, cache_dir=tmp_path / "cache", settings={**TINY, "exit_resolution": 8})
 
     def cancel_once_rendering(fraction: float) -> None:
         if fraction > 0:

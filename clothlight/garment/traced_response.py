@@ -248,18 +248,20 @@ def trace_response(weave: WeaveParameters, incidence_resolution: int, exit_resol
     plan = plan_sample(weave, incidence_resolution, exit_resolution, pixels_per_patch, patch_repeats)
     tracer = WovenTracer(plan, incidence_resolution, exit_resolution)
     views = [(side, cell) for side in SIDES for cell in range(exit_resolution**2)]
-    done = []
-
-    def one(numbered):
-        number, (side, cell) = numbered
-        traced = trace_view(tracer, side, cell, exit_resolution, samples_per_side, (seed, number))
-        done.append(number)
-        if progress is not None:
-            progress(len(done), len(views), f"{side}: exit cell {cell + 1} of {exit_resolution**2}")
-        return traced
-
     with ThreadPoolExecutor(max(1, int(threads))) as pool:
-        traced = list(pool.map(one, enumerate(views)))
+        futures = [pool.submit(trace_view, tracer, side, cell, exit_resolution, samples_per_side, (seed, number))
+                   for number, (side, cell) in enumerate(views)]
+        traced = []
+        try:
+            # Progress from this thread, in order: a caller's callback may raise (a cancel) or print.
+            for done, (future, (side, cell)) in enumerate(zip(futures, views), start=1):
+                traced.append(future.result())
+                if progress is not None:
+                    progress(done, len(views), f"{side}: exit cell {cell + 1} of {exit_resolution**2}")
+        except BaseException:
+            for future in futures:
+                future.cancel()
+            raise
     shape = {"patch_mm": plan.patch_mm,
              "sample_size_mm": tuple(2.0 * float(h) for h in tracer.half_size[:2]),
              "half_thickness_mm": plan.half_thickness_mm}

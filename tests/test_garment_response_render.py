@@ -175,3 +175,9 @@ def test_the_response_is_keyed_by_how_it_is_made_and_the_code_that_makes_it_not_
     assert not {"clothlight/garment/response_measurement.py", "clothlight/garment/tables.py"} & (traced | rendered)
     keys = {method: garment_bake.response_inputs(SETTINGS, method=method) for method in ("traced", "rendered")}
     assert keys["traced"]["code_digest"] != keys["rendered"]["code_digest"]
+
+
+def test_without_embree_the_response_is_rendered_and_keyed_so(monkeypatch):
+    monkeypatch.setattr(garment_bake, "tracing_available", lambda: False)
+    assert garment_bake.response_method() == "rendered"
+    assert garment_bake.response_inputs(SETTINGS)["method"] == "rendered"

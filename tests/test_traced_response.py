@@ -128,3 +128,11 @@ def test_the_share_of_yarn_light_meeting_another_yarn_grows_with_the_thread_coun
     assert sparse == pytest.approx(between_yarns.LOST_TO_YARNS * shares[0] / how["yarn_to_yarn_share"]
                                    ["validation_weave"])
     assert sparse < between_yarns.LOST_TO_YARNS
+
+
+def test_without_embree_every_weave_keeps_the_validation_weaves_q(monkeypatch):
+    from clothlight.garment import tables
+
+    monkeypatch.setattr(tables, "tracing_available", lambda: False)
+    assert lost_to_yarns(dataclasses.replace(VALIDATION_WEAVE, spacing_mm=10.0 / 12)) == (
+        between_yarns.LOST_TO_YARNS, {"scaled_by_geometry": False})

@@ -48,7 +48,7 @@ from ..weave import WeaveParameters
 from . import between_yarns
 from .goniometry import SIDES, side_to_world
 from .response_measurement import yarn_lookup
-from .traced_response import yarn_to_yarn_share
+from .traced_response import tracing_available, yarn_to_yarn_share
 
 from precompute.tables import exr as precompute_tables
 from precompute.tables import layout as table_layout
@@ -190,9 +190,7 @@ def lost_to_yarns(weave: WeaveParameters | None) -> tuple[float, dict]:
     validation weave (:data:`.between_yarns.LOST_TO_YARNS`) times the ratio of the two weaves'
     geometric shares (:func:`.traced_response.yarn_to_yarn_share`); the validation weave's own where
     Embree is missing (it traces them)."""
-    import importlib.util
-
-    if weave is None or importlib.util.find_spec("embreex") is None:
+    if weave is None or not tracing_available():
         return between_yarns.LOST_TO_YARNS, {"scaled_by_geometry": False}
     # The validation weave: WeaveParameters' defaults (its yarn counts do not matter here).
     shares = {"weave": yarn_to_yarn_share(weave), "validation_weave": yarn_to_yarn_share(WeaveParameters())}

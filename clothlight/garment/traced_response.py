@@ -29,6 +29,7 @@ the response against Cycles' render of it.
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import math
 import time
 from collections.abc import Callable
@@ -67,6 +68,11 @@ ENTRY_MARGIN_MM = 0.01
 DEFAULT_THREADS = 2
 #: Rays that :func:`yarn_to_yarn_share` casts: its share to ±0.002.
 YARN_TO_YARN_RAYS = 100_000
+
+
+def tracing_available() -> bool:
+    """Whether Embree (``embreex``) imports in this Python: what tracing needs."""
+    return importlib.util.find_spec("embreex") is not None
 
 
 class WovenTracer:

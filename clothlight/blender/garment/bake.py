@@ -32,7 +32,7 @@ from ...yarn_tables import yarn_tables_from_bake
 from ...garment.goniometry import MEASUREMENT_METHODS, SIDES, ClothMeasurement
 from ...garment.response import GarmentResponse
 from ...garment.response_measurement import measurement_from_response, yarn_lookup
-from ...garment.traced_response import trace_response
+from ...garment.traced_response import trace_response, tracing_available
 from ...garment.tables import DETAIL_FILE, SUMMARY_FILE, write_cloth_summary, write_cloth_tables
 from .detail import render_weave_detail
 from .measure import GoniometerSettings, _sample_weave, measure_cloth, measure_response
@@ -90,9 +90,7 @@ def yarn_inputs(yarn_tables) -> dict:
 def response_method() -> str:
     """How this Python makes a cloth response: ``traced`` where Embree (``embreex``) can be imported,
     else ``rendered`` (module docstring)."""
-    import importlib.util
-
-    return "traced" if importlib.util.find_spec("embreex") is not None else "rendered"
+    return "traced" if tracing_available() else "rendered"
 
 
 def response_inputs(settings: GoniometerSettings, samples_per_side: int = RESPONSE_SAMPLES_PER_SIDE,

@@ -57,6 +57,11 @@ SIDES = ("front", "back")
 SIDE_TO_WORLD = {"front": np.diag([1.0, 1.0, 1.0]), "back": np.diag([1.0, -1.0, -1.0])}
 #: Sub-pixel lattice (per pixel side) on which the patch weights are counted.
 WEIGHT_SUBSAMPLES = 4
+#: How far from a surface the gonioreflectometer's rays start, mm (the shaders' ``ShadowMinDistance``,
+#: the trace's offset).  The regions at the grid's edge lie 18–24 mm from the origin, where a float32
+#: step is 2·10⁻⁶ mm: with the shaders' default 10⁻⁵ a shadow ray met the triangle next to its start
+#: and the rendered response lost up to 5 % of the lit samples there (docs/garment.md).
+RAY_OFFSET_MM = 1e-4
 
 
 def side_to_world(directions, side: str) -> np.ndarray:

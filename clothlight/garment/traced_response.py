@@ -46,6 +46,7 @@ from ..render_bounds import (
 )
 from ..weave import WeaveParameters, build_woven_mesh
 from .goniometry import (
+    RAY_OFFSET_MM,
     SIDES,
     SamplePlan,
     exit_directions,
@@ -59,9 +60,6 @@ from .goniometry import (
 )
 from .response import GarmentResponse, ResponseView, view_samples
 
-#: How far past a surface a ray starts, mm: clear of the triangle it leaves in Embree's float32
-#: (Cycles skips that triangle; the shader's own ``mindist`` is 1e-5), far below a yarn's size.
-RAY_OFFSET_MM = 1e-4
 #: How far outside the slab a camera ray starts, mm.
 ENTRY_MARGIN_MM = 0.01
 #: Threads that trace the views: Embree releases the GIL, and each view is traced alone.

@@ -48,6 +48,7 @@ from ..sample_object import build_sample_object, weave_record
 from ..validation.rig import VALIDATION_WEAVE, sample_bounds
 from ...weave import WeaveParameters
 from ...garment.goniometry import (
+    RAY_OFFSET_MM,
     SIDES,
     ClothMeasurement,
     OrthographicView,
@@ -167,6 +168,7 @@ class _GoniometerScene:
                 material = build_yarn_material(tables, name=f"{SCENE_NAME} Yarn", mode=SUN_MODE)
             self._created.append(material)
             shader = shader_node(material)
+            shader.inputs["ShadowMinDistance"].default_value = RAY_OFFSET_MM
             if not self.lookups:
                 shader.inputs["MarkSpecular"].default_value = 1
             # Even with no bounce Cycles follows a diffuse closure's sampled ray to find emitting

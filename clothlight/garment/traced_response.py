@@ -285,9 +285,9 @@ def yarn_to_yarn_share(weave: WeaveParameters, rays: int = YARN_TO_YARN_RAYS, se
     plan = plan_sample(weave, DEFAULT_GONIO_INCIDENCE_RESOLUTION, DEFAULT_GONIO_EXIT_RESOLUTION,
                        DEFAULT_GONIO_PIXELS_PER_PATCH, 1)
     tracer = WovenTracer(plan, DEFAULT_GONIO_INCIDENCE_RESOLUTION, DEFAULT_GONIO_EXIT_RESOLUTION)
-    repeat = max(weave.interlacing.shape) * float(weave.spacing_mm)
+    # One weave repeat: the plan's patch (patch_repeats 1).
     offset = np.abs(tracer.face_centers[:, :2] - tracer.center[:2])
-    faces = np.nonzero(np.all(offset < repeat / 2.0, axis=1))[0]
+    faces = np.nonzero(np.all(offset < plan.patch_mm / 2.0, axis=1))[0]
     corners = tracer.vertices[tracer.faces[faces]]
     area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
     rng = np.random.default_rng(seed)

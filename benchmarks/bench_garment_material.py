@@ -4,12 +4,19 @@
 gaps: it makes camera and shadow rays continue through the cloth), and the reference with the
 same see-through (its alpha the cloth's coverage) for what that costs any material; and without
 the light through the cloth too (transmission=False), with how much each faster option changes
-the picture: the image's mean radiance against the full material's.
+the picture: the image's mean radiance against the full material's.  The garment is also timed
+against the see-through reference (like with like: both let the same share of light through).
+
+``--basis-lobes K``: also times the garment with K more GGX lobes, each steered by the view to a
+fixed peak and weighted by its own image lookup, what a mixture that forms a basis over the
+incidences would cost (docs/garment.md: 25 of them bring the general mode near 5 %).  Their
+weights are not fitted: the variant measures the cost, not the picture.
 
 The cloth tables are the shipped example's (example_blends/tables/paper_2008_cloth): their grid
 does not change the shader's cost (the same texture lookups), their weights do (the share of
 paths that go on through the cloth)."""
 
+import argparse
 import json
 import pathlib
 import sys
@@ -25,8 +32,11 @@ from clothlight.blender.garment.material import build_garment_material, cloth_ta
 from clothlight.garment.tables import SUMMARY_FILE
 from clothlight.blender.materials import GENERAL_MODE
 from clothlight.blender.measurement_render import configure_measurement_render, render_to_array
-from render_cost import light_and_camera, principled_with_sheen, print_render_cost, read_rgb
+from render_cost import light_and_camera, paired_ratio, principled_with_sheen, print_render_cost, read_rgb
 
+parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+parser.add_argument("--basis-lobes", type=int, default=0, metavar="K", help="also time K more steered GGX lobes")
+args = parser.parse_args()
 REPO = pathlib.Path(__file__).resolve().parents[1]
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-garment-"))
 cloth_dir = REPO / "example_blends" / "tables" / "paper_2008_cloth"
@@ -41,18 +51,70 @@ cloth, form = draped_cloth(scene)
 light_and_camera(scene, (0.0, -2.4, 1.1), (1.2, 0.0, 0.0))
 # What the see-through costs any material: the reference with the cloth's coverage at normal view
 # as its alpha (the same share of camera and shadow rays continue through it).
+SEE_THROUGH = "Principled + sheen, alpha = coverage"
 see_through = principled_with_sheen()
 coverage = json.loads((cloth_dir / SUMMARY_FILE).read_text())["coverage_normal"]["front"]
 see_through.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = coverage
 materials = {
-    "Principled + sheen, alpha = coverage": see_through,
+    SEE_THROUGH: see_through,
     "garment": build_garment_material(tables, "garment", mode=GENERAL_MODE, uv_map="UVMap"),
     "garment, no open weave": build_garment_material(tables, "garment opaque", mode=GENERAL_MODE, uv_map="UVMap",
                                                      open_weave=False),
+    "garment, open weave, no transmission": build_garment_material(tables, "garment gaps only", mode=GENERAL_MODE,
+                                                                   uv_map="UVMap", transmission=False),
     "garment, no transmission": build_garment_material(tables, "garment no transmission", mode=GENERAL_MODE,
                                                        uv_map="UVMap", open_weave=False, transmission=False),
 }
-print_render_cost(scene, cloth, materials, out)
+
+
+def with_basis_lobes(material, count: int):
+    """``material`` plus ``count`` GGX lobes (roughness 0.5), lobe k about the half vector between
+    the view and a fixed peak p_k, weighted by a lookup of the material's own lobe image."""
+    tree = material.node_tree
+    output = next(node for node in tree.nodes if node.type == "OUTPUT_MATERIAL")
+    total = output.inputs["Surface"].links[0].from_socket
+    image = next(node for node in tree.nodes if node.type == "TEX_IMAGE").image
+    incoming = tree.nodes.new("ShaderNodeNewGeometry").outputs["Incoming"]
+
+    def vector_math(operation, *inputs):
+        node = tree.nodes.new("ShaderNodeVectorMath")
+        node.operation = operation
+        for socket, value in zip(node.inputs, inputs):
+            if isinstance(value, bpy.types.NodeSocket):
+                tree.links.new(value, socket)
+            elif value is not None:
+                socket.default_value = value
+        return node.outputs[0]
+
+    golden = np.pi * (3.0 - np.sqrt(5.0))  # peaks spread over the hemisphere (a Fibonacci lattice)
+    for k in range(count):
+        z = 1.0 - (k + 0.5) / count
+        peak = (np.sqrt(1.0 - z * z) * np.cos(golden * k), np.sqrt(1.0 - z * z) * np.sin(golden * k), z)
+        half = vector_math("NORMALIZE", vector_math("ADD", incoming, peak))
+        lookup = tree.nodes.new("ShaderNodeTexImage")
+        lookup.image, lookup.interpolation, lookup.extension = image, "Linear", "EXTEND"
+        tree.links.new(vector_math("MULTIPLY_ADD", incoming, (0.05, 0.1, 0.0), ((k + 0.5) / count, 0.5, 0.0)),
+                       lookup.inputs["Vector"])
+        lobe = tree.nodes.new("ShaderNodeBsdfAnisotropic")
+        lobe.distribution = "GGX"
+        lobe.inputs["Roughness"].default_value = 0.5
+        tree.links.new(vector_math("SCALE", lookup.outputs["Color"], None, None, 0.05), lobe.inputs["Color"])
+        tree.links.new(half, lobe.inputs["Normal"])
+        add = tree.nodes.new("ShaderNodeAddShader")
+        tree.links.new(total, add.inputs[0])
+        tree.links.new(lobe.outputs[0], add.inputs[1])
+        total = add.outputs[0]
+    tree.links.new(total, output.inputs["Surface"])
+    return material
+
+
+if args.basis_lobes:
+    materials[f"garment + {args.basis_lobes} basis lobes"] = with_basis_lobes(
+        build_garment_material(tables, "garment basis", mode=GENERAL_MODE, uv_map="UVMap"), args.basis_lobes)
+runs = print_render_cost(scene, cloth, materials, out)
+# Like with like: against the reference that lets the same share of light through its gaps.
+for label in ("garment", "garment, open weave, no transmission"):
+    print(f"{label:36s} / the reference with alpha: {paired_ratio(runs, label, SEE_THROUGH)}")
 
 
 def cloth_mask() -> np.ndarray:

@@ -40,7 +40,8 @@ def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: i
     each (shader compile, BVH), then ``repeats`` rounds of one timed render per material, taken in
     turn so that a machine whose speed drifts slows them alike; print the medians and ratios.  The
     reference renders under Cycles' default SVM, as a user would render it, and so does every
-    material without a script node; the others under OSL, which their shaders need."""
+    material without a script node; the others under OSL, which their shaders need.  Returns the
+    seconds of each round per label, for :func:`paired_ratio` against another anchor."""
     every = {REFERENCE: principled_with_sheen(), **materials}
     shading_systems = {label: any(node.type == "SCRIPT" for node in material.node_tree.nodes)
                        for label, material in every.items()}
@@ -55,10 +56,10 @@ def print_render_cost(scene, obj, materials: dict, out: pathlib.Path, repeats: i
             bpy.ops.render.render(write_still=True)
             if round_index:
                 runs[label].append(time.perf_counter() - start)
-    timings = {label: sorted(seconds)[len(seconds) // 2] for label, seconds in runs.items()}
-    for label, seconds in timings.items():
-        print(f"{label:36s} {seconds:6.2f} s   {paired_ratio(runs, label, REFERENCE)}   (median of {repeats})")
-    return timings
+    for label, seconds in runs.items():
+        median = sorted(seconds)[len(seconds) // 2]
+        print(f"{label:36s} {median:6.2f} s   {paired_ratio(runs, label, REFERENCE)}   (median of {repeats})")
+    return runs
 
 
 def paired_ratio(runs: dict, label: str, anchor: str) -> str:

@@ -187,6 +187,58 @@ def test_without_transmission_the_garment_reflects_the_same_and_passes_no_light(
             np.testing.assert_allclose(means[False][:3], means[True][:3], rtol=0.02, atol=2e-4)
 
 
+def test_a_shadow_ray_reads_only_the_open_weave_and_sees_the_same_cloth(tmp_path, synthetic_cloth):
+    """Shadow rays meet a Mix Shader on Is Shadow Ray whose shadow side is the open weave alone, so
+    the other lobes' lookups sit behind it; the picture is the one without the shortcut. A floor
+    under the cloth, seen through its gaps from above and lit through them: what the floor adds is
+    the front's open share along the view times the back's along the sun (a shadow ray from below
+    meets the back face) times the floor's direct light."""
+    tables, *_ = synthetic_cloth
+    toward_camera, toward_sun = np.array([0.0, 0.0, 1.0]), unit([0.3, -0.2, 0.9])
+    scene = garment_scene(tables, GENERAL_MODE, toward_camera, toward_sun)
+    scene.cycles.samples = 64
+    cloth = next(obj for obj in scene.objects if obj.type == "MESH")
+    nodes, links = cloth.active_material.node_tree.nodes, cloth.active_material.node_tree.links
+    gates = [node for node in nodes if node.type == "MIX_SHADER" and node.inputs["Fac"].is_linked
+             and node.inputs["Fac"].links[0].from_socket.name == "Is Shadow Ray"]
+    assert len(gates) == 1
+    gate = gates[0]
+    passes = gate.inputs[2].links[0].from_node
+    assert passes.type == "BSDF_TRANSPARENT"
+
+    def upstream(socket):
+        seen, todo = set(), [link.from_node for link in socket.links]
+        while todo:
+            node = todo.pop()
+            if node.name not in seen:
+                seen.add(node.name)
+                todo += [link.from_node for inp in node.inputs for link in inp.links]
+        return {nodes[name] for name in seen}
+
+    lookups = {node for node in nodes if node.type == "TEX_IMAGE"}
+    assert len(lookups & upstream(gate.inputs[2])) == 1 and lookups <= upstream(gate.inputs[1])
+
+    bpy.ops.mesh.primitive_plane_add(size=20.0, location=(0.0, 0.0, -1.0))
+    floor = bpy.context.active_object
+    white = bpy.data.materials.new("white")
+    white.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    white.node_tree.nodes["Principled BSDF"].inputs["Roughness"].default_value = 1.0
+    white.node_tree.nodes["Principled BSDF"].inputs["Specular IOR Level"].default_value = 0.0
+    floor.data.materials.append(white)
+    with_floor = render_to_array(scene, tmp_path / "shortcut.exr")[..., :3]
+    surface = gate.inputs[1].links[0].from_socket
+    output = next(node for node in nodes if node.type == "OUTPUT_MATERIAL")
+    links.new(surface, output.inputs["Surface"])
+    np.testing.assert_allclose(render_to_array(scene, tmp_path / "no shortcut.exr")[..., :3], with_floor,
+                               rtol=1e-6, atol=1e-7)
+    floor.hide_render = True
+    without_floor = render_to_array(scene, tmp_path / "no floor.exr")[..., :3]
+    open_share = {side: 1.0 - COVERAGE[side] for side in ("front", "back")}
+    floor_lit = SUN_IRRADIANCE * toward_sun[2] / np.pi
+    np.testing.assert_allclose((with_floor - without_floor).mean(axis=(0, 1)),
+                               open_share["front"] * open_share["back"] * floor_lit, rtol=0.05)
+
+
 def test_weave_detail_shows_the_yarns_and_keeps_the_mean(tmp_path, synthetic_cloth):
     """A detail texture of stripes (coverage 1 and 0.6, flat normals; its mean the bake's 0.8 at
     normal view, as a real bake's is) tiled four times across a view straight down: pixels differ

@@ -106,7 +106,7 @@ def build_garment_material(tables: ClothTableFiles, name: str = "ClothLight Garm
     tree = material.node_tree
     tree.nodes.clear()
     output = tree.nodes.new("ShaderNodeOutputMaterial")
-    output.location = (1400, 0)
+    output.location = (1600, 0)
     tangent = tree.nodes.new("ShaderNodeTangent")
     tangent.direction_type = "UV_MAP"
     tangent.uv_map = uv_map
@@ -249,7 +249,18 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
     gloss.distribution = "BECKMANN"
     nodes.node_inputs(gloss, {"Roughness": tables.lobe_shape["gloss_alpha"] ** 0.5,  # Cycles: α = roughness²
                               "Anisotropy": 0.0})
-    return nodes.add_shaders([closure.outputs[0] for closure in closures.values()], x=1200)
+    surface = nodes.add_shaders([closure.outputs[0] for closure in closures.values()], x=1200)
+    if not open_weave:
+        return surface
+    # A shadow ray asks the cloth only how much light passes, which is the transparent closure's
+    # weight: SVM jumps over a Mix Shader's input of weight zero and the nodes only it reads, so the
+    # other lobes' lookups are not run for shadow rays (the same picture, 6 % faster:
+    # benchmarks/bench_garment_material.py).
+    light_path = nodes.node("ShaderNodeLightPath", (1200, 400))
+    passes = nodes.node("ShaderNodeBsdfTransparent", (1200, 250),
+                        {"Color": closures["open_weave"].inputs["Color"].links[0].from_socket})
+    return nodes.node("ShaderNodeMixShader", (1400, 0),
+                      (light_path.outputs["Is Shadow Ray"], surface, passes.outputs[0])).outputs[0]
 
 
 def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_MODE, name: str | None = None,

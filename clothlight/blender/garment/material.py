@@ -180,7 +180,7 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
 
     ``open_weave``, ``transmission``: whether the transparent closure and the two transmission
     closures are in the sum (:func:`build_garment_material`); the image lookups of lobes left out
-    are left out too.
+    are left out too.  With the open weave, shadow rays see the transparent closure alone.
 
     ``detail`` (:func:`_weave_detail`): the closures about the bent normal, their weights times
     s = coverage / mean coverage, the open weave's 1 − s (1 − open): the same mean per repeat."""
@@ -254,8 +254,7 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
         return surface
     # A shadow ray asks the cloth only how much light passes, which is the transparent closure's
     # weight: SVM jumps over a Mix Shader's input of weight zero and the nodes only it reads, so the
-    # other lobes' lookups are not run for shadow rays (the same picture, 6 % faster:
-    # benchmarks/bench_garment_material.py).
+    # other lobes' lookups are not run for shadow rays (the same picture: docs/garment.md, "Render cost").
     light_path = nodes.node("ShaderNodeLightPath", (1200, 400))
     passes = nodes.node("ShaderNodeBsdfTransparent", (1200, 250),
                         {"Color": closures["open_weave"].inputs["Color"].links[0].from_socket})

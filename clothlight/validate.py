@@ -231,6 +231,12 @@ def _main(argv) -> int:
                 print(f"garment material ({mode}, flat patch) vs {what}: RMS relative difference "
                       f"{comparison['RGB']['relative_rms']:.1%} (red {comparison['R']['relative_rms']:.1%}) over "
                       f"{comparison['views_compared']} views")
+    comparison = results.get("garment_general_vs_garment")
+    if comparison:
+        print(f"garment material, general lighting vs sun mode (the closure mixture's own error): RMS relative "
+              f"difference {comparison['RGB']['relative_rms']:.1%} (red {comparison['R']['relative_rms']:.1%}, "
+              f"green {comparison['G']['relative_rms']:.1%}, blue {comparison['B']['relative_rms']:.1%}) over "
+              f"{comparison['views_compared']} views")
     print(f"sweep: {results['seconds']['total']:.1f} s")
     return 0
 

@@ -242,7 +242,8 @@ def test_apply_garment_material_puts_a_cloth_bake_on_meshes_with_uvs_only(scene,
     assert bpy.ops.clothlight.apply_garment_material() == {"FINISHED"}
     closures = {node.bl_idname for node in garment.active_material.node_tree.nodes
                 if node.bl_idname.startswith("ShaderNodeBsdf")}
-    assert closures == {"ShaderNodeBsdfDiffuse", "ShaderNodeBsdfAnisotropic"}
+    assert closures == {"ShaderNodeBsdfDiffuse", "ShaderNodeBsdfToon", "ShaderNodeBsdfAnisotropic",
+                        "ShaderNodeBsdfMetallic"}  # reflection only
 
 
 def weave_repeats(material) -> float | None:

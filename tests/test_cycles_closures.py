@@ -29,8 +29,10 @@ shader closure_probe(int Kind = 0, float R1 = 0.2, float R2 = 0.5, float Alpha =
         BSDF = hair_transmission(N, R1, R2, T, 0.0);
     else if (Kind == 2)
         BSDF = microfacet("ggx", normalize(I), Alpha, 1.5, 0);
-    else
+    else if (Kind == 3)
         BSDF = microfacet("beckmann", N, Alpha, 1.5, 0);
+    else
+        BSDF = diffuse_toon(N, 1.0, 0.0);
 }
 """
 
@@ -65,6 +67,8 @@ CASES = [
     ("beckmann", (30, 0), (35, 180), "near the mirror direction"),
     ("beckmann", (70, 20), (60, 150), "grazing, forward"),
     ("beckmann", (40, 90), (20, 80), "back toward the light"),
+    ("uniform", (30, 0), (75, 180), "grazing light, the same as at normal"),
+    ("uniform", (60, 90), (5, 10), "near-normal light"),
 ]
 
 
@@ -74,7 +78,7 @@ CASES = [
 def test_twin_matches_cycles(bpy, tmp_path, kind, view_angles, light_angles, what):
     view, light = direction(*view_angles), direction(*light_angles)
     r1, r2, alpha = 0.2, 0.5, 0.3
-    kinds = {"hair_reflection": 0, "hair_transmission": 1, "ggx_retro": 2, "beckmann": 3}
+    kinds = {"hair_reflection": 0, "hair_transmission": 1, "ggx_retro": 2, "beckmann": 3, "uniform": 4}
     if kind == "beckmann":  # the garment's gloss: the paper's rms slope
         alpha = 0.8
     rendered = render_closure(tmp_path, kinds[kind], view, light, r1, r2, alpha)
@@ -84,6 +88,8 @@ def test_twin_matches_cycles(bpy, tmp_path, kind, view_angles, light_angles, wha
         expected = cc.hair_transmission_eval(NORMAL, TANGENT, view, light, r1, r2)
     elif kind == "beckmann":
         expected = cc.beckmann_reflection_eval(NORMAL, view, light, alpha)
+    elif kind == "uniform":
+        expected = cc.uniform_eval(NORMAL, light)
     else:
         expected = cc.ggx_reflection_eval(view, view, light, alpha)
     assert float(expected) > 1e-3, "each case must probe a lit part of the lobe"
@@ -99,9 +105,10 @@ def test_twins_vanish_where_cycles_does():
     assert cc.beckmann_reflection_eval(NORMAL, view, behind, 0.8) == 0.0
     np.testing.assert_allclose(cc.diffuse_eval(NORMAL, direction(60, 0)), 0.5 / math.pi)
     np.testing.assert_allclose(cc.translucent_eval(NORMAL, direction(120, 0)), 0.5 / math.pi)
+    assert cc.uniform_eval(NORMAL, behind) == 0.0
 
 
-@pytest.mark.parametrize("kind", ["hair_reflection", "hair_transmission", "ggx", "beckmann"])
+@pytest.mark.parametrize("kind", ["hair_reflection", "hair_transmission", "ggx", "beckmann", "uniform"])
 def test_lobes_conserve_energy(kind):
     # Each lobe is normalised by its sampling pdf: the integral over the sphere is at most 1 (less
     # where the lobe is clipped), which makes a fitted weight the lobe's albedo.
@@ -115,6 +122,8 @@ def test_lobes_conserve_energy(kind):
         values = cc.hair_transmission_eval(NORMAL, TANGENT, view, samples, 0.3, 0.6)
     elif kind == "beckmann":
         values = cc.beckmann_reflection_eval(NORMAL, view, samples, 0.8)
+    elif kind == "uniform":
+        values = cc.uniform_eval(NORMAL, samples)
     else:
         values = cc.ggx_reflection_eval(view, view, samples, 0.4)
     integral = values.mean() * 4 * math.pi

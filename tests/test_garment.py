@@ -22,10 +22,11 @@ from clothlight.garment.tables import (
     SPECULAR_VISIBILITY_FILES,
     SUMMARY_FILE,
     SUMMARY_SCHEMA,
+    garment_lobe_responses,
     lobe_image,
     projected_view_grid,
 )
-from precompute.tables.closure_fit import LobeShape, lobe_responses
+from precompute.tables.closure_fit import LobeShape
 from precompute.tables.grids import AngularGrid
 from precompute.tables.layout import brdf_atlas, interpolate_rho
 from precompute.tables.exr import TableError
@@ -78,11 +79,13 @@ def lobe_weights(view, side):
     sign = 1.0 if side == "front" else -1.0
     diffuse = np.array([0.5 + 0.2 * view[..., 0], 0.3 + sign * 0.15 * view[..., 1], 0.1 + 0.05 * view[..., 0]])
     weights = np.zeros(view.shape[:-1] + (len(LOBE_TILES), 3))
-    weights[..., 0, :] = np.moveaxis(diffuse, 0, -1)
-    weights[..., 1, :] = [0.4, 0.0, 0.1] if side == "front" else [0.1, 0.2, 0.0]
-    weights[..., 2, :] = [0.3, 0.2, 0.0]
-    weights[..., 3, :] = [0.2, 0.1, 0.3]
-    weights[..., 4, :] = 1.0 - COVERAGE[side]
+    constant = {"uniform": [0.1, 0.05, 0.2], "retroreflection": [0.05, 0.1, 0.02],
+                "translucent": [0.4, 0.0, 0.1] if side == "front" else [0.1, 0.2, 0.0],
+                "fibre_transmission": [0.3, 0.2, 0.0], "gloss": np.full(3, 0.2),  # grey: the yarns' specular term
+                "open_weave": np.full(3, 1.0 - COVERAGE[side])}
+    weights[..., LOBE_TILES.index("diffuse"), :] = np.moveaxis(diffuse, 0, -1)
+    for tile, value in constant.items():
+        weights[..., LOBE_TILES.index(tile), :] = value
     return weights
 
 
@@ -163,7 +166,8 @@ def test_general_mode_renders_the_lobe_mixture_and_the_open_weave(tmp_path, synt
     view = side_to_world(to_cloth @ toward_camera, side)
     light = side_to_world(to_cloth @ toward_sun, side)
     weights = lobe_weights(view, side)
-    expected = SUN_IRRADIANCE * lobe_responses(view, light, lobes=GARMENT_LOBES) @ weights[: len(GARMENT_LOBES)]
+    expected = (SUN_IRRADIANCE * garment_lobe_responses(view, light, LobeShape(), SPECULAR["ior"])
+                @ weights[: len(GARMENT_LOBES)])
     assert expected[0] > 1e-3
     np.testing.assert_allclose(pixels[:, :3].mean(axis=0), expected, rtol=0.02, atol=2e-4)
     np.testing.assert_allclose(pixels[:, 3].mean(), COVERAGE[side], atol=0.02)  # sampled: 16 spp
@@ -385,7 +389,8 @@ def test_cloth_bsdf_agrees_with_the_in_plane_rig_at_normal_incidence_and_view(tm
     """Two framings of the same measurement: the gonioreflectometer's regions at (normal, normal)
     (a cell centre of both odd grids) and the validation rig's in-plane sweep at θi = θv = 0."""
     folder, _, _ = red_cotton_cloth
-    results = run_validation(None, tmp_path, materials=("yarn", "garment"), tables_dir=YARN_BAKE, cloth_dir=folder,
+    results = run_validation(None, tmp_path, materials=("yarn", "garment", "garment_general"), tables_dir=YARN_BAKE,
+                             cloth_dir=folder,
                              settings=RigSettings(incidences_deg=(0.0,), views_deg=(0.0,), resolution=48, samples=4),
                              swatches=False)
     yarn = np.array(results["materials"]["yarn"]["views"][0]["brdf_rgb"])
@@ -396,6 +401,11 @@ def test_cloth_bsdf_agrees_with_the_in_plane_rig_at_normal_incidence_and_view(tm
     assert 0.0 < between[0] < 0.5 * garment[0]
     np.testing.assert_allclose(garment[0] - between[0], yarn[0], rtol=0.05)
     assert results["garment_vs_yarn"]["views_compared"] == 1
+    # The general mode against the cloth BSDF it stands for (the closure mixture's own error).
+    general = np.array(results["materials"]["garment_general"]["views"][0]["brdf_rgb"])
+    mixture = results["garment_general_vs_garment"]
+    assert mixture["views_compared"] == 1
+    np.testing.assert_allclose(mixture["R"]["relative_rms"], abs(general[0] / garment[0] - 1.0), rtol=1e-6)
 
 
 def test_bake_command_copies_a_cached_bake_and_names_bad_input(tmp_path, red_cotton_cloth, capsys):

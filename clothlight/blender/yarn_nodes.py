@@ -166,15 +166,25 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal) -> list:
                               .outputs["Value"], 0.0, location=(-650, -800))
     copies = math.ceil(weight)
     factor = nodes.math("MULTIPLY", face_on_side, weight / copies, location=(-500, -800))
+    return cook_torrance_closures(nodes, factor, copies, tables.host_index, slope, toward, (-200, -700))
+
+
+def cook_torrance_closures(nodes, factor, copies: int, index: float, slope: float, normal, location) -> list:
+    """The Cook–Torrance term (§5.2) of slope ``slope`` and index ``index`` about ``normal`` (a socket;
+    None: the shading normal), ``copies`` times, each scaled by ``factor`` (a socket in [0, 1]): a
+    Beckmann Metallic BSDF, physical conductor with no extinction, has the dielectric's Fresnel
+    (``precompute.tables.cycles_closures.beckmann_conductor_eval``).  It has no colour input, so a
+    weight above 1 takes copies, each weighted by a Mix Shader's factor."""
     closures = []
+    x, y = location
     for copy in range(copies):
-        lobe = nodes.node("ShaderNodeBsdfMetallic", (-200, -700 - 300 * copy),
-                          {"IOR": (tables.host_index,) * 3, "Extinction": (0.0, 0.0, 0.0),
-                           "Roughness": math.sqrt(slope), "Anisotropy": 0.0, "Normal": toward,
+        lobe = nodes.node("ShaderNodeBsdfMetallic", (x, y - 300 * copy),
+                          {"IOR": (index,) * 3, "Extinction": (0.0, 0.0, 0.0),
+                           "Roughness": math.sqrt(slope), "Anisotropy": 0.0, "Normal": normal,
                            # Without anisotropy the rotation changes nothing; it keeps the copies
                            # distinct nodes, which Cycles would otherwise merge into one closure.
                            "Rotation": copy / (copies + 1.0)},
                           distribution="BECKMANN", fresnel_type="PHYSICAL_CONDUCTOR")
-        closures.append(nodes.node("ShaderNodeMixShader", (100, -700 - 300 * copy),
+        closures.append(nodes.node("ShaderNodeMixShader", (x + 300, y - 300 * copy),
                                    (factor, None, lobe.outputs[0])).outputs[0])
     return closures

@@ -20,8 +20,8 @@ and for both sides together:
 
 ``lobes.exr``
     The general-lighting closure mixture: per view, the weights of :data:`GARMENT_LOBES`
-    fitted to each side's ρ (:func:`precompute.tables.closure_fit.fit_closure_weights`: the gloss
-    lobe to the specular term, the others to the rest, :data:`SPECULAR_LOBE`), and the open
+    for each side's ρ (the gloss lobe from the specular term, :func:`gloss_weights`; the others
+    fitted to the rest, :func:`precompute.tables.closure_fit.fit_closure_weights`), and the open
     weave, 1 − the fraction of the cloth hidden by yarn along the view, through which light
     passes unscattered (a transparent closure).  Laid out for a node-based material
     (:func:`lobe_image`): views on a square grid over the projected hemisphere, front side on top.
@@ -52,26 +52,27 @@ from .traced_response import tracing_available, yarn_to_yarn_share
 
 from precompute.tables import exr as precompute_tables
 from precompute.tables import layout as table_layout
-from precompute.tables import closure_fit
+from precompute.tables import closure_fit, cycles_closures
 from precompute.tables.grids import AngularGrid
 
-SUMMARY_SCHEMA = "clothlight-cloth/2"
+SUMMARY_SCHEMA = "clothlight-cloth/3"
 #: The garment material's closure mixture (names of precompute.tables.closure_fit lobes, in tile order).
-#: At cloth scale the fibre reflection cone and the retro-reflection lobe barely lower the fit
-#: error (red cotton, median relative error front 0.248 with the yarn's five, 0.249 with diffuse,
-#: translucent and fibre transmission, 0.263 with diffuse and translucent alone), and every
-#: closure costs render time; a gloss lobe about the normal, Beckmann as the yarns' Cook–Torrance
-#: term, carries the cloth's specular peak.
-GARMENT_LOBES = ("diffuse", "translucent", "fibre_transmission", "gloss")
+#: Per view, a cloth's ρ falls more slowly with the incidence than a Lambertian lobe's cos θ_i (light
+#: meets the yarns' sides) and rises toward the light (shadow hiding): with diffuse, translucent and
+#: fibre transmission alone the mixture was 1.12–1.19 of red_cotton's ρ at normal incidence and
+#: 0.61–0.87 at 60°.  A uniform lobe (the same ρ at every incidence) and the yarn mixture's GGX
+#: retro-reflection lobe follow both: against the cloth BSDF over the validation sweep, 16.2 % →
+#: 6.0 % RGB (benchmarks/bench_garment_lobes.py).  The gloss lobe is the yarns' Cook–Torrance term
+#: itself (:func:`gloss_weights`).
+GARMENT_LOBES = ("diffuse", "uniform", "retroreflection", "translucent", "fibre_transmission", "gloss")
 #: The garment mixture is fitted where ρ is large (precompute.tables.closure_fit.fit_closure_weights):
-#: a garment under broad light reflects an integral of ρ.  Red cotton, N_o = 12, general mode vs
-#: the yarn sample: validation sweep 13.4 % (14.2 % weighing every incidence alike), lit from
-#: straight behind 1.03 of the sample's red glow (1.38).
+#: a garment under broad light reflects an integral of ρ.
 FIT_WEIGHTING = "absolute"
 #: The lobe that carries the specular term (the yarns' Cook–Torrance, whose Beckmann distribution it
-#: shares), fitted to that term alone, and the other lobes to ρ without it: fitted among them to all
-#: of ρ, the white, narrow peak bent the coloured lobes (red_cotton's general mode vs the yarn sample
-#: over the validation sweep: 37.1 % → 21.2 % RGB, blue 79.8 % → 41.6 %; docs/garment.md).
+#: shares), weighted from that term alone (:func:`gloss_weights`), and the other lobes fitted to ρ
+#: without it: fitted among them to all of ρ, the white, narrow peak bent the coloured lobes
+#: (red_cotton's general mode vs the yarn sample over the validation sweep: 37.1 % → 21.2 % RGB, blue
+#: 79.8 % → 41.6 %; docs/garment.md).
 SPECULAR_LOBE = "gloss"
 SUMMARY_FILE = "summary.json"
 #: How far above 1 a cloth's reflected + transmitted + open share of the incident light may come before
@@ -226,33 +227,70 @@ def with_light_between_yarns(measurement, yarn, weave: WeaveParameters | None = 
     return dataclasses.replace(measurement, rho=rho), record
 
 
-def mixture_weights(rho: np.ndarray, specular: np.ndarray, incidence_resolution: int,
-                    shape: closure_fit.LobeShape, views: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def mixture_weights(rho: np.ndarray, specular: np.ndarray, visibility: np.ndarray, specular_parameters: dict,
+                    incidence_resolution: int, shape: closure_fit.LobeShape,
+                    views: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The general-lighting mixture of one side standing for all of ``rho`` (n_in, n_out, 3), 1/sr,
-    whose ``specular`` term (n_in, n_out), 1/sr, is carried by :data:`SPECULAR_LOBE` alone: weights
-    (n_views, len(GARMENT_LOBES), 3) at ``views``, and the mixture's relative error against ``rho``
-    (:func:`mixture_error`)."""
+    whose ``specular`` term (n_in, n_out), 1/sr, of visibility ``visibility`` (n_in, n_out) and
+    parameters ``specular_parameters`` (:data:`SPECULAR_KEYS`) is carried by :data:`SPECULAR_LOBE`
+    alone (:func:`gloss_weights`): weights (n_views, len(GARMENT_LOBES), 3) at ``views``, and the
+    mixture's relative error against ``rho`` (:func:`mixture_error`)."""
     specular = np.broadcast_to(np.asarray(specular, float)[..., None], rho.shape)
     weights = np.zeros((len(views), len(GARMENT_LOBES), rho.shape[-1]))
-    for part, lobes in ((np.maximum(rho - specular, 0.0), tuple(k for k in GARMENT_LOBES if k != SPECULAR_LOBE)),
-                        (specular, (SPECULAR_LOBE,))):
-        fitted, _ = closure_fit.fit_closure_weights(table_layout.brdf_atlas(part), incidence_resolution, shape,
-                                                    lobes=lobes, views=views, weighting=FIT_WEIGHTING)
-        weights[:, [GARMENT_LOBES.index(k) for k in lobes]] = fitted
-    return weights, mixture_error(table_layout.brdf_atlas(rho), incidence_resolution, weights, shape, views)
+    others = tuple(k for k in GARMENT_LOBES if k != SPECULAR_LOBE)
+    fitted, _ = closure_fit.fit_closure_weights(table_layout.brdf_atlas(np.maximum(rho - specular, 0.0)),
+                                                incidence_resolution, shape, lobes=others, views=views,
+                                                weighting=FIT_WEIGHTING)
+    weights[:, [GARMENT_LOBES.index(k) for k in others]] = fitted
+    weights[:, GARMENT_LOBES.index(SPECULAR_LOBE)] = gloss_weights(visibility, specular_parameters,
+                                                                   incidence_resolution, views)[:, None]
+    error = mixture_error(table_layout.brdf_atlas(rho), incidence_resolution, weights, shape, views,
+                          specular_parameters["ior"])
+    return weights, error
+
+
+def gloss_weights(visibility: np.ndarray, specular_parameters: dict, incidence_resolution: int,
+                  views: np.ndarray) -> np.ndarray:
+    """The gloss lobe's weight (n_views,) at ``views`` (n_views, 3), the side's frame, standing for
+    the specular term w_s f_CT(ω_i, ω_o) cos θ_i V(ω_i, ω_o) (``specular_parameters``: w_s, slope m,
+    index n; ``visibility`` V (n_in, n_out)).  The lobe is f_CT cos θ_i itself, Fresnel included
+    (:func:`garment_lobe_responses`); V is close to its value at the mirror direction where the lobe
+    is, so the weight is w_s V(mirror of ω_o, ω_o).  A least-squares fit to the tabulated term cannot
+    do this: cell centres 16–20° apart sample a peak a few degrees wide (red_cotton's m = 0.094)
+    anywhere from its top to nothing, view by view."""
+    views = np.asarray(views, float)
+    mirror = views * np.array([-1.0, -1.0, 1.0])
+    v_at_mirror = table_layout.interpolate_rho(
+        table_layout.brdf_atlas(np.asarray(visibility, float)[..., None]), incidence_resolution, mirror, views)[:, 0]
+    return specular_parameters["weight"] * v_at_mirror
+
+
+def garment_lobe_responses(view: np.ndarray, light: np.ndarray, shape: closure_fit.LobeShape,
+                           ior: float) -> np.ndarray:
+    """Cycles' response (…, len(GARMENT_LOBES)), 1/sr, of each of the garment's lobes
+    (:func:`precompute.tables.closure_fit.lobe_responses`), the gloss lobe the Metallic BSDF of the
+    yarns' index ``ior`` the material uses (``cycles_closures.beckmann_conductor_eval``): the
+    Cook–Torrance term, whose Fresnel factor changes fast across a narrow lobe seen near grazing."""
+    others = tuple(k for k in GARMENT_LOBES if k != SPECULAR_LOBE)
+    response = np.zeros(np.shape(light)[:-1] + (len(GARMENT_LOBES),))
+    response[..., [GARMENT_LOBES.index(k) for k in others]] = closure_fit.lobe_responses(view, light, shape, others)
+    response[..., GARMENT_LOBES.index(SPECULAR_LOBE)] = cycles_closures.beckmann_conductor_eval(
+        closure_fit.YARN_NORMAL, view, light, shape.gloss_alpha, ior)
+    return response
 
 
 def mixture_error(atlas: np.ndarray, incidence_resolution: int, weights: np.ndarray, shape: closure_fit.LobeShape,
-                  views: np.ndarray, subsamples: int = 3) -> np.ndarray:
-    """The relative error (n_views, C) of the mixture ``weights`` (n_views, len(GARMENT_LOBES), C) against
-    ``atlas``, as :func:`precompute.tables.closure_fit.fit_closure_weights` measures its own fit's: RMS
-    over the incidence samples of (mixture − ρ) / (ρ + mean ρ)."""
+                  views: np.ndarray, ior: float, subsamples: int = 3) -> np.ndarray:
+    """The relative error (n_views, C) of the mixture ``weights`` (n_views, len(GARMENT_LOBES), C) of
+    :func:`garment_lobe_responses` against ``atlas``, as
+    :func:`precompute.tables.closure_fit.fit_closure_weights` measures its own fit's: RMS over the
+    incidence samples of (mixture − ρ) / (ρ + mean ρ)."""
     grid = AngularGrid("sphere", incidence_resolution)
     light = closure_fit.incidence_samples(grid, subsamples)
     error = np.zeros((len(views), atlas.shape[2]))
     for exit_cell, view in enumerate(views):
         target = closure_fit.interpolate_rho(atlas, incidence_resolution, light, np.broadcast_to(view, light.shape))
-        mixture = closure_fit.lobe_responses(view, light, shape, GARMENT_LOBES) @ weights[exit_cell]
+        mixture = garment_lobe_responses(view, light, shape, ior) @ weights[exit_cell]
         error[exit_cell] = np.sqrt(np.mean(((mixture - target) / (target + target.mean(axis=0) + 1e-30)) ** 2, axis=0))
     return error
 
@@ -290,7 +328,9 @@ def write_cloth_tables(folder, measurement, settings, yarn_tables, *, cache_key:
         precompute_tables.write_table(folder / SPECULAR_VISIBILITY_FILES[side], table_layout.brdf_atlas(visibility),
                                       {**header, "side": side, "layout": layout, "table": "brdf",
                                        "quantity": "specular visibility", "specular": measurement.specular_parameters})
-        weights, error = mixture_weights(measurement.rho[side], measurement.specular[side], n_i, shape, views)
+        weights, error = mixture_weights(measurement.rho[side], measurement.specular[side],
+                                         measurement.specular_visibility[side], measurement.specular_parameters,
+                                         n_i, shape, views)
         fit_error[side] = np.median(error, axis=0).tolist()
         open_weave = 1.0 - coverage_along(measurement.coverage[side], views)
         tiles[side] = np.concatenate([weights, np.repeat(open_weave[:, None, None], 3, axis=-1)], axis=1)

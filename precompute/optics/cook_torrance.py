@@ -60,10 +60,7 @@ def cook_torrance_between(light, view, m=DEFAULT_SLOPE, n=DEFAULT_IOR) -> float:
         return 0.0 if math.isinf(a) else (math.erf(a) - 1) / 2 + math.exp(-a * a) / (2 * a * math.sqrt(math.pi))
 
     g_att = 1.0 / (1.0 + smith_lambda(nv) + smith_lambda(nl))
-    c = vh
-    g = math.sqrt(n * n - 1 + c * c)
-    f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1 + (c * (g + c) - 1) ** 2 / (c * (g - c) + 1) ** 2)
-    return f * d * g_att / (4 * nl * nv)
+    return float(dielectric_fresnel(vh, n)) * d * g_att / (4 * nl * nv)
 
 
 def _smith_lambda(cos_theta: np.ndarray, m: float) -> np.ndarray:
@@ -89,13 +86,20 @@ def cook_torrance(light, view, m: float = DEFAULT_SLOPE, n: float = DEFAULT_IOR)
     tan2 = (1.0 - nh * nh) / (nh * nh)
     d = np.exp(-tan2 / (m * m)) / (math.pi * m * m * nh**4)
     g_att = 1.0 / (1.0 + _smith_lambda(nv, m) + _smith_lambda(nl, m))
+    safe = np.where(above, 4.0 * nl * nv, 1.0)
+    return np.where(above, dielectric_fresnel(c, n) * d * g_att / safe, 0.0)
+
+
+def dielectric_fresnel(cos_theta, n: float = DEFAULT_IOR) -> np.ndarray:
+    """Cook and Torrance's unpolarised dielectric Fresnel reflectance (…), dimensionless, at the
+    cosine ``cos_theta`` (…) between a direction and the microfacet normal, for index ``n``:
+    F = ½ (g − c)²/(g + c)² (1 + (c(g + c) − 1)²/(c(g − c) + 1)²), g² = n² − 1 + c²."""
+    c = np.clip(np.asarray(cos_theta, float), 0.0, 1.0)
     g = np.sqrt(n * n - 1.0 + c * c)
     # n = 1 (a yarn of fibres in air) reflects nothing; the formula is 0/0 where c = 0 (light and view
-    # opposite: the swatch lit from behind, masked below)
+    # opposite: the swatch lit from behind)
     g_plus_c = np.where(g + c > 0.0, g + c, 1.0)
-    f = 0.5 * (g - c) ** 2 / g_plus_c**2 * (1.0 + (c * (g + c) - 1.0) ** 2 / (c * (g - c) + 1.0) ** 2)
-    safe = np.where(above, 4.0 * nl * nv, 1.0)
-    return np.where(above, f * d * g_att / safe, 0.0)
+    return 0.5 * (g - c) ** 2 / g_plus_c**2 * (1.0 + (c * (g + c) - 1.0) ** 2 / (c * (g - c) + 1.0) ** 2)
 
 
 def direction(theta_deg, phi_deg) -> np.ndarray:

@@ -116,13 +116,15 @@ def lobe_responses(view: np.ndarray, light: np.ndarray, shape: LobeShape = LobeS
     shape (…, len(lobes)).
 
     ``view`` (3,) is ω_o and ``light`` (…, 3) the directions ω_i toward the
-    light, both in the yarn frame.
+    light, both in the yarn frame.  Besides :data:`LOBES`, the garment mixture's ``uniform``
+    (Cycles' diffuse toon of size 1: the same ρ at every incidence above the plane) and ``gloss``.
     """
     view = np.asarray(view, float)
     light = np.asarray(light, float)
     cc = cycles_closures
     response = {
         "diffuse": lambda: cc.diffuse_eval(YARN_NORMAL, light),
+        "uniform": lambda: cc.uniform_eval(YARN_NORMAL, light),
         "translucent": lambda: cc.translucent_eval(YARN_NORMAL, light),
         "fibre_reflection": lambda: cc.hair_reflection_eval(YARN_NORMAL, YARN_AXIS, view, light,
                                                             shape.reflection_longitudinal,

@@ -9,7 +9,7 @@ cosine it carries, in 1/sr — so that a closure of weight ``w`` lit by a sun of
 irradiance ``E`` (W/m² on a plane facing it) gives the radiance ``w · eval · E``.
 That is also the yarn BRDF's convention ``ρ = L_o / E⊥`` (docs/transport.md).
 
-They follow ``intern/cycles/kernel/closure/bsdf_diffuse.h``, ``bsdf_hair.h`` and
+They follow ``intern/cycles/kernel/closure/bsdf_diffuse.h``, ``bsdf_toon.h``, ``bsdf_hair.h`` and
 ``bsdf_microfacet.h`` of Blender 5.0 (the hair lobes are the Kajiya–Kay-like
 "Hair BSDF" lobes, not the Chiang/Huang models); ``tests/test_cycles_closures.py``
 renders each closure in Cycles and holds the twins to it.  All directions point
@@ -19,6 +19,8 @@ away from the surface and are unit vectors; arrays broadcast over leading axes.
 from __future__ import annotations
 
 import numpy as np
+
+from precompute.optics.cook_torrance import dielectric_fresnel
 
 #: Cycles clamps the hair lobes' roughness to this range (``bsdf_hair_*_setup``).
 HAIR_ROUGHNESS_RANGE = (0.001, 1.0)
@@ -38,6 +40,13 @@ def diffuse_eval(normal, light):
 def translucent_eval(normal, light):
     """Cycles ``translucent(N)``: ``max(0, −N·L) / π``, 1/sr (exact only while N is the shading normal)."""
     return np.maximum(-_dot(normal, light), 0.0) / np.pi
+
+
+def uniform_eval(normal, light):
+    """Cycles ``diffuse_toon(N, 1, 0)`` (the Toon BSDF's diffuse component, size 1, no smoothing): the
+    same ``1 / (2π)`` for every light above the plane, 1/sr — a lobe without the cosine a Lambertian
+    one falls with (``bsdf_toon.h``: its eval is its uniform sampling pdf over the cone)."""
+    return np.where(_dot(normal, light) > 0.0, 0.5 / np.pi, 0.0)
 
 
 def _fibre_angles(tangent, view, light):
@@ -143,6 +152,16 @@ def beckmann_reflection_eval(normal, view, light, alpha):
     (:func:`_microfacet_reflection_eval`).
     """
     return _microfacet_reflection_eval(normal, view, light, alpha, _beckmann_distribution, _beckmann_lambda)
+
+
+def beckmann_conductor_eval(normal, view, light, alpha, ior):
+    """The Metallic BSDF node, Beckmann, a physical conductor of index ``ior`` and extinction 0:
+    :func:`beckmann_reflection_eval` times the Fresnel reflectance at V·H, 1/sr.  Cycles' conductor
+    Fresnel (Born and Wolf, ``bsdf_util.h``) with k = 0 is the unpolarised dielectric one, so this is
+    the Cook–Torrance term times cos θ_L (:mod:`precompute.optics.cook_torrance`, Cycles' Λ)."""
+    half = np.asarray(view, float) + np.asarray(light, float)
+    half = half / np.maximum(np.linalg.norm(half, axis=-1, keepdims=True), 1e-30)
+    return dielectric_fresnel(_dot(view, half), ior) * beckmann_reflection_eval(normal, view, light, alpha)
 
 
 def ggx_reflection_eval(normal, view, light, alpha):

@@ -3,8 +3,9 @@
 Two modes, as for the yarn material:
 
 * :data:`~clothlight.blender.materials.GENERAL_MODE` (any lighting, what artists render with): the
-  closure mixture of ``lobes.exr`` as plain Cycles nodes — diffuse, translucent, hair
-  transmission and Beckmann gloss closures weighted by image lookups at the view direction, plus a
+  closure mixture of ``lobes.exr`` as plain Cycles nodes — diffuse, uniform (diffuse toon),
+  GGX retro-reflection, translucent and hair transmission closures and the yarns' Cook–Torrance
+  term (a Beckmann Metallic BSDF), weighted by image lookups at the view direction, plus a
   transparent closure for the open weave.  No OSL: it renders with Cycles' SVM on the CPU or any GPU.
 * :data:`~clothlight.blender.materials.SUN_MODE` (validation): ``osl/cloth_garment.osl`` evaluates the
   measured ρ for the scene's sun exactly (needs Cycles OSL on the CPU).
@@ -15,6 +16,7 @@ normals face.  Tables are checked before any render (Cycles would render them ma
 
 from __future__ import annotations
 
+import math
 import pathlib
 from dataclasses import dataclass
 
@@ -23,12 +25,14 @@ import bpy
 from ..materials import GENERAL_MODE, SUN_MODE, configure_cycles_material
 from ..node_builder import NodeBuilder
 from ..osl_shaders import add_script_node
+from ..yarn_nodes import cook_torrance_closures
 from ...garment.goniometry import SIDES
 from ...garment.tables import (
     BRDF_FILES,
     LOBE_FILE,
     LOBE_TILES,
     SPECULAR_KEYS,
+    SPECULAR_LOBE,
     SPECULAR_VISIBILITY_FILES,
     check_cloth_table_folder,
 )
@@ -205,7 +209,8 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
 
     image = bpy.data.images.load(str(tables.lobe_path), check_existing=True)
     image.colorspace_settings.name = "Non-Color"
-    kinds = [("ShaderNodeBsdfDiffuse", "diffuse"), ("ShaderNodeBsdfAnisotropic", "gloss")]
+    kinds = [("ShaderNodeBsdfDiffuse", "diffuse"), ("ShaderNodeBsdfToon", "uniform"),
+             ("ShaderNodeBsdfAnisotropic", "retroreflection"), (None, SPECULAR_LOBE)]  # _specular_lobe
     if transmission:
         kinds += [("ShaderNodeBsdfTranslucent", "translucent"), ("ShaderNodeBsdfHair", "fibre_transmission")]
     if open_weave:
@@ -236,30 +241,44 @@ def _closure_mixture(tree, tables: ClothTableFiles, tangent_socket, open_weave: 
                 scaled = nodes.vector_math("SCALE", weight, location=(900, y - 100))
                 nodes.link(scale, scaled.inputs["Scale"])
                 weight = scaled.outputs[0]
+        weights[tile] = weight
+        if tile == SPECULAR_LOBE:
+            closures[tile] = _specular_lobe(nodes, tables, weight, bent if detail is not None else None, y)
+            continue
         closure = nodes.node(node_type, (1000, y), {"Color": weight})
-        if detail is not None and "Normal" in closure.inputs:
+        if detail is not None and "Normal" in closure.inputs and tile != "retroreflection":
             nodes.link(bent, closure.inputs["Normal"])
-        closures[tile] = closure
-    if transmission:
-        nodes.node_inputs(closures["fibre_transmission"], {
-            "Offset": 0.0, "RoughnessU": tables.lobe_shape["transmission_longitudinal"],
-            "RoughnessV": tables.lobe_shape["transmission_azimuthal"], "Tangent": warp})
-        closures["fibre_transmission"].component = "Transmission"
-    gloss = closures["gloss"]
-    gloss.distribution = "BECKMANN"
-    nodes.node_inputs(gloss, {"Roughness": tables.lobe_shape["gloss_alpha"] ** 0.5,  # Cycles: α = roughness²
-                              "Anisotropy": 0.0})
-    surface = nodes.add_shaders([closure.outputs[0] for closure in closures.values()], x=1200)
+        closures[tile] = closure.outputs[0]
+        if tile == "uniform":  # Cycles' diffuse toon of size 1, unsmoothed: the same ρ at every incidence
+            closure.component = "DIFFUSE"
+            nodes.node_inputs(closure, {"Size": 1.0, "Smooth": 0.0})
+        elif tile == "retroreflection":  # GGX about the view: back-scatter
+            closure.distribution = "GGX"
+            nodes.node_inputs(closure, {"Roughness": tables.lobe_shape["retroreflection_alpha"] ** 0.5,
+                                        "Anisotropy": 0.0, "Normal": incoming})
+        elif tile == "fibre_transmission":
+            closure.component = "Transmission"
+            nodes.node_inputs(closure, {"Offset": 0.0, "RoughnessU": tables.lobe_shape["transmission_longitudinal"],
+                                        "RoughnessV": tables.lobe_shape["transmission_azimuthal"], "Tangent": warp})
+    surface = nodes.add_shaders(list(closures.values()), x=1200)
     if not open_weave:
         return surface
     # A shadow ray asks the cloth only how much light passes, which is the transparent closure's
     # weight: SVM jumps over a Mix Shader's input of weight zero and the nodes only it reads, so the
     # other lobes' lookups are not run for shadow rays (the same picture: docs/garment.md, "Render cost").
     light_path = nodes.node("ShaderNodeLightPath", (1200, 400))
-    passes = nodes.node("ShaderNodeBsdfTransparent", (1200, 250),
-                        {"Color": closures["open_weave"].inputs["Color"].links[0].from_socket})
+    passes = nodes.node("ShaderNodeBsdfTransparent", (1200, 250), {"Color": weights["open_weave"]})
     return nodes.node("ShaderNodeMixShader", (1400, 0),
                       (light_path.outputs["Is Shadow Ray"], surface, passes.outputs[0])).outputs[0]
+
+
+def _specular_lobe(nodes, tables: ClothTableFiles, weight, normal, y: int):
+    """The yarns' Cook–Torrance term of grey weight ``weight`` (at most w_s) about ``normal`` (None:
+    the shading normal), over ⌈w_s⌉ copies (:func:`..yarn_nodes.cook_torrance_closures`)."""
+    copies = max(1, math.ceil(tables.specular["weight"]))
+    factor = nodes.math("DIVIDE", weight, float(copies), location=(1000, y - 100))
+    return nodes.add_shaders(cook_torrance_closures(nodes, factor, copies, tables.specular["ior"],
+                                                    tables.lobe_shape["gloss_alpha"], normal, (1000, y)), x=1150)
 
 
 def apply_garment_material(obj, tables: ClothTableFiles, *, mode: str = GENERAL_MODE, name: str | None = None,

@@ -384,6 +384,9 @@ class ValidationRun:
             for sample in ("yarn", "yarn_scene"):
                 if sample in curves and kind in curves:
                     results[f"{kind}_vs_{sample}"] = compare_sweeps(curves[kind], curves[sample])
+        if set(GARMENT_MATERIALS) <= set(curves):
+            # The closure mixture's own error: the general mode against the cloth BSDF it stands for.
+            results["garment_general_vs_garment"] = compare_sweeps(curves["garment_general"], curves["garment"])
         if self.measurement is not None:
             m = self.measurement
             results["measurement"] = {

@@ -31,8 +31,10 @@ shader closure_probe(int Kind = 0, float R1 = 0.2, float R2 = 0.5, float Alpha =
         BSDF = microfacet("ggx", normalize(I), Alpha, 1.5, 0);
     else if (Kind == 3)
         BSDF = microfacet("beckmann", N, Alpha, 1.5, 0);
-    else
+    else if (Kind == 4)
         BSDF = diffuse_toon(N, 1.0, 0.0);
+    else  // the Metallic BSDF node's physical conductor
+        BSDF = conductor_bsdf(N, vector(1, 0, 0), Alpha, Alpha, color(1.5), color(0), "beckmann");
 }
 """
 
@@ -69,6 +71,8 @@ CASES = [
     ("beckmann", (40, 90), (20, 80), "back toward the light"),
     ("uniform", (30, 0), (75, 180), "grazing light, the same as at normal"),
     ("uniform", (60, 90), (5, 10), "near-normal light"),
+    ("conductor", (30, 0), (32, 180), "near the mirror direction, dielectric Fresnel"),
+    ("conductor", (70, 0), (60, 180), "grazing, the Fresnel rising"),
 ]
 
 
@@ -78,9 +82,11 @@ CASES = [
 def test_twin_matches_cycles(bpy, tmp_path, kind, view_angles, light_angles, what):
     view, light = direction(*view_angles), direction(*light_angles)
     r1, r2, alpha = 0.2, 0.5, 0.3
-    kinds = {"hair_reflection": 0, "hair_transmission": 1, "ggx_retro": 2, "beckmann": 3, "uniform": 4}
-    if kind == "beckmann":  # the garment's gloss: the paper's rms slope
+    kinds = {"hair_reflection": 0, "hair_transmission": 1, "ggx_retro": 2, "beckmann": 3, "uniform": 4, "conductor": 5}
+    if kind == "beckmann":  # the paper's rms slope
         alpha = 0.8
+    elif kind == "conductor":  # the garment's specular lobe at red_cotton's fitted slope
+        alpha = 0.094
     rendered = render_closure(tmp_path, kinds[kind], view, light, r1, r2, alpha)
     if kind == "hair_reflection":
         expected = cc.hair_reflection_eval(NORMAL, TANGENT, view, light, r1, r2)
@@ -90,6 +96,8 @@ def test_twin_matches_cycles(bpy, tmp_path, kind, view_angles, light_angles, wha
         expected = cc.beckmann_reflection_eval(NORMAL, view, light, alpha)
     elif kind == "uniform":
         expected = cc.uniform_eval(NORMAL, light)
+    elif kind == "conductor":
+        expected = cc.beckmann_conductor_eval(NORMAL, view, light, alpha, 1.5)
     else:
         expected = cc.ggx_reflection_eval(view, view, light, alpha)
     assert float(expected) > 1e-3, "each case must probe a lit part of the lobe"

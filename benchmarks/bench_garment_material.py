@@ -10,7 +10,8 @@ against the see-through reference (like with like: both let the same share of li
 ``--basis-lobes K``: also times the garment with K more GGX lobes, each steered by the view to a
 fixed peak and weighted by its own image lookup, what a mixture that forms a basis over the
 incidences would cost (docs/garment.md: 25 of them bring the general mode near 5 %).  Their
-weights are not fitted: the variant measures the cost, not the picture.
+weights are not fitted, and they are added after the material's shadow-ray shortcut (shadow rays
+run their lookups too): the variant measures the cost, not the picture.
 
 The cloth tables are the shipped example's (example_blends/tables/paper_2008_cloth): their grid
 does not change the shader's cost (the same texture lookups), their weights do (the share of

@@ -127,4 +127,4 @@ def specular_from_config(config: Mapping) -> dict[str, float]:
 
 
 __all__ = ["DEFAULT_IOR", "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "SPECULAR_DEFAULTS", "cloth_specular",
-           "cook_torrance", "cook_torrance_between", "direction", "specular_from_config"]
+           "cook_torrance", "cook_torrance_between", "dielectric_fresnel", "direction", "specular_from_config"]

@@ -32,6 +32,7 @@ from clothlight.blender.garment.drape import draped_cloth
 from clothlight.blender.garment.material import build_garment_material, cloth_tables_from_bake
 from clothlight.garment.tables import SUMMARY_FILE
 from clothlight.blender.materials import GENERAL_MODE
+from clothlight.blender.node_builder import NodeBuilder
 from clothlight.blender.measurement_render import configure_measurement_render, render_to_array
 from render_cost import light_and_camera, paired_ratio, principled_with_sheen, print_render_cost, read_rgb
 
@@ -72,39 +73,23 @@ def with_basis_lobes(material, count: int):
     """``material`` plus ``count`` GGX lobes (roughness 0.5), lobe k about the half vector between
     the view and a fixed peak p_k, weighted by a lookup of the material's own lobe image."""
     tree = material.node_tree
+    nodes = NodeBuilder(tree)
     output = next(node for node in tree.nodes if node.type == "OUTPUT_MATERIAL")
     total = output.inputs["Surface"].links[0].from_socket
     image = next(node for node in tree.nodes if node.type == "TEX_IMAGE").image
-    incoming = tree.nodes.new("ShaderNodeNewGeometry").outputs["Incoming"]
-
-    def vector_math(operation, *inputs):
-        node = tree.nodes.new("ShaderNodeVectorMath")
-        node.operation = operation
-        for socket, value in zip(node.inputs, inputs):
-            if isinstance(value, bpy.types.NodeSocket):
-                tree.links.new(value, socket)
-            elif value is not None:
-                socket.default_value = value
-        return node.outputs[0]
-
+    incoming = nodes.node("ShaderNodeNewGeometry", (0, 0)).outputs["Incoming"]
     golden = np.pi * (3.0 - np.sqrt(5.0))  # peaks spread over the hemisphere (a Fibonacci lattice)
     for k in range(count):
         z = 1.0 - (k + 0.5) / count
         peak = (np.sqrt(1.0 - z * z) * np.cos(golden * k), np.sqrt(1.0 - z * z) * np.sin(golden * k), z)
-        half = vector_math("NORMALIZE", vector_math("ADD", incoming, peak))
-        lookup = tree.nodes.new("ShaderNodeTexImage")
-        lookup.image, lookup.interpolation, lookup.extension = image, "Linear", "EXTEND"
-        tree.links.new(vector_math("MULTIPLY_ADD", incoming, (0.05, 0.1, 0.0), ((k + 0.5) / count, 0.5, 0.0)),
-                       lookup.inputs["Vector"])
-        lobe = tree.nodes.new("ShaderNodeBsdfAnisotropic")
-        lobe.distribution = "GGX"
-        lobe.inputs["Roughness"].default_value = 0.5
-        tree.links.new(vector_math("SCALE", lookup.outputs["Color"], None, None, 0.05), lobe.inputs["Color"])
-        tree.links.new(half, lobe.inputs["Normal"])
-        add = tree.nodes.new("ShaderNodeAddShader")
-        tree.links.new(total, add.inputs[0])
-        tree.links.new(lobe.outputs[0], add.inputs[1])
-        total = add.outputs[0]
+        half = nodes.vector_math("NORMALIZE", nodes.vector_math("ADD", incoming, peak).outputs[0]).outputs[0]
+        where = nodes.vector_math("MULTIPLY_ADD", incoming, (0.05, 0.1, 0.0), ((k + 0.5) / count, 0.5, 0.0))
+        lookup = nodes.node("ShaderNodeTexImage", (0, 0), {"Vector": where.outputs[0]}, image=image,
+                            interpolation="Linear", extension="EXTEND")
+        weight = nodes.vector_math("SCALE", lookup.outputs["Color"], None, None, 0.05).outputs[0]
+        lobe = nodes.node("ShaderNodeBsdfAnisotropic", (0, 0), {"Color": weight, "Roughness": 0.5, "Normal": half},
+                          distribution="GGX")
+        total = nodes.add_shaders([total, lobe.outputs[0]])
     tree.links.new(total, output.inputs["Surface"])
     return material
 

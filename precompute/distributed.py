@@ -26,7 +26,8 @@ task at a time (ClothLight's numba kernels and bpy are not for concurrent calls)
 threads as the kernels' threads.
 
 Faults: a worker that dies mid-task has its tasks, and the results it held, recomputed elsewhere
-from their inputs (dask keeps the lineage of every result a job still holds), with the same result;
+from their inputs (dask keeps the lineage of every result a job still holds, and shared values
+are inputs in that graph), with the same result;
 a finished result that dask gives up fetching from a dead worker (its future left cancelled) is
 submitted again, up to MAX_RESUBMITS times, each after a longer wait (RESUBMIT_BACKOFF_S);
 a scheduler that does not answer within ``connect_timeout_s`` or is lost during the job raises
@@ -50,6 +51,7 @@ import signal
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 
 from precompute.errors import ClusterError, ParameterError, SchedulerUnreachable, WorkerCodeMismatch
@@ -64,9 +66,8 @@ CONNECT_TIMEOUT_S = 10.0
 POLL_S = 0.25
 #: Times a task whose finished result was lost with its worker is run again before the job fails.
 MAX_RESUBMITS = 3
-#: Seconds to wait before running a task again, times its resubmissions so far: a resubmission made
-#: while the scheduler is still removing a dead worker can be cancelled with the rest of its work
-#: (a fresh-clone CI run on a loaded machine lost all three of a task's immediate resubmissions).
+#: Seconds to wait before running a task again, times its resubmissions so far: gives the scheduler
+#: time to remove a dead worker before the task is placed again.
 RESUBMIT_BACKOFF_S = 1.0
 #: A scheduler address: protocol, host (a name, IPv4, or IPv6 in brackets) and port.
 _ADDRESS = re.compile(r"^(tcp|tls)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):\d{1,5}$")
@@ -158,10 +159,17 @@ class ClusterExecutor:
         self.bytes_received = 0
 
     def share(self, value):
-        """A handle of ``value`` copied to every worker once (data that many tasks read)."""
+        """A handle of ``value`` (data that many tasks read), fetched by each worker once.
+
+        The value is held in the job's graph, as a task's input, not scattered: dask's memory
+        manager keeps a single copy of scattered data, which dies with its worker, and every task
+        reading it is then cancelled; a task's result is made again from its input.
+        """
         self.bytes_sent += _nbytes(value) * self.workers
-        # In a list: scatter would give each item of a dict or a list a future of its own.
-        return self.client.scatter([value], broadcast=True, hash=False)[0]
+        with warnings.catch_warnings():
+            # the value travels once, to the scheduler, as dask's large-graph warning advises against
+            warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning)
+            return self.client.submit(_shared_value, value, pure=False)
 
     def map(self, function: Callable, items: Iterable[Sequence], *, keep: bool = False,
             progress: Callable[[int], None] | None = None, cancel: Callable[[], bool] | None = None) -> list:
@@ -204,8 +212,7 @@ class ClusterExecutor:
                 except TimeoutError:
                     continue
                 except FuturesCancelledError as error:
-                    # dask's wait raises as soon as a future it waits on is cancelled (a worker
-                    # killed with the task's input on it leaves it "already forgotten"): those are
+                    # dask's wait raises as soon as a future it waits on is cancelled: those are
                     # run again below, as the cancelled futures it returns.
                     done = {future for future in pending if future.status == "cancelled"}
                     if not done:
@@ -243,6 +250,11 @@ class ClusterExecutor:
             raise SchedulerUnreachable(self.address, "the scheduler was lost during the job")
         why = f" ({error})" if error is not None else ""
         raise ClusterError(f"--scheduler {self.address}: the scheduler cancelled the job's tasks{why}")
+
+
+def _shared_value(value):
+    """The task of :meth:`ClusterExecutor.share`: its value, as a result the scheduler can remake."""
+    return value
 
 
 def folder_payload(folder) -> dict:

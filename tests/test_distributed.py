@@ -296,3 +296,25 @@ def test_a_dye_series_transport_on_the_cluster_is_bitwise_the_single_process_one
     for name in ("specular", "exit_fraction", "absorbed_fraction", "lost_fraction", "paths_per_cell"):
         np.testing.assert_array_equal(getattr(spread, name), getattr(here, name), err_msg=name)
     assert spread.events == here.events
+
+
+def test_a_shared_value_outlives_the_worker_that_holds_its_only_copy(tmp_path):
+    """dask's memory manager keeps one copy of data nobody waits on (every 2 s): a value shared
+    with the workers must come back from the job's graph when its last holder dies (a fresh-clone
+    CI run lost a bake's medium so: every task reading it was cancelled, again and again)."""
+    with dask_cluster(tmp_path, [REPO, REPO]) as (address, workers):
+        with layer.open_executor(address, code={"entries": ("precompute.distributed",)}) as executor:
+            client = executor.client
+            handle = executor.share(np.arange(5.0))
+            assert executor.map(np.sum, [(handle,)] * 2) == [10.0, 10.0]
+            pid_of = client.run(os.getpid)
+            holders = client.who_has([handle])[handle.key]
+            while len(holders) > 1:
+                client.amm.run_once()
+                time.sleep(0.2)
+                holders = client.who_has([handle])[handle.key]
+            (holder,) = holders
+            os.kill(pid_of[holder], signal.SIGKILL)
+            while len(client.scheduler_info()["workers"]) > 1:
+                time.sleep(0.2)
+            assert executor.map(np.sum, [(handle,)] * 2) == [10.0, 10.0]

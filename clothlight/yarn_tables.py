@@ -69,8 +69,8 @@ class YarnTableFiles:
         Roughness of the general-lighting mode's shaped lobes, keyed as
         ``precompute.tables.closure_fit.LobeShape`` (the bake's ``summary.json``).
     host_index
-        Refractive index of the yarn host, for the specular Fresnel term and the refraction of
-        the unscattered light.
+        Refractive index of the yarn host, for the refraction of the unscattered light (and the
+        specular Fresnel factor where ``specular`` has no ``index``).
     unscattered_samples
         Pixels of the attenuation table.
     unscattered_reach
@@ -78,9 +78,9 @@ class YarnTableFiles:
         path (:func:`attenuation_reach`); ``inf`` when it never is.
     specular
         The yarn shader's specular term as the bake recorded it (``summary.json`` → ``specular``,
-        docs/table-spec.md): ``weight`` (SpecularWeight), ``slope`` (Slope, the Beckmann rms slope m)
-        and ``source`` (a fitted preset's ``[fit]`` table or the paper's defaults).  None: the
-        shader's own defaults (tables made without a bake).
+        docs/table-spec.md): ``weight`` (SpecularWeight), ``slope`` (Slope, the Beckmann rms slope m),
+        ``index`` (SpecularIOR: :attr:`specular_index`) and ``source`` (a fitted preset's ``[fit]``
+        table or the paper's defaults).  None: the shader's own defaults (tables made without a bake).
     """
 
     brdf_path: pathlib.Path
@@ -102,6 +102,12 @@ class YarnTableFiles:
             if not path.is_file():
                 raise FileNotFoundError(f"ClothLight table {name} is missing: {path}")
             object.__setattr__(self, name, path)
+
+    @property
+    def specular_index(self) -> float:
+        """The index of the specular term's Fresnel factor: the bake's record (the fibres' for a yarn
+        of fibres in air, ``precompute.optics.cook_torrance.sheen_index``), else the host index."""
+        return float((self.specular or {}).get("index", self.host_index))
 
 
 def yarn_tables_from_bake(folder: str | pathlib.Path) -> YarnTableFiles:

@@ -43,9 +43,11 @@ Read here too, written by ``python -m clothlight.fit`` (:data:`precompute.optics
 
 The bake does not simulate the specular term (the shader computes it); it records it — the
 ``[fit]`` values, or :data:`precompute.optics.cook_torrance.DEFAULT_WEIGHT` and ``DEFAULT_SLOPE`` stated as
-defaults — in the tables' summary and headers as ``specular`` (docs/table-spec.md), and the
-materials set the shader from it.  It is part of the tables' key, not of the spectral one: a fitted
-preset reuses the simulation of its medium.
+defaults — in the tables' summary and headers as ``specular`` (docs/table-spec.md), with the
+``index`` of its Fresnel factor, the medium's (the fibres' for a yarn of fibres in air, else the
+host's: :func:`precompute.optics.cook_torrance.sheen_index`), and the materials set the shader from it.
+It is part of the tables' key, not of the spectral one: a fitted preset reuses the simulation of
+its medium.
 """
 
 from __future__ import annotations
@@ -82,7 +84,7 @@ from precompute.tables.color import (
 )
 from precompute.distributed import LOCAL, check_scheduler, open_executor
 from precompute.errors import ParameterError
-from precompute.optics.cook_torrance import FIT_TABLE, specular_from_config
+from precompute.optics.cook_torrance import FIT_TABLE, sheen_index, specular_from_config
 from precompute.tables.grids import AngularGrid
 from precompute.optics.medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from precompute.optics.coefficients import medium_optics, planned_phase_grid
@@ -170,7 +172,7 @@ class BakeConfiguration:
     medium: MediumParameters
     transport: dict
     colour: dict
-    specular: dict = dataclasses.field(default_factory=default_specular)
+    specular: dict
 
 
 @dataclasses.dataclass(frozen=True)
@@ -275,19 +277,22 @@ def _settings(config: dict, table: str, defaults: dict) -> dict:
     return {**defaults, **given}
 
 
-def specular_settings(config: Mapping) -> dict:
+def specular_settings(config: Mapping, medium: MediumParameters) -> dict:
     """The specular record of a preset's content (``specular`` of the summary, docs/table-spec.md):
     its ``[fit]`` table's ``specular_weight`` and ``specular_slope``, checked, a key it leaves out at
-    the shader's default; :func:`precompute.tables.folder.default_specular` when it has no ``[fit]``."""
+    the shader's default (:func:`precompute.tables.folder.default_specular` when it has no ``[fit]``),
+    and the ``index`` of its Fresnel factor, the medium's
+    (:func:`precompute.optics.cook_torrance.sheen_index`)."""
     given = _settings(dict(config), FIT_TABLE, FIT_DEFAULTS)
-    default = default_specular()
+    default = {**default_specular(), "index": sheen_index(medium)}
     table = config.get(FIT_TABLE) or {}
     if not table:
         return default
     values = {key: SPECULAR_BOUNDS[key].check(value) for key, value in given.items()}
     defaulted = [key for key in FIT_DEFAULTS if key not in table]
     source = SPECULAR_FROM_PRESET + (f"; {', '.join(defaulted)}: {default['source']}" if defaulted else "")
-    return {"weight": values["specular_weight"], "slope": values["specular_slope"], "source": source}
+    return {"weight": values["specular_weight"], "slope": values["specular_slope"], "index": default["index"],
+            "source": source}
 
 
 def _integer(name: str, value, low: int, high: int | None = None) -> int:
@@ -402,7 +407,7 @@ def bake_configuration(
     # Checks the illuminant, the observer and that the wavelengths lie where colour is defined,
     # before any simulation.
     spectral_weights(medium.wavelengths.values, colour["illuminant"], colour["observer"])
-    return BakeConfiguration(medium, settings, colour, specular_settings(config))
+    return BakeConfiguration(medium, settings, colour, specular_settings(config, medium))
 
 
 # ---- the two stages -----------------------------------------------------------------------------

@@ -40,7 +40,7 @@ def bake_folder_brdf(model, folder: pathlib.Path):
     atlas = checked.tables[files["brdf"]].pixels[..., :3]
     attenuation = checked.tables[files["unscattered"]].pixels[..., :3]
     return model.cloth_brdf(atlas, attenuation, layout, specular_weight=float(specular["weight"]),
-                            specular_slope=float(specular["slope"]))
+                            specular_slope=float(specular["slope"]), specular_index=float(specular["index"]))
 
 
 def fit_folder_brdf(folder: pathlib.Path, measured):

@@ -1,6 +1,7 @@
-"""A fitted preset's specular term (its ``[fit]`` table) reaches the tables: recorded in the summary and
-every header, part of the tables' cache key but not of the spectral one, read back by the folder check
-and the yarn material's table files (the paper's defaults for folders baked before)."""
+"""A fitted preset's specular term (its ``[fit]`` table) and its medium's sheen index reach the tables:
+recorded in the summary and every header, part of the tables' cache key but not of the spectral one,
+read back by the folder check and the yarn material's table files (the paper's defaults and the host
+index for folders baked before)."""
 
 import json
 
@@ -9,10 +10,15 @@ import pytest
 
 from precompute import bake as bake_module
 from precompute.cache import entries as cache
-from precompute.optics.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT
 from precompute.errors import ParameterError
-from precompute.optics.cook_torrance import FIT_TABLE
-from precompute.optics.medium import load_preset_config
+from precompute.optics.cook_torrance import (
+    DEFAULT_SLOPE,
+    DEFAULT_WEIGHT,
+    FIT_TABLE,
+    cook_torrance_between,
+    sheen_index,
+)
+from precompute.optics.medium import PRESET_DIR, load_preset_config, medium_from_dict
 from precompute.tables.folder import (
     SPECULAR_FROM_PRESET,
     SPECULAR_KEY,
@@ -32,6 +38,8 @@ N_I, N_O, LOBES, SAMPLES = 5, 4, 5, 9
 
 #: A shipped preset without a [fit] table: the paper's medium (the default, red_cotton, is fitted).
 PLAIN_PRESET = "paper_2008"
+#: A yarn of fibres in air (not shipped).
+FIBRE_PRESET = PRESET_DIR / "experimental" / "fibre_cotton.toml"
 
 
 def keys(configuration) -> tuple[str, str]:
@@ -45,12 +53,19 @@ def test_the_default_record_is_the_papers_from_the_cook_torrance_twin():
     assert bake_module.FIT_DEFAULTS == {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE}
 
 
+def paper_medium():
+    config, base_dir = load_preset_config(PLAIN_PRESET)
+    return medium_from_dict(config, base_dir)
+
+
 def test_a_fit_table_is_recorded_as_such_and_checked():
-    assert bake_module.specular_settings({}) == default_specular()
-    assert bake_module.specular_settings({FIT_TABLE: {}}) == default_specular()
-    assert bake_module.specular_settings({FIT_TABLE: FITTED}) == {"weight": 0.55, "slope": 0.35,
-                                                                  "source": SPECULAR_FROM_PRESET}
-    partial = bake_module.specular_settings({FIT_TABLE: {"specular_weight": 0.2}})
+    medium = paper_medium()
+    index = {"index": pytest.approx(1.557)}
+    assert bake_module.specular_settings({}, medium) == {**default_specular(), **index}
+    assert bake_module.specular_settings({FIT_TABLE: {}}, medium) == {**default_specular(), **index}
+    assert bake_module.specular_settings({FIT_TABLE: FITTED}, medium) == {"weight": 0.55, "slope": 0.35, **index,
+                                                                          "source": SPECULAR_FROM_PRESET}
+    partial = bake_module.specular_settings({FIT_TABLE: {"specular_weight": 0.2}}, medium)
     assert (partial["weight"], partial["slope"]) == (0.2, DEFAULT_SLOPE)
     assert partial["source"].startswith(SPECULAR_FROM_PRESET) and "specular_slope: default" in partial["source"]
     for table, name in (({"specular_slop": 0.3}, "fit.specular_slop"), ({"specular_slope": 0.0}, "fit.specular_slope"),
@@ -59,9 +74,25 @@ def test_a_fit_table_is_recorded_as_such_and_checked():
                         ({"specular_slope": float("nan")}, "fit.specular_slope"),
                         ({"specular_slope": "rough"}, "fit.specular_slope")):
         with pytest.raises(ParameterError, match=name.replace(".", r"\.")):
-            bake_module.specular_settings({FIT_TABLE: table})
+            bake_module.specular_settings({FIT_TABLE: table}, medium)
     with pytest.raises(ParameterError, match="fit"):
-        bake_module.specular_settings({FIT_TABLE: 0.5})
+        bake_module.specular_settings({FIT_TABLE: 0.5}, medium)
+
+
+def test_the_sheen_of_a_yarn_of_fibres_in_air_reflects_at_the_fibres_index():
+    # No refracting yarn surface (host index 1): the fibres reflect the sheen.  Any other yarn
+    # reflects it from its boundary, at the host's index (the paper's case).
+    config, base_dir = load_preset_config(FIBRE_PRESET)
+    in_air = medium_from_dict(config, base_dir)
+    assert in_air.host.refractive_index.n == 1.0
+    assert sheen_index(in_air) == pytest.approx(in_air.fibres.refractive_index.n)
+    assert bake_module.bake_configuration(FIBRE_PRESET).specular["index"] == pytest.approx(1.557)
+    in_resin = medium_from_dict({**config, "host": {"refractive_index": 1.4}}, base_dir)
+    assert sheen_index(in_resin) == pytest.approx(1.4)
+    assert sheen_index(paper_medium()) == pytest.approx(1.557)
+    # A sheen at index 1 would be none: the Cook–Torrance term is there only at the fibres' index.
+    up = np.array([0.0, 0.0, 1.0])
+    assert cook_torrance_between(up, up, 0.3, 1.0) == 0.0 < cook_torrance_between(up, up, 0.3, sheen_index(in_air))
 
 
 def test_the_specular_term_keys_the_tables_not_the_simulation():
@@ -72,8 +103,9 @@ def test_the_specular_term_keys_the_tables_not_the_simulation():
                                                                "fit.specular_slope=0.35"], paths_per_cell=100)
     other = bake_module.bake_configuration({**config, FIT_TABLE: {**FITTED, "specular_slope": 0.5}}, SMALL,
                                            paths_per_cell=100)
-    assert plain.specular == default_specular()
-    assert fitted.specular == overridden.specular == {"weight": 0.55, "slope": 0.35, "source": SPECULAR_FROM_PRESET}
+    assert plain.specular == {**default_specular(), "index": pytest.approx(1.557)}
+    assert fitted.specular == overridden.specular == {"weight": 0.55, "slope": 0.35, "index": pytest.approx(1.557),
+                                                      "source": SPECULAR_FROM_PRESET}
     assert bake_module.spectral_inputs(fitted) == bake_module.spectral_inputs(plain)
     (plain_spectral, plain_tables), (fitted_spectral, fitted_tables) = keys(plain), keys(fitted)
     assert fitted_spectral == plain_spectral == keys(other)[0]
@@ -93,8 +125,9 @@ def test_a_bake_records_the_fit_in_its_summary_and_headers_on_the_same_simulatio
     plain = bake_module.bake(PLAIN_PRESET, SMALL, paths_per_cell=100, cache_dir=tmp_path)
     assert len(runs) == 1 and fitted.simulated and not plain.simulated and not plain.cache_hit
     assert fitted.folder != plain.folder and fitted.summary["spectral_key"] == plain.summary["spectral_key"]
-    assert fitted.summary[SPECULAR_KEY] == {"weight": 0.55, "slope": 0.35, "source": SPECULAR_FROM_PRESET}
-    assert plain.summary[SPECULAR_KEY] == default_specular()
+    assert fitted.summary[SPECULAR_KEY] == {"weight": 0.55, "slope": 0.35, "index": pytest.approx(1.557),
+                                            "source": SPECULAR_FROM_PRESET}
+    assert plain.summary[SPECULAR_KEY] == {**default_specular(), "index": pytest.approx(1.557)}
     for result in (fitted, plain):
         for kind in bake_module.TABLE_FILES:
             assert read_table(result.table(kind)).metadata[SPECULAR_KEY] == result.summary[SPECULAR_KEY]
@@ -114,16 +147,19 @@ def folder(path, **options):
                                    exit_resolution=N_O, **options)
 
 
-RECORDED = {"weight": 0.55, "slope": 0.35, "source": SPECULAR_FROM_PRESET}
+RECORDED = {"weight": 0.55, "slope": 0.35, "index": 1.3, "source": SPECULAR_FROM_PRESET}
 
 
 def test_the_table_files_carry_the_recorded_specular_or_the_defaults(tmp_path):
     from clothlight.yarn_tables import yarn_tables_from_bake
 
-    recorded = folder(tmp_path / "fitted", specular=RECORDED)
-    older = folder(tmp_path / "older")
-    assert yarn_tables_from_bake(recorded).specular == RECORDED
-    assert yarn_tables_from_bake(older).specular == default_specular()  # baked before bakes recorded it
+    recorded = yarn_tables_from_bake(folder(tmp_path / "fitted", specular=RECORDED))
+    older = yarn_tables_from_bake(folder(tmp_path / "older"))
+    assert recorded.specular == RECORDED and recorded.specular_index == RECORDED["index"] != recorded.host_index
+    # baked before bakes recorded it, or before they recorded its index: the host's
+    assert older.specular == {**default_specular(), "index": older.host_index}
+    without_index = {key: value for key, value in RECORDED.items() if key != "index"}
+    assert yarn_tables_from_bake(folder(tmp_path / "no index", specular=without_index)).specular_index == 1.557
 
 
 def rewrite_summary(path, **changes):
@@ -135,6 +171,7 @@ def rewrite_summary(path, **changes):
 @pytest.mark.parametrize("specular, reason", [
     ({**RECORDED, "slope": 0.5}, "header specular"),  # the tables were baked with another one
     ({**RECORDED, "slope": 0.0}, "specular .* is not an object"),
+    ({**RECORDED, "index": 0.9}, "specular .* is not an object"),  # no Fresnel factor below 1
     ({"weight": 0.55, "slope": 0.35}, "specular .* is not an object"),
     ("fitted", "specular .* is not an object"),
 ])

@@ -23,10 +23,17 @@ def test_the_yarn_material_takes_the_recorded_specular_or_the_defaults(tmp_path)
     empty_render_scene(resolution=8, samples=1)  # Cycles with OSL: the script node compiles
     fitted = yarn_tables_from_bake(folder(tmp_path / "fitted", specular=RECORDED))
     older = yarn_tables_from_bake(folder(tmp_path / "older"))
-    for tables, expected in ((fitted, RECORDED), (older, default_specular())):
-        inputs = specular_inputs(build_yarn_material(tables, name="test fitted specular"))
+    for tables, expected in ((fitted, RECORDED), (older, {**default_specular(), "index": older.host_index})):
+        material = build_yarn_material(tables, name="test fitted specular")
+        node, inputs = shader_node(material), specular_inputs(material)
         assert inputs == {key: pytest.approx(expected[key], rel=1e-6) for key in ("weight", "slope")}
+        # the sheen's Fresnel index apart from the host's, which refracts the unscattered light
+        assert node.inputs["SpecularIOR"].default_value == pytest.approx(expected["index"], rel=1e-6)
+        assert node.inputs["IOR"].default_value == pytest.approx(tables.host_index, rel=1e-6)
     # The cloth bake measures that material: its measurement is another with another specular term.
     settings = GoniometerSettings()
     assert measurement_inputs(fitted, settings)["specular"] == {"weight": 0.55, "slope": 0.35}
+    assert measurement_inputs(fitted, settings)["specular_index"] == RECORDED["index"]
     assert measurement_inputs(fitted, settings) != measurement_inputs(older, settings)
+    other_index = yarn_tables_from_bake(folder(tmp_path / "other index", specular={**RECORDED, "index": 1.4}))
+    assert measurement_inputs(other_index, settings) != measurement_inputs(fitted, settings)

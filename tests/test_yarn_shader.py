@@ -24,7 +24,7 @@ from precompute.tables.layout import (
     interpolate_unscattered_rho,
     lobe_atlas,
 )
-from tests.helpers import add_sun_and_camera, direction, empty_render_scene, unit, write_exr
+from tests.helpers import add_sun_and_camera, cook_torrance_between, direction, empty_render_scene, unit, write_exr
 
 bpy = pytest.importorskip("bpy")
 
@@ -84,8 +84,9 @@ def spec_sun_rho(atlas, attenuation, wi, wo):
 
 
 def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, *, cloth_normal=(0.0, 0.0, 1.0),
-                specular_weight=0.0, plain_nodes=None):
-    """A lit, viewed patch of yarn; the material in plain nodes renders under SVM, as a user's would."""
+                specular_weight=0.0, specular_index=None, plain_nodes=None):
+    """A lit, viewed patch of yarn; the material in plain nodes renders under SVM, as a user's would.
+    The specular term's slope is 0.8, its index ``specular_index`` (None: the host's)."""
     scene = empty_render_scene(resolution=8, samples=1 if mode == SUN_MODE else 16, bounces=0)
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     plane = bpy.context.active_object
@@ -93,7 +94,8 @@ def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, 
     for name, value in ((YARN_TANGENT, (1.0, 0.0, 0.0)), (CLOTH_NORMAL, cloth_normal)):
         attribute = mesh.attributes.new(name, "FLOAT_VECTOR", "POINT")
         attribute.data.foreach_set("vector", np.tile(value, len(mesh.vertices)).astype(np.float32))
-    tables = dataclasses.replace(tables, specular={"weight": specular_weight, "slope": 0.8})
+    index = {} if specular_index is None else {"index": specular_index}
+    tables = dataclasses.replace(tables, specular={"weight": specular_weight, "slope": 0.8, **index})
     material = build_yarn_material(tables, mode=mode, plain_nodes=plain_nodes)
     mesh.materials.append(material)
 
@@ -228,14 +230,15 @@ def test_general_mode_renders_the_lobe_mixture(tmp_path, synthetic_tables, view_
     np.testing.assert_allclose(pixels.mean(axis=0), expected, rtol=0.01, atol=1e-4)
 
 
-def rendered_specular(tmp_path, tables, mode, view, sun_direction, cloth_normal, weight=1.0, plain_nodes=None):
+def rendered_specular(tmp_path, tables, mode, view, sun_direction, cloth_normal, weight=1.0, plain_nodes=None,
+                      specular_index=None):
     """Mean radiance of the patch with the specular term of ``weight`` minus without it."""
     zenith = math.degrees(math.acos(view[2]))
     azimuth = math.degrees(math.atan2(view[1], view[0]))
     means = []
     for weight in (weight, 0.0):
         scene, _ = patch_scene(tables, mode, zenith, azimuth, sun_direction, cloth_normal=cloth_normal,
-                               specular_weight=weight, plain_nodes=plain_nodes)
+                               specular_weight=weight, specular_index=specular_index, plain_nodes=plain_nodes)
         means.append(render_to_array(scene, tmp_path / f"{mode}{weight}.exr")[..., :3].reshape(-1, 3).mean(axis=0))
     return means[0] - means[1]
 
@@ -275,6 +278,21 @@ def test_the_specular_is_the_same_on_both_faces_of_the_cloth(tmp_path, synthetic
     back = rendered_specular(tmp_path, tables, mode, view, sun_direction, (0.0, 0.0, -1.0), plain_nodes=plain_nodes)
     assert front.min() > 1e-2
     np.testing.assert_allclose(back, front, rtol=1e-3 if mode == SUN_MODE else 0.02)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("mode, plain_nodes", [(SUN_MODE, False), (GENERAL_MODE, False), (GENERAL_MODE, True)],
+                         ids=["sun", "general-osl", "general-plain-nodes"])
+def test_the_sheen_reflects_at_its_own_index_not_the_hosts(tmp_path, synthetic_tables, mode, plain_nodes):
+    # A yarn of fibres reflects its sheen off the fibres (SpecularIOR), whatever index the host has
+    # (IOR, which refracts the unscattered light); at the host's 1.2 the Fresnel factor is 1/5 of it.
+    tables = dataclasses.replace(without_unscattered_light(synthetic_tables[0], tmp_path), host_index=1.2)
+    view, sun_direction = unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])
+    sheen = rendered_specular(tmp_path, tables, mode, view, sun_direction, (0.0, 0.0, 1.0), plain_nodes=plain_nodes,
+                              specular_index=INDEX)
+    expected = SUN_IRRADIANCE * cook_torrance_between(sun_direction, view, 0.8, INDEX) * sun_direction[2]
+    assert expected > 3.0 * SUN_IRRADIANCE * cook_torrance_between(sun_direction, view, 0.8, 1.2) * sun_direction[2]
+    np.testing.assert_allclose(sheen, expected, rtol=1e-3 if mode == SUN_MODE else 0.02)
 
 
 @pytest.mark.blender

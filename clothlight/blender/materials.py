@@ -36,7 +36,8 @@ LOBE_SHAPE_SOCKETS = {
     "RetroreflectionAlpha": "retroreflection_alpha",
 }
 
-#: cloth_yarn.osl's inputs for the bake's specular record (``summary.json`` → ``specular``).
+#: cloth_yarn.osl's inputs for the bake's specular record (``summary.json`` → ``specular``); its
+#: SpecularIOR is ``YarnTableFiles.specular_index``.
 SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope"}
 
 #: cloth_yarn.osl's inputs for the closure-mixture weights, keyed by lobe in the order of the tiles
@@ -273,7 +274,8 @@ _SUN_SOCKETS = ("SunDirection", "SunIrradiance")
 #: The shader inputs :func:`_read_tables` sets and the lobe weights the general mode feeds: a shader
 #: without one of them is older than this version.
 _TABLE_SOCKETS = ("Table", "IncidenceResolution", "ExitResolution", "UnscatteredTable", "UnscatteredSamples",
-                  "UnscatteredReach", "UnscatteredSpread", "IOR", *LOBE_SHAPE_SOCKETS, *SPECULAR_SOCKETS,
+                  "UnscatteredReach", "UnscatteredSpread", "IOR", "SpecularIOR", *LOBE_SHAPE_SOCKETS,
+                  *SPECULAR_SOCKETS,
                   *LOBE_WEIGHT_SOCKETS.values())
 
 
@@ -319,6 +321,7 @@ def _read_tables(material, shader, tables) -> None:
     for socket, key in LOBE_SHAPE_SOCKETS.items():
         shader.inputs[socket].default_value = tables.lobe_shape[key]
     shader.inputs["IOR"].default_value = tables.host_index
+    shader.inputs["SpecularIOR"].default_value = tables.specular_index
     if tables.specular is not None:
         for socket, key in SPECULAR_SOCKETS.items():
             shader.inputs[socket].default_value = tables.specular[key]

@@ -166,7 +166,7 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal) -> list:
                               .outputs["Value"], 0.0, location=(-650, -800))
     copies = math.ceil(weight)
     factor = nodes.math("MULTIPLY", face_on_side, weight / copies, location=(-500, -800))
-    return cook_torrance_closures(nodes, factor, copies, tables.host_index, slope, toward, (-200, -700))
+    return cook_torrance_closures(nodes, factor, copies, tables.specular_index, slope, toward, (-200, -700))
 
 
 def cook_torrance_closures(nodes, factor, copies: int, index: float, slope: float, normal, location) -> list:

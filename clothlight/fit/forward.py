@@ -31,6 +31,7 @@ from precompute.tables.color import clip_to_gamut, spectral_to_rgb
 from precompute.errors import ParameterError
 from precompute.optics.medium import medium_from_dict
 from precompute.optics.coefficients import medium_optics
+from precompute.optics.cook_torrance import sheen_index
 from precompute.cache.sources import stage_digest
 from precompute.tables.layout import brdf_atlas
 
@@ -153,22 +154,17 @@ class ForwardModel:
     """``model(config, specular_weight=, specular_slope=, relative_error=, seed=)`` → the cloth BRDF
     (n_views + 2, 3), 1/sr, linear Rec.709, at the measured views given to :func:`build_forward_model`
     and then at the :data:`SWATCH_VIEWS` (:attr:`swatch_count` rows: the BRDF lit from the front,
-    and the BTDF lit from straight behind, both at normal view).
-
-    ``sheen_index``: the index of the specular term's Fresnel factor; None (the default) the tables'
-    boundary index, as the shader takes it.  Another one answers what a sheen index apart from the
-    boundary index would give, e.g. the fibres' own in a yarn of fibres in air, whose boundary index
-    1 reflects no sheen (scripts/fit_fibres_sheen_index.py); the shader cannot render that yet."""
+    and the BTDF lit from straight behind, both at normal view).  The specular term's Fresnel factor
+    takes the candidate medium's index, as its bake records it for the shader
+    (``precompute.optics.cook_torrance.sheen_index``: the fibres' for a yarn of fibres in air)."""
 
     swatch_count = len(SWATCH_VIEWS)
 
-    def __init__(self, response, view_count: int, base_dir: pathlib.Path, threads: int | None = None,
-                 sheen_index: float | None = None):
+    def __init__(self, response, view_count: int, base_dir: pathlib.Path, threads: int | None = None):
         self.response = response
         self.view_count = view_count + self.swatch_count
         self.base_dir = pathlib.Path(base_dir)
         self.threads = threads
-        self.sheen_index = sheen_index
 
     def tables(self, config: dict, *, relative_error: float, seed: int):
         """A candidate's BRDF atlas (N_i·N_o, N_i·N_o, 3), attenuation table (M, 3) and their layout."""
@@ -184,10 +180,12 @@ class ForwardModel:
     def _mean_over_azimuths(self, per_view: np.ndarray) -> np.ndarray:
         return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), *per_view.shape[1:]).mean(axis=1)
 
-    def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float) -> np.ndarray:
+    def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float,
+                   specular_index: float | None = None) -> np.ndarray:
         """The cloth BRDF of given tables at the measured views, averaged over the sample azimuths."""
         return self._mean_over_azimuths(self.response.cloth_brdf(
-            atlas, attenuation, layout, specular_weight=specular_weight, specular_slope=specular_slope))
+            atlas, attenuation, layout, specular_weight=specular_weight, specular_slope=specular_slope,
+            specular_index=specular_index))
 
     def parts(self, config: dict, *, relative_error: float, seed: int):
         """The cloth BRDF split into what the medium gives and what the specular term adds: the
@@ -196,7 +194,7 @@ class ForwardModel:
         atlas, attenuation, layout = self.tables(config, relative_error=relative_error, seed=seed)
         yarn = self.cloth_brdf(atlas, attenuation, layout, specular_weight=0.0, specular_slope=1.0)
 
-        index = layout.index if self.sheen_index is None else self.sheen_index
+        index = sheen_index(medium_from_dict(config, self.base_dir))
 
         def specular(weight: float, slope: float) -> np.ndarray:
             return self._mean_over_azimuths(self.response.specular_brdf(weight, slope, index))
@@ -302,14 +300,12 @@ class DyeSeriesForwardModel(ForwardModel):
 
 def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: int = 0, cache_dir=None,
                         threads: int | None = None, progress: Callable[[int, int], None] | None = None,
-                        dye_range: tuple[float, float] | None = None,
-                        sheen_index: float | None = None) -> ForwardModel:
+                        dye_range: tuple[float, float] | None = None) -> ForwardModel:
     """The forward model at ``measured_views`` ((θi, φi, θo, φo) in degrees, the CSV's convention)
     for media written like ``preset_config`` (checked here, before any render; relative files
     resolve against ``base_dir``).  ``progress(done, total)`` follows the response's renders when it
     is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call).  With
-    ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone;
-    ``sheen_index`` as :class:`ForwardModel` takes it."""
+    ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone."""
     medium = medium_from_dict(preset_config, pathlib.Path(base_dir))
     if dye_range is not None and medium.fibres is not None:
         # the dye of fibres changes their scattering (their index), not only the medium's absorption
@@ -318,4 +314,4 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
     response = cloth_response(measured_views, seed=seed, cache_dir=cache_dir, progress=progress)
     if dye_range is not None:
         return DyeSeriesForwardModel(response, len(measured_views), base_dir, dye_range, threads, seed=seed)
-    return ForwardModel(response, len(measured_views), base_dir, threads, sheen_index)
+    return ForwardModel(response, len(measured_views), base_dir, threads)

@@ -59,7 +59,7 @@ class YarnLookup:
 def yarn_lookup(tables) -> YarnLookup:
     """The :class:`YarnLookup` of a :class:`clothlight.yarn_tables.YarnTableFiles`, as the sun-mode
     material reads it (``clothlight.blender.materials``: the tables' host index as IOR, the bake's
-    specular term or the shader's defaults, the sun mode's unscattered cone)."""
+    specular term, its index included, or the shader's defaults, the sun mode's unscattered cone)."""
     specular = tables.specular or {}
     attenuation = exr.read_table(tables.unscattered_path, "unscattered").pixels
     layout = TableLayout(tables.incidence_resolution, tables.exit_resolution, tables.unscattered_samples,
@@ -67,7 +67,7 @@ def yarn_lookup(tables) -> YarnLookup:
     return YarnLookup(exr.read_table(tables.brdf_path, "brdf").pixels,
                       np.asarray(attenuation, float).reshape(-1, attenuation.shape[-1]), layout,
                       {"weight": _socket(specular.get("weight", DEFAULT_WEIGHT)),
-                       "slope": _socket(specular.get("slope", DEFAULT_SLOPE)), "ior": _socket(tables.host_index)})
+                       "slope": _socket(specular.get("slope", DEFAULT_SLOPE)), "ior": _socket(tables.specular_index)})
 
 
 def _socket(value: float) -> float:

@@ -152,13 +152,14 @@ class ClothResponse:
         return np.array([np.count_nonzero(v.incidence[:, 2] > 0.0) * v.calibration for v in self.views])
 
     def cloth_brdf(self, atlas: np.ndarray, attenuation: np.ndarray | None, layout: TableLayout, *,
-                   specular_weight: float, specular_slope: float) -> np.ndarray:
+                   specular_weight: float, specular_slope: float, specular_index: float | None = None) -> np.ndarray:
         """The cloth BRDF (n_views, C), 1/sr, that a sun-mode sweep of the yarn material measures.
 
         ``atlas``: the BRDF atlas image (N_i·N_o, N_i·N_o, C) (``brdf.exr``); ``attenuation``: the
         unscattered light's table (M, C) or (1, M, C) (``unscattered.exr``), or None for a material
-        without it; ``layout`` must describe both.  ``specular_weight``, ``specular_slope``: the
-        shader's ``SpecularWeight`` and ``Slope`` (Beckmann rms slope m).
+        without it; ``layout`` must describe both.  ``specular_weight``, ``specular_slope``,
+        ``specular_index``: the shader's ``SpecularWeight``, ``Slope`` (Beckmann rms slope m) and
+        ``SpecularIOR`` (None: the layout's host index).
         """
         atlas = np.asarray(atlas, float)
         side = layout.incidence_resolution * layout.exit_resolution
@@ -172,7 +173,8 @@ class ClothResponse:
                 raise ParameterError("attenuation", attenuation.shape,
                                      f"({layout.unscattered_samples}, C): the layout's attenuation table")
             brdf = brdf + unscattered_map @ attenuation
-        return brdf + self.specular_brdf(specular_weight, specular_slope, layout.index)[:, None]
+        index = layout.index if specular_index is None else specular_index
+        return brdf + self.specular_brdf(specular_weight, specular_slope, index)[:, None]
 
     def save(self, path) -> pathlib.Path:
         """Write the response to ``path`` (``.npz``, compressed)."""

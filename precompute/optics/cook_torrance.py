@@ -118,6 +118,20 @@ def cloth_specular(angles_deg, weight: float = DEFAULT_WEIGHT, m: float = DEFAUL
     return weight * cook_torrance(direction(a[:, 0], a[:, 1]), direction(a[:, 2], a[:, 3]), m, n)
 
 
+def sheen_index(medium) -> float:
+    """The index n of the specular term's Fresnel factor for a yarn medium (a
+    :class:`precompute.optics.medium.MediumParameters`), its real part averaged over the medium's
+    wavelengths: that of the surfaces the sheen reflects from.  A yarn of fibres in air (host index
+    1) has no refracting yarn surface and reflects its sheen from the fibres themselves, at the
+    fibres' index (issue 43: with the boundary's index 1 its Fresnel factor, and so its sheen, is 0);
+    any other yarn from its boundary, at the host's index (the paper's §5.2, the tables' host index)."""
+    wavelengths = np.asarray(medium.wavelengths.values, float)
+    host = float(np.mean(medium.host.refractive_index.at(wavelengths).real))
+    if medium.fibres is not None and host == 1.0:
+        return float(np.mean(medium.fibres.refractive_index.at(wavelengths).real))
+    return host
+
+
 def specular_from_config(config: Mapping) -> dict[str, float]:
     """The specular keywords a preset records in its ``[fit]`` table (a fitted preset), else the
     shader's defaults."""
@@ -127,4 +141,5 @@ def specular_from_config(config: Mapping) -> dict[str, float]:
 
 
 __all__ = ["DEFAULT_IOR", "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "SPECULAR_DEFAULTS", "cloth_specular",
-           "cook_torrance", "cook_torrance_between", "dielectric_fresnel", "direction", "specular_from_config"]
+           "cook_torrance", "cook_torrance_between", "dielectric_fresnel", "direction", "sheen_index",
+           "specular_from_config"]

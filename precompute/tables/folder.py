@@ -67,7 +67,8 @@ YARN_REQUIRED_KINDS = ("brdf", "closure_lobes", "unscattered")
 YARN_FOLDER_FILES = (*YARN_TABLE_FILES.values(), SPECTRAL_FILE, SUMMARY_FILE)
 #: The key of a yarn bake's summary (and every table header) recording the yarn shader's specular term
 #: (§5.2, ``osl/cloth_yarn.osl``): ``{"weight": SpecularWeight, "slope": Slope (Beckmann rms slope m),
-#: "source": where they come from}``; a folder baked before bakes recorded it has the defaults.
+#: "index": SpecularIOR (its Fresnel factor's), "source": where they come from}``; a folder baked before
+#: bakes recorded it has the defaults, one baked before they recorded ``index`` the host index.
 SPECULAR_KEY = "specular"
 #: ``source`` of a specular term taken from a preset's ``[fit]`` table (``python -m clothlight.fit``).
 SPECULAR_FROM_PRESET = "preset [fit]"
@@ -175,22 +176,26 @@ def default_specular() -> dict:
 
 def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
     """The specular record of a yarn bake's summary (:data:`SPECULAR_KEY`): ``weight`` (a finite number
-    ≥ 0), ``slope`` (finite, > 0) and ``source``; :func:`default_specular` where the summary has none
-    (a folder baked before bakes recorded it).  :class:`TableError` naming the summary otherwise."""
+    ≥ 0), ``slope`` (finite, > 0), ``index`` (finite, ≥ 1) and ``source``; :func:`default_specular` where
+    the summary has none (a folder baked before bakes recorded it), and the summary's ``host_index``
+    where it has no ``index`` (baked before bakes recorded that).  :class:`TableError` naming the
+    summary otherwise."""
     value = summary.get(SPECULAR_KEY)
+    host_index = {"index": float(summary["host_index"])} if "host_index" in summary else {}
     if value is None:
-        return default_specular()
+        return {**default_specular(), **host_index}
 
-    def number(key: str, positive: bool) -> bool:
+    def number(key: str, low: float, inclusive: bool) -> bool:
         v = value.get(key)
         return (not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
-                and (v > 0 if positive else v >= 0))
+                and (v >= low if inclusive else v > low))
 
-    if not (isinstance(value, dict) and number("weight", False) and number("slope", True)
-            and isinstance(value.get("source"), str)):
+    if not (isinstance(value, dict) and number("weight", 0.0, True) and number("slope", 0.0, False)
+            and ("index" not in value or number("index", 1.0, True)) and isinstance(value.get("source"), str)):
         raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SPECULAR_KEY} {value!r} is not an object of "
-                         "weight (≥ 0), slope (> 0) and source")
-    return {"weight": float(value["weight"]), "slope": float(value["slope"]), "source": value["source"]}
+                         "weight (≥ 0), slope (> 0), index (≥ 1) and source")
+    return {"weight": float(value["weight"]), "slope": float(value["slope"]),
+            **host_index, **({"index": float(value["index"])} if "index" in value else {}), "source": value["source"]}
 
 
 def check_files(

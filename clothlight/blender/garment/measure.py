@@ -176,7 +176,7 @@ class _GoniometerScene:
             sample.visible_diffuse = False
             self.specular_parameters = {"weight": shader.inputs["SpecularWeight"].default_value,
                                         "slope": shader.inputs["Slope"].default_value,
-                                        "ior": shader.inputs["IOR"].default_value}
+                                        "ior": shader.inputs["SpecularIOR"].default_value}
             _drive_sun_from_attribute(material)
             sample.data.materials.clear()
             sample.data.materials.append(material)

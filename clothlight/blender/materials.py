@@ -275,8 +275,7 @@ _SUN_SOCKETS = ("SunDirection", "SunIrradiance")
 #: without one of them is older than this version.
 _TABLE_SOCKETS = ("Table", "IncidenceResolution", "ExitResolution", "UnscatteredTable", "UnscatteredSamples",
                   "UnscatteredReach", "UnscatteredSpread", "IOR", "SpecularIOR", *LOBE_SHAPE_SOCKETS,
-                  *SPECULAR_SOCKETS,
-                  *LOBE_WEIGHT_SOCKETS.values())
+                  *SPECULAR_SOCKETS, *LOBE_WEIGHT_SOCKETS.values())
 
 
 def read_other_tables(material, tables) -> None:

@@ -181,21 +181,23 @@ def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
     where it has no ``index`` (baked before bakes recorded that).  :class:`TableError` naming the
     summary otherwise."""
     value = summary.get(SPECULAR_KEY)
-    host_index = {"index": float(summary["host_index"])} if "host_index" in summary else {}
     if value is None:
-        return {**default_specular(), **host_index}
+        record = default_specular()
+    else:
+        def number(key: str, low: float, inclusive: bool) -> bool:
+            v = value.get(key)
+            return (not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
+                    and (v >= low if inclusive else v > low))
 
-    def number(key: str, low: float, inclusive: bool) -> bool:
-        v = value.get(key)
-        return (not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
-                and (v >= low if inclusive else v > low))
-
-    if not (isinstance(value, dict) and number("weight", 0.0, True) and number("slope", 0.0, False)
-            and ("index" not in value or number("index", 1.0, True)) and isinstance(value.get("source"), str)):
-        raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SPECULAR_KEY} {value!r} is not an object of "
-                         "weight (≥ 0), slope (> 0), index (≥ 1) and source")
-    return {"weight": float(value["weight"]), "slope": float(value["slope"]),
-            **host_index, **({"index": float(value["index"])} if "index" in value else {}), "source": value["source"]}
+        if not (isinstance(value, dict) and number("weight", 0.0, True) and number("slope", 0.0, False)
+                and ("index" not in value or number("index", 1.0, True)) and isinstance(value.get("source"), str)):
+            raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SPECULAR_KEY} {value!r} is not an object of "
+                             "weight (≥ 0), slope (> 0), index (≥ 1) and source")
+        record = {key: float(value[key]) for key in ("weight", "slope", "index") if key in value}
+        record["source"] = value["source"]
+    if "index" not in record and "host_index" in summary:
+        record["index"] = float(summary["host_index"])
+    return record
 
 
 def check_files(

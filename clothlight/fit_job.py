@@ -38,6 +38,8 @@ FREE_PARAMETERS = (
     ("scatterer_diameter_nm", "Scatterer Diameter", "nm", 30.0, 3000.0,
      "the diameter of the particle species named scatterers"),
     ("dye_weight_percent", "Dye", "%", 0.1, 10.0, "the dye content, % of the fibre's weight"),
+    ("dye_share", "Second Dye Share", "", 0.0, 1.0,
+     "the second dye's share of the dye weight, in a preset that mixes two dyes"),
     ("host_absorption_per_mm", "Fibre Absorption", "1/mm", 0.01, 30.0,
      "the fibre's own grey absorption coefficient, beside the dye's spectrum"),
     ("fibre_fraction", "Fibre Fraction", "", 0.2, 0.8, "the share of the yarn's volume its fibres fill"),

@@ -15,6 +15,7 @@ from precompute.optics.cook_torrance import cook_torrance, cook_torrance_between
 from precompute.errors import InputError, ParameterError
 from precompute.fit.objective import Objective, parse_target_ratios, split_views
 from precompute.fit.parameters import (
+    DYE_SHARE_PATH,
     PARAMETERS,
     MissingSpeciesError,
     UnknownFitParameterError,
@@ -67,6 +68,8 @@ def test_fit_ranges_lie_within_what_the_medium_accepts(name):
         assert 0 <= p.low and p.high < 100
     # either end, written into a preset, loads (the sum of fractions aside)
     config, base_dir = load_preset_config(FIBRE_COTTON) if p.path.startswith("fibres.") else preset_with_voids()
+    if p.path == DYE_SHARE_PATH:
+        config["dye"]["spectrum_csv"] = ["congo_red.csv", "red_dye_band_model.csv"]
     for value in (p.low, p.high):
         new, keywords = apply(config, None, {name: value})
         if p.is_specular:
@@ -89,6 +92,20 @@ def test_apply_sets_the_preset_paths_and_leaves_the_input_alone():
     assert keywords == {"specular_weight": 1.0, "specular_slope": 0.3}  # the shader's weight by default
     assert next(t for t in config["particles"] if t["name"] == "voids")["volume_fraction"] == 0.02
     assert config["dye"]["weight_percent"] == 3.0
+
+
+def test_the_dye_share_mixes_two_dyes_and_is_refused_for_one():
+    config, base_dir = preset_with_voids()
+    with pytest.raises(MissingSpeciesError, match="two dye spectra"):
+        apply(config, None, {"dye_share": 0.3})
+    config["dye"]["spectrum_csv"] = ["congo_red.csv", "red_dye_band_model.csv"]
+    assert PARAMETERS["dye_share"].get(config) == 0.5  # no shares written: an even mixture
+    new, _ = apply(config, None, {"dye_share": 0.3})
+    assert new["dye"]["shares"] == pytest.approx([0.7, 0.3])
+    # the mixture's absorption is the shares' sum of the two dyes' (precompute.optics.medium)
+    congo_red_only = {**new, "dye": {**new["dye"], "shares": [1.0, 0.0]}}
+    mixed, alone = (medium_from_dict(c, base_dir).dye for c in (new, congo_red_only))
+    assert not np.allclose(mixed.mass_absorption_cm2_per_g, alone.mass_absorption_cm2_per_g)
 
 
 def test_unknown_parameter_names_the_allowed_ones():

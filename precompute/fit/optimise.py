@@ -585,9 +585,13 @@ def evaluate_on_cluster(executor, shared_evaluate, evaluate: CandidateEvaluator,
         raise
 
 
-#: Starting points (in the [0, 1] box) of the profiled specular fit: it is cheap, and two starts
-#: keep it out of the flat corner where a weight near 0 makes the slope irrelevant.
-PROFILE_STARTS = (0.25, 0.75)
+#: Points per profiled parameter of the grid the profiled specular fit scans before it polishes:
+#: the misfit over (weight, slope) has more than one basin (a broad faint lobe and a narrow bright
+#: one can both explain a grazing rise), and a local search from fixed starts ended in the worse one
+#: (fibre_red_cotton's sheen 0.84, m 0.58: relative RMS 0.349, against 0.231 at 0.11, m 0.23).
+PROFILE_GRID_POINTS = 13
+#: How many of the grid's best points the bounded local search starts from.
+PROFILE_POLISHED = 3
 
 
 #: Rec. 709 luminance of linear R, G, B.
@@ -607,18 +611,22 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
                           profiled: Sequence[FitParameter], keywords: Mapping[str, float]) -> dict[str, float]:
     """The values of the specular parameters ``profiled`` that minimise ``objective`` for one medium:
     its cloth BRDF without the specular term ``medium_part`` (n, 3) plus ``specular_part(weight,
-    slope)`` (n,).  Bounded L-BFGS-B in the parameters' [0, 1] box (log where they say), from
-    :data:`PROFILE_STARTS`; milliseconds, no forward evaluation.  Variable projection: the
-    optimiser outside searches only the medium, whose every candidate gets its best sheen."""
+    slope)`` (n,).  A grid of :data:`PROFILE_GRID_POINTS` per parameter over their [0, 1] box (log
+    where they say), then bounded L-BFGS-B from its :data:`PROFILE_POLISHED` best points; no forward
+    evaluation.  Variable projection: the optimiser outside searches only the medium, whose every
+    candidate gets its best sheen."""
     from scipy.optimize import minimize
 
     def misfit(u) -> float:
         values = {**keywords, **{p.path: p.from_unit(float(x)) for p, x in zip(profiled, u)}}
         return objective(medium_part + specular_part(values["specular_weight"], values["specular_slope"])[:, None])
 
+    axes = [np.linspace(0.0, 1.0, PROFILE_GRID_POINTS)] * len(profiled)
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(profiled))
+    scanned = np.array([misfit(u) for u in grid])
     best = None
-    for start in PROFILE_STARTS:
-        result = minimize(misfit, np.full(len(profiled), start), method="L-BFGS-B", bounds=[(0.0, 1.0)] * len(profiled))
+    for start in grid[np.argsort(scanned, kind="stable")[:PROFILE_POLISHED]]:
+        result = minimize(misfit, start, method="L-BFGS-B", bounds=[(0.0, 1.0)] * len(profiled))
         if best is None or result.fun < best.fun:
             best = result
     return {p.name: p.from_unit(float(x)) for p, x in zip(profiled, best.x)}

@@ -39,6 +39,10 @@ _SPECIES_TEMPLATES = {
 }
 
 
+#: The path of the second dye's share in a two-dye ``[dye]`` mixture (``shares = [1 − s, s]``,
+#: precompute.optics.medium.dye_mixture_spectrum): one number sets the mixture's hue.
+DYE_SHARE_PATH = "dye.shares"
+
 #: Values the medium takes where a preset leaves them out (precompute.optics.medium.Yarn).
 _MEDIUM_DEFAULTS = {"yarn.radius_mm": 0.1}
 
@@ -129,6 +133,8 @@ class FitParameter:
         preset leaves it out (the yarn radius)."""
         if self.is_specular:
             return float((specular or {}).get(self.path, SPECULAR_DEFAULTS[self.path]))
+        if self.path == DYE_SHARE_PATH:
+            return float(two_dye_table(config, self.name)["shares"][1])
         table, key = self._place(config)
         if key not in table:
             if self.path in _MEDIUM_DEFAULTS:
@@ -140,6 +146,9 @@ class FitParameter:
         """Write ``value`` into ``config`` (in place).  Not for the specular parameters."""
         if self.is_specular:
             raise ValueError(f"{self.name} is a forward-model keyword, not a preset value")
+        if self.path == DYE_SHARE_PATH:
+            two_dye_table(config, self.name)["shares"] = [1.0 - float(value), float(value)]
+            return
         table, key = self._place(config, create=True)
         table[key] = float(value) * self.scale
 
@@ -159,6 +168,19 @@ class FitParameter:
             raise MissingSpeciesError("dye", None, f"a [dye] table in the preset for the free parameter {self.name} "
                                                    "(weight_percent, fiber_density_g_per_cm3, spectrum_csv)")
         raise MissingSpeciesError(section, None, f"a [{section}] table in the preset for {self.name}")
+
+
+def two_dye_table(config: Mapping, parameter: str) -> dict:
+    """The ``[dye]`` table of ``config`` when it mixes two dyes (``spectrum_csv`` a list of two CSVs),
+    its ``shares`` filled in equal where it has none; MissingSpeciesError saying what to write otherwise."""
+    table = config.get("dye")
+    csvs = table.get("spectrum_csv") if isinstance(table, dict) else None
+    if not (isinstance(csvs, list) and len(csvs) == 2):
+        raise MissingSpeciesError("dye.spectrum_csv", csvs, f"two dye spectra for the free parameter {parameter} "
+                                                            '(e.g. spectrum_csv = ["congo_red.csv", '
+                                                            '"red_dye_band_model.csv"] in the [dye] table)')
+    table.setdefault("shares", [0.5, 0.5])
+    return table
 
 
 def species_table(config: Mapping, species: str, parameter: str) -> dict:
@@ -198,6 +220,9 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
     FitParameter("dye_weight_percent", "dye.weight_percent", "%", 0.1, 10.0, log=True,
                  note="the paper's 1–5 % (§6.2) widened by a factor of ten below and two above; the medium "
                       "allows [0, 100)"),
+    FitParameter("dye_share", DYE_SHARE_PATH, "", 0.0, 1.0, log=False,
+                 note="the second dye's share of the dye weight in a two-dye mixture: the hue between the two "
+                      "dyes' (a dyer's recipe mixes dyes to a shade)"),
     FitParameter("host_absorption_per_mm", "host.absorption_per_mm", "1/mm", 0.01, 30.0, log=True,
                  note="grey absorption of the fibre itself (impurities, lignin, a shade of dark in the dyeing), "
                       "beside the dye's spectrum: 0.01 /mm is nothing across a 0.2 mm yarn, 30 /mm absorbs within "
@@ -270,4 +295,4 @@ def total_volume_fraction(config: Mapping) -> float:
 
 __all__ = ["PARAMETERS", "SCATTERERS", "VOIDS", "FitParameter", "MissingSpeciesError",
            "UnknownFitParameterError", "apply", "initial_values", "parse_free", "species_table",
-           "total_volume_fraction"]
+           "total_volume_fraction", "two_dye_table"]

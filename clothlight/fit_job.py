@@ -50,6 +50,8 @@ FREE_PARAMETERS = (
     ("specular_weight", "Sheen Weight", "", 0.0, 3.0, "the Cook–Torrance sheen's weight (the shader's SpecularWeight)"),
     ("specular_slope", "Sheen Slope", "", 0.05, 1.0,
      "the Cook–Torrance sheen's Beckmann rms slope m (the shader's Slope; the paper's 0.8)"),
+    ("fuzz_albedo", "Fuzz Albedo", "", 0.0, 0.5,
+     "the white first reflections of the cloth's surface fibres (the shader's FuzzAlbedo)"),
 )
 
 #: precompute's command-line names of a fit's inputs → the request's (messages name what the user set).

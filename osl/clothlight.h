@@ -153,6 +153,30 @@ closure color cl_cloth_specular_closure(vector Nc, normal N, float weight, float
     return lobe;
 }
 
+// The cloth's fuzz (precompute/optics/lommel_seeliger.py): the white first reflections of its
+// surface fibres, a Lommel-Seeliger law A / (4 pi (mu_i + mu_o)) about the cloth normal Nc, times
+// (n_c.l), cut on yarn faces turned away from the light as cl_cloth_specular is.
+float cl_cloth_fuzz(vector Nc, vector N_out, vector L, vector V, float albedo)
+{
+    float mu_i = dot(Nc, L);
+    float mu_o = dot(Nc, V);
+    if (dot(N_out, L) <= 0.0 || mu_i <= 0.0 || mu_o <= 0.0)
+        return 0.0;
+    return albedo * mu_i / (4.0 * M_PI * (mu_i + mu_o));
+}
+
+// The general modes' closure for the fuzz: a diffuse lobe about Nc of the weight that returns the
+// fuzz's directional albedo at this view, (A / 2)(1 - mu_o ln(1 + 1/mu_o)), the light spread over
+// the lights as a Lambertian's.  Faces turned below the cloth plane get none, as for the sheen.
+closure color cl_cloth_fuzz_closure(vector Nc, normal N, vector V, float albedo)
+{
+    float mu_o = max(dot(Nc, V), 1e-6);
+    closure color lobe = 0;
+    if (albedo > 0.0 && dot(N, Nc) > 0.0)
+        lobe = 0.5 * albedo * (1.0 - mu_o * log(1.0 + 1.0 / mu_o)) * diffuse(Nc);
+    return lobe;
+}
+
 // True when the sun (world direction L) is hidden from P by ANOTHER yarn.  Ng_out is the outward
 // geometric normal of the yarn at P.  Light arriving from behind crosses the yarn itself first;
 // that self-shadowing is already inside the baked tables, so a ray that starts into its own

@@ -37,6 +37,10 @@ def test_the_linear_map_equals_the_twins_summed_over_the_samples(tmp_path):
     again = ClothResponse.load(response.save(tmp_path / "response.npz"))
     np.testing.assert_allclose(again.cloth_brdf(atlas, attenuation, layout, specular_weight=0.7, specular_slope=0.5),
                                model, rtol=1e-6)
+    # the fuzz adds its Lommel–Seeliger term on the same lit faces as the sheen (cl_cloth_fuzz)
+    fuzzy = response.cloth_brdf(atlas, attenuation, layout, specular_weight=0.7, specular_slope=0.5, fuzz_albedo=0.2)
+    fuzz = 0.2 / (4 * np.pi * (view.toward_sun[2] + view.toward_camera[2])) * view.toward_sun[2]
+    np.testing.assert_allclose(fuzzy[0] - model[0], fuzz * lit_faces * view.calibration, rtol=1e-9)
 
 
 def test_the_view_directions_follow_the_rig_conventions():

@@ -47,7 +47,7 @@ class SyntheticForward:
         self.noisy = noisy
         self.calls: list[dict] = []
 
-    def __call__(self, config, *, specular_weight, specular_slope, relative_error, seed):
+    def __call__(self, config, *, specular_weight, specular_slope, relative_error, seed, fuzz_albedo=0.0):
         self.calls.append({"relative_error": relative_error, "seed": seed})
         void = species_table(config, VOIDS, "test")["volume_fraction"]
         rgb = synthetic_brdf(self.angles, void, config["dye"]["weight_percent"], specular_weight, specular_slope)
@@ -212,7 +212,7 @@ def test_the_specular_term_is_profiled_when_the_model_splits_it_off(measured):
     for name, value in TRUTH.items():
         assert result.parameters[name] == pytest.approx(value, rel=0.1), name
     assert result.specular == pytest.approx({"specular_weight": result.parameters["specular_weight"],
-                                             "specular_slope": result.parameters["specular_slope"]})
+                                             "specular_slope": result.parameters["specular_slope"], "fuzz_albedo": 0.0})
     candidates = [e for e in result.history if e.kind == "candidate"]
     assert len({e.parameters["specular_slope"] for e in candidates}) > 1  # fitted per candidate
     assert len(model.calls) <= 150

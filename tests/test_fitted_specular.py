@@ -48,9 +48,10 @@ def keys(configuration) -> tuple[str, str]:
 
 
 def test_the_default_record_is_the_papers_from_the_cook_torrance_twin():
-    assert default_specular() == {"weight": DEFAULT_WEIGHT, "slope": DEFAULT_SLOPE,
+    assert default_specular() == {"weight": DEFAULT_WEIGHT, "slope": DEFAULT_SLOPE, "fuzz_albedo": 0.0,
                                   "source": f"default (paper §6: m = {DEFAULT_SLOPE:g})"}
-    assert bake_module.FIT_DEFAULTS == {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE}
+    assert bake_module.FIT_DEFAULTS == {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE,
+                                        "fuzz_albedo": 0.0}
 
 
 def paper_medium():
@@ -64,7 +65,10 @@ def test_a_fit_table_is_recorded_as_such_and_checked():
     assert bake_module.specular_settings({}, medium) == {**default_specular(), **index}
     assert bake_module.specular_settings({FIT_TABLE: {}}, medium) == {**default_specular(), **index}
     assert bake_module.specular_settings({FIT_TABLE: FITTED}, medium) == {"weight": 0.55, "slope": 0.35, **index,
+                                                                          "fuzz_albedo": 0.0,
                                                                           "source": SPECULAR_FROM_PRESET}
+    with_fuzz = bake_module.specular_settings({FIT_TABLE: {**FITTED, "fuzz_albedo": 0.1}}, medium)
+    assert with_fuzz["fuzz_albedo"] == 0.1 and with_fuzz["source"] == SPECULAR_FROM_PRESET
     partial = bake_module.specular_settings({FIT_TABLE: {"specular_weight": 0.2}}, medium)
     assert (partial["weight"], partial["slope"]) == (0.2, DEFAULT_SLOPE)
     assert partial["source"].startswith(SPECULAR_FROM_PRESET) and "specular_slope: default" in partial["source"]
@@ -105,7 +109,7 @@ def test_the_specular_term_keys_the_tables_not_the_simulation():
                                            paths_per_cell=100)
     assert plain.specular == {**default_specular(), "index": pytest.approx(1.557)}
     assert fitted.specular == overridden.specular == {"weight": 0.55, "slope": 0.35, "index": pytest.approx(1.557),
-                                                      "source": SPECULAR_FROM_PRESET}
+                                                      "fuzz_albedo": 0.0, "source": SPECULAR_FROM_PRESET}
     assert bake_module.spectral_inputs(fitted) == bake_module.spectral_inputs(plain)
     (plain_spectral, plain_tables), (fitted_spectral, fitted_tables) = keys(plain), keys(fitted)
     assert fitted_spectral == plain_spectral == keys(other)[0]
@@ -126,7 +130,7 @@ def test_a_bake_records_the_fit_in_its_summary_and_headers_on_the_same_simulatio
     assert len(runs) == 1 and fitted.simulated and not plain.simulated and not plain.cache_hit
     assert fitted.folder != plain.folder and fitted.summary["spectral_key"] == plain.summary["spectral_key"]
     assert fitted.summary[SPECULAR_KEY] == {"weight": 0.55, "slope": 0.35, "index": pytest.approx(1.557),
-                                            "source": SPECULAR_FROM_PRESET}
+                                            "fuzz_albedo": 0.0, "source": SPECULAR_FROM_PRESET}
     assert plain.summary[SPECULAR_KEY] == {**default_specular(), "index": pytest.approx(1.557)}
     for result in (fitted, plain):
         for kind in bake_module.TABLE_FILES:
@@ -155,7 +159,9 @@ def test_the_table_files_carry_the_recorded_specular_or_the_defaults(tmp_path):
 
     recorded = yarn_tables_from_bake(folder(tmp_path / "fitted", specular=RECORDED))
     older = yarn_tables_from_bake(folder(tmp_path / "older"))
-    assert recorded.specular == RECORDED and recorded.specular_index == RECORDED["index"] != recorded.host_index
+    # a record without the fuzz (baked before bakes recorded it): none
+    assert recorded.specular == {**RECORDED, "fuzz_albedo": 0.0}
+    assert recorded.specular_index == RECORDED["index"] != recorded.host_index
     # baked before bakes recorded it, or before they recorded its index: the host's
     assert older.specular == {**default_specular(), "index": older.host_index}
     without_index = {key: value for key, value in RECORDED.items() if key != "index"}
@@ -172,6 +178,7 @@ def rewrite_summary(path, **changes):
     ({**RECORDED, "slope": 0.5}, "header specular"),  # the tables were baked with another one
     ({**RECORDED, "slope": 0.0}, "specular .* is not an object"),
     ({**RECORDED, "index": 0.9}, "specular .* is not an object"),  # no Fresnel factor below 1
+    ({**RECORDED, "fuzz_albedo": 1.5}, "specular .* is not an object"),  # more light than it receives
     ({"weight": 0.55, "slope": 0.35}, "specular .* is not an object"),
     ("fitted", "specular .* is not an object"),
 ])

@@ -4,6 +4,8 @@ samples of what the shader's NumPy twins read at their lookups, the specular ter
 Cook–Torrance term times the share of lit yarn facing the sun, and the result is the same whatever
 the threads and after a save and load."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -106,6 +108,24 @@ def test_the_measurement_adds_the_specular_term_to_rho_and_keeps_the_response_sh
         np.testing.assert_allclose(measured.coverage[side], expected)
     assert measured.specular_parameters == yarn.specular
     assert (measured.patch_mm, measured.sample_size_mm, measured.render_seconds) == (1.0, (30.0, 30.0), 5.0)
+
+
+def test_the_fuzz_joins_rho_on_the_lit_yarn_facing_the_sun_and_not_the_specular_part(response, yarn):
+    # the sun mode emits the fuzz with ρ, not as the marked specular term (cl_cloth_fuzz)
+    fuzzy = measurement_from_response(response, dataclasses.replace(yarn, fuzz_albedo=0.2))
+    plain = measurement_from_response(response, yarn)
+    toward_sun = AngularGrid("sphere", N_I).cell_centers()
+    toward_camera = AngularGrid("hemisphere", N_O).cell_centers()
+    for k, view in enumerate(response.views):
+        side, cell = SIDES[k // (N_O * N_O)], k % (N_O * N_O)
+        facing = np.bincount(view.patch, view.weight * (view.incidence[:, 2] > 0.0), N_I * N_I) / view.counted
+        mu_i, mu_o = np.maximum(toward_sun[:, 2], 0.0), toward_camera[cell, 2]
+        expected = np.where(mu_i > 0.0, 0.2 / (4 * np.pi * (mu_i + mu_o)) * mu_i, 0.0) * facing
+        np.testing.assert_allclose(fuzzy.rho[side][:, cell] - plain.rho[side][:, cell], expected[:, None] * np.ones(3),
+                                   rtol=1e-9, atol=1e-15)
+    for side in SIDES:
+        np.testing.assert_array_equal(fuzzy.specular[side], plain.specular[side])
+    assert np.any(fuzzy.rho["front"] > plain.rho["front"])
 
 
 def test_the_measurement_is_the_same_bit_for_bit_whatever_the_threads_and_after_a_save(response, yarn, tmp_path):

@@ -16,6 +16,7 @@ import pytest
 from precompute.tables.closure_fit import LOBES, LobeShape, lobe_responses
 from precompute.tables.grids import AngularGrid
 from precompute.optics import ballistic
+from precompute.optics.lommel_seeliger import lommel_seeliger, lommel_seeliger_albedo
 from precompute.tables.layout import (
     brdf_atlas,
     interpolate_attenuation,
@@ -84,7 +85,7 @@ def spec_sun_rho(atlas, attenuation, wi, wo):
 
 
 def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, *, cloth_normal=(0.0, 0.0, 1.0),
-                specular_weight=0.0, specular_index=None, plain_nodes=None):
+                specular_weight=0.0, specular_index=None, plain_nodes=None, fuzz_albedo=0.0):
     """A lit, viewed patch of yarn; the material in plain nodes renders under SVM, as a user's would.
     The specular term's slope is 0.8, its index ``specular_index`` (None: the host's)."""
     scene = empty_render_scene(resolution=8, samples=1 if mode == SUN_MODE else 16, bounces=0)
@@ -95,7 +96,8 @@ def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, 
         attribute = mesh.attributes.new(name, "FLOAT_VECTOR", "POINT")
         attribute.data.foreach_set("vector", np.tile(value, len(mesh.vertices)).astype(np.float32))
     index = {} if specular_index is None else {"index": specular_index}
-    tables = dataclasses.replace(tables, specular={"weight": specular_weight, "slope": 0.8, **index})
+    tables = dataclasses.replace(tables, specular={"weight": specular_weight, "slope": 0.8, "fuzz_albedo": fuzz_albedo,
+                                                   **index})
     material = build_yarn_material(tables, mode=mode, plain_nodes=plain_nodes)
     mesh.materials.append(material)
 
@@ -293,6 +295,29 @@ def test_the_sheen_reflects_at_its_own_index_not_the_hosts(tmp_path, synthetic_t
     expected = SUN_IRRADIANCE * cook_torrance_between(sun_direction, view, 0.8, INDEX) * sun_direction[2]
     assert expected > 3.0 * SUN_IRRADIANCE * cook_torrance_between(sun_direction, view, 0.8, 1.2) * sun_direction[2]
     np.testing.assert_allclose(sheen, expected, rtol=1e-3 if mode == SUN_MODE else 0.02)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("mode, plain_nodes", [(SUN_MODE, False), (GENERAL_MODE, False), (GENERAL_MODE, True)],
+                         ids=["sun", "general-osl", "general-plain-nodes"])
+def test_the_fuzz_is_lommel_seeliger_in_sun_mode_and_its_albedo_in_the_general_mode(tmp_path, synthetic_tables, mode,
+                                                                                   plain_nodes):
+    # Sun mode: A μi / (4π (μi + μo)) exactly.  General mode: a diffuse lobe about the cloth normal that
+    # returns the term's directional albedo at the view, a(μo) μi / π under the sun.
+    tables = without_unscattered_light(synthetic_tables[0], tmp_path)
+    view, sun_direction, albedo = unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86]), 0.3
+    zenith, azimuth = math.degrees(math.acos(view[2])), math.degrees(math.atan2(view[1], view[0]))
+    means = []
+    for fuzz in (albedo, 0.0):
+        scene, _ = patch_scene(tables, mode, zenith, azimuth, sun_direction, plain_nodes=plain_nodes, fuzz_albedo=fuzz)
+        means.append(render_to_array(scene, tmp_path / f"{mode}{fuzz}.exr")[..., :3].reshape(-1, 3).mean(axis=0))
+    fuzz = means[0] - means[1]
+    if mode == SUN_MODE:
+        expected = SUN_IRRADIANCE * lommel_seeliger(sun_direction, view, albedo) * sun_direction[2]
+        np.testing.assert_allclose(fuzz, expected, rtol=1e-3)
+    else:
+        expected = SUN_IRRADIANCE * lommel_seeliger_albedo(view[2], albedo) / math.pi * sun_direction[2]
+        np.testing.assert_allclose(fuzz, expected, rtol=0.02)
 
 
 @pytest.mark.blender

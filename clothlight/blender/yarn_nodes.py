@@ -150,23 +150,40 @@ def _clamped(socket):
 
 
 def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal) -> list:
-    """The cloth's specular closures (``cl_cloth_specular_closure``): about the cloth normal turned
-    toward the viewer, on faces whose normal is on its side only, weighted by the specular weight."""
+    """The cloth's specular and fuzz closures (``cl_cloth_specular_closure``, ``cl_cloth_fuzz_closure``):
+    about the cloth normal turned toward the viewer, on faces whose normal is on its side only, the
+    sheen weighted by the specular weight, the fuzz a diffuse lobe weighted by its directional albedo
+    at the view (:func:`precompute.optics.lommel_seeliger.lommel_seeliger_albedo`)."""
     from precompute.tables import folder as table_folder
     specular = tables.specular or table_folder.default_specular()
     weight, slope = float(specular["weight"]), float(specular["slope"])
-    if weight <= 0.0:
+    fuzz = float(specular.get("fuzz_albedo", 0.0))
+    if weight <= 0.0 and fuzz <= 0.0:
         return []
-    facing = nodes.math("SIGN", nodes.vector_math("DOT_PRODUCT", cloth_normal, toward_view, location=(-1400, -700))
-                        .outputs["Value"], location=(-1250, -700))
+    cosine = nodes.vector_math("DOT_PRODUCT", cloth_normal, toward_view, location=(-1400, -700)).outputs["Value"]
+    facing = nodes.math("SIGN", cosine, location=(-1250, -700))
     toward = nodes.vector_math("SCALE", cloth_normal, location=(-1100, -700))  # unit: a closure normalises its normal
     nodes.link(facing, toward.inputs["Scale"])
     toward = toward.outputs[0]
     face_on_side = nodes.math("GREATER_THAN", nodes.vector_math("DOT_PRODUCT", normal, toward, location=(-800, -800))
                               .outputs["Value"], 0.0, location=(-650, -800))
-    copies = math.ceil(weight)
-    factor = nodes.math("MULTIPLY", face_on_side, weight / copies, location=(-500, -800))
-    return cook_torrance_closures(nodes, factor, copies, tables.specular_index, slope, toward, (-200, -700))
+    closures = []
+    if weight > 0.0:
+        copies = math.ceil(weight)
+        factor = nodes.math("MULTIPLY", face_on_side, weight / copies, location=(-500, -800))
+        closures += cook_torrance_closures(nodes, factor, copies, tables.specular_index, slope, toward, (-200, -700))
+    if fuzz > 0.0:
+        # a(μo) = (A/2)(1 − μo ln(1 + 1/μo)), μo = |n_c·v| kept above 0
+        mu = nodes.math("MAXIMUM", nodes.math("ABSOLUTE", cosine, location=(-1250, -1300)), 1e-6,
+                        location=(-1100, -1300))
+        log = nodes.math("LOGARITHM", nodes.math("ADD", 1.0, nodes.math("DIVIDE", 1.0, mu, location=(-950, -1300)),
+                                                 location=(-800, -1300)), math.e, location=(-650, -1300))
+        albedo = nodes.math("MULTIPLY_ADD", nodes.math("MULTIPLY", mu, log, location=(-500, -1300)), -0.5 * fuzz,
+                            0.5 * fuzz, location=(-350, -1300))
+        colour = nodes.math("MULTIPLY", albedo, face_on_side, location=(-200, -1300))
+        closures.append(nodes.node("ShaderNodeBsdfDiffuse", (100, -1300), {"Color": colour, "Normal": toward}
+                                   ).outputs[0])
+    return closures
 
 
 def cook_torrance_closures(nodes, factor, copies: int, index: float, slope: float, normal, location) -> list:

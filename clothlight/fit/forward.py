@@ -151,7 +151,7 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
 
 
 class ForwardModel:
-    """``model(config, specular_weight=, specular_slope=, relative_error=, seed=)`` → the cloth BRDF
+    """``model(config, specular_weight=, specular_slope=, relative_error=, seed=, fuzz_albedo=0)`` → the cloth BRDF
     (n_views + 2, 3), 1/sr, linear Rec.709, at the measured views given to :func:`build_forward_model`
     and then at the :data:`SWATCH_VIEWS` (:attr:`swatch_count` rows: the BRDF lit from the front,
     and the BTDF lit from straight behind, both at normal view).  The specular term's Fresnel factor
@@ -181,30 +181,31 @@ class ForwardModel:
         return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), *per_view.shape[1:]).mean(axis=1)
 
     def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float,
-                   specular_index: float | None = None) -> np.ndarray:
+                   specular_index: float | None = None, fuzz_albedo: float = 0.0) -> np.ndarray:
         """The cloth BRDF of given tables at the measured views, averaged over the sample azimuths."""
         return self._mean_over_azimuths(self.response.cloth_brdf(
             atlas, attenuation, layout, specular_weight=specular_weight, specular_slope=specular_slope,
-            specular_index=specular_index))
+            specular_index=specular_index, fuzz_albedo=fuzz_albedo))
 
     def parts(self, config: dict, *, relative_error: float, seed: int):
-        """The cloth BRDF split into what the medium gives and what the specular term adds: the
-        first (n_views, 3), 1/sr, with no specular, and ``specular(weight, slope)`` (n_views,), 1/sr,
-        white.  A fit optimises the specular term's two parameters for each medium in milliseconds."""
+        """The cloth BRDF split into what the medium gives and what the cloth-scale terms add: the
+        first (n_views, 3), 1/sr, with neither, and ``specular(weight, slope, fuzz_albedo=0)``
+        (n_views,), 1/sr, white: the sheen and the fuzz.  A fit optimises their parameters for each
+        medium in milliseconds."""
         atlas, attenuation, layout = self.tables(config, relative_error=relative_error, seed=seed)
         yarn = self.cloth_brdf(atlas, attenuation, layout, specular_weight=0.0, specular_slope=1.0)
 
         index = sheen_index(medium_from_dict(config, self.base_dir))
 
-        def specular(weight: float, slope: float) -> np.ndarray:
-            return self._mean_over_azimuths(self.response.specular_brdf(weight, slope, index))
+        def specular(weight: float, slope: float, fuzz_albedo: float = 0.0) -> np.ndarray:
+            return self._mean_over_azimuths(self.response.specular_brdf(weight, slope, index, fuzz_albedo))
 
         return yarn, specular
 
     def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
-                 seed: int) -> np.ndarray:
+                 seed: int, fuzz_albedo: float = 0.0) -> np.ndarray:
         yarn, specular = self.parts(config, relative_error=relative_error, seed=seed)
-        return yarn + specular(specular_weight, specular_slope)[:, None]
+        return yarn + specular(specular_weight, specular_slope, fuzz_albedo)[:, None]
 
 
 def _yarn_and_grids(config: dict, medium, optics, seed: int, paths: int):

@@ -30,6 +30,7 @@ import numpy as np
 from precompute.errors import ParameterError
 from precompute.optics import ballistic
 from precompute.optics.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT, cook_torrance
+from precompute.optics.lommel_seeliger import lommel_seeliger
 from precompute.tables import exr
 from precompute.tables import layout as table_layout
 from precompute.tables.grids import AngularGrid
@@ -48,12 +49,14 @@ class YarnLookup:
     """What the sun-mode yarn shader reads of a yarn's tables: the BRDF atlas (N_i·N_o, N_i·N_o, C)
     (``brdf.exr``), the unscattered light's attenuation (M, C) (``unscattered.exr``), their layout
     (grids, host index, the sun mode's cone) and the specular term's ``weight``, ``slope`` (Beckmann
-    rms slope m) and ``ior``, as the shader's sockets hold them (float32)."""
+    rms slope m) and ``ior``, as the shader's sockets hold them (float32), and its fuzz albedo
+    (``FuzzAlbedo``, :mod:`precompute.optics.lommel_seeliger`), part of ρ as the sun mode emits it."""
 
     atlas: np.ndarray
     attenuation: np.ndarray
     layout: TableLayout
     specular: dict
+    fuzz_albedo: float = 0.0
 
 
 def yarn_lookup(tables) -> YarnLookup:
@@ -67,7 +70,8 @@ def yarn_lookup(tables) -> YarnLookup:
     return YarnLookup(exr.read_table(tables.brdf_path, "brdf").pixels,
                       np.asarray(attenuation, float).reshape(-1, attenuation.shape[-1]), layout,
                       {"weight": _socket(specular.get("weight", DEFAULT_WEIGHT)),
-                       "slope": _socket(specular.get("slope", DEFAULT_SLOPE)), "ior": _socket(tables.specular_index)})
+                       "slope": _socket(specular.get("slope", DEFAULT_SLOPE)), "ior": _socket(tables.specular_index)},
+                      _socket(specular.get("fuzz_albedo", 0.0)))
 
 
 def _socket(value: float) -> float:
@@ -119,20 +123,36 @@ def _patch_rho(view: ResponseView, pixels: np.ndarray, attenuation: np.ndarray, 
     return summed / view.counted[:, None]
 
 
+def _lit_facing_cells(response: GarmentResponse):
+    """Per side, the share of each patch that is lit yarn facing the sun (N_i², N_o²) (ω_i·z > 0 in the
+    yarn frame), and the cells' directions toward the sun (N_i², 1, 3) and the camera (1, N_o², 3), in
+    each side's own frame, where the viewer's cloth normal is +z."""
+    patches = response.incidence_resolution**2
+    facing = response.per_side([np.bincount(v.patch, v.weight * (v.incidence[:, 2] > 0.0), patches) / v.counted
+                                for v in response.views])
+    toward_sun = AngularGrid("sphere", response.incidence_resolution).cell_centers()[:, None, :]
+    toward_camera = AngularGrid("hemisphere", response.exit_resolution).cell_centers()[None, :, :]
+    return facing, toward_sun, toward_camera
+
+
 def response_specular(response: GarmentResponse, weight: float, slope: float, ior: float) -> tuple[dict, dict]:
     """The specular term's part of ρ per side (N_i², N_o²), 1/sr, and its visibility V (N_i², N_o²):
     ``weight`` f_CT(ω_i, ω_o) cos θ_i V about the cloth normal on the viewer's side (``cl_cloth_specular``),
     V the share of the patch that is lit yarn facing the sun (ω_i·z > 0 in the yarn frame), and none
     where the term itself is 0 (the sun on the other side: the shader marks nothing there)."""
-    patches = response.incidence_resolution**2
-    facing = response.per_side([np.bincount(v.patch, v.weight * (v.incidence[:, 2] > 0.0), patches) / v.counted
-                                for v in response.views])
-    # Each side's cells in its own frame, where the viewer's cloth normal is +z.
-    toward_sun = AngularGrid("sphere", response.incidence_resolution).cell_centers()[:, None, :]
-    toward_camera = AngularGrid("hemisphere", response.exit_resolution).cell_centers()[None, :, :]
+    facing, toward_sun, toward_camera = _lit_facing_cells(response)
     f_cos = weight * cook_torrance(toward_sun, toward_camera, slope, ior) * np.maximum(toward_sun[..., 2], 0.0)
     visibility = {side: np.where(f_cos > 0.0, facing[side], 0.0) for side in SIDES}
     return {side: f_cos * visibility[side] for side in SIDES}, visibility
+
+
+def response_fuzz(response: GarmentResponse, albedo: float) -> dict:
+    """The fuzz term's part of ρ per side (N_i², N_o²), 1/sr: f_LS(ω_i, ω_o) cos θ_i about the cloth
+    normal on the viewer's side (``cl_cloth_fuzz``) on the share of the patch that is lit yarn facing
+    the sun, as for the specular term."""
+    facing, toward_sun, toward_camera = _lit_facing_cells(response)
+    f_cos = lommel_seeliger(toward_sun, toward_camera, albedo) * np.maximum(toward_sun[..., 2], 0.0)
+    return {side: f_cos * facing[side] for side in SIDES}
 
 
 def measurement_from_response(response: GarmentResponse, yarn: YarnLookup,
@@ -141,6 +161,9 @@ def measurement_from_response(response: GarmentResponse, yarn: YarnLookup,
     ``clothlight.blender.garment.measure.measure_cloth`` renders, from the response's samples.
     Its ``render_seconds`` are the response's renders, once for every yarn (none where it was traced)."""
     rho = response_rho(response, yarn, threads)
+    if yarn.fuzz_albedo > 0.0:
+        fuzz = response_fuzz(response, yarn.fuzz_albedo)
+        rho = {side: rho[side] + fuzz[side][..., None] for side in SIDES}
     specular, visibility = response_specular(response, **yarn.specular)
     return ClothMeasurement({side: rho[side] + specular[side][..., None] for side in SIDES}, specular, visibility,
                             dict(yarn.specular), response.coverage(), float(response.shape["patch_mm"]),

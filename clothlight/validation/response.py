@@ -131,12 +131,17 @@ class ClothResponse:
         rho_map, _ = self._maps_for(layout)
         return np.unique(rho_map.indices)
 
-    def specular_brdf(self, weight: float, slope: float, index: float) -> np.ndarray:
-        """The Cook–Torrance term's share of each view's cloth BRDF (n_views,), 1/sr: w f_CT (n_c·l) s."""
-        from precompute.optics import cook_torrance
-        cook_torrance = cook_torrance.cook_torrance(self._toward_sun, self._toward_camera,
-                                                                          slope, index)
-        return weight * cook_torrance * self._toward_sun[:, 2] * self._specular_share
+    def specular_brdf(self, weight: float, slope: float, index: float, fuzz_albedo: float = 0.0) -> np.ndarray:
+        """The cloth-scale terms' share of each view's cloth BRDF (n_views,), 1/sr: (w f_CT + f_LS) (n_c·l) s,
+        the Cook–Torrance sheen and the fuzz (:mod:`precompute.optics.lommel_seeliger`) about the cloth
+        normal, on the lit yarn faces turned to the sun (the shader's sun mode cuts both alike)."""
+        from precompute.optics.cook_torrance import cook_torrance
+        from precompute.optics.lommel_seeliger import lommel_seeliger
+
+        terms = weight * cook_torrance(self._toward_sun, self._toward_camera, slope, index)
+        if fuzz_albedo:
+            terms = terms + lommel_seeliger(self._toward_sun, self._toward_camera, fuzz_albedo)
+        return terms * self._toward_sun[:, 2] * self._specular_share
 
     @functools.cached_property
     def _toward_sun(self) -> np.ndarray:
@@ -152,14 +157,15 @@ class ClothResponse:
         return np.array([np.count_nonzero(v.incidence[:, 2] > 0.0) * v.calibration for v in self.views])
 
     def cloth_brdf(self, atlas: np.ndarray, attenuation: np.ndarray | None, layout: TableLayout, *,
-                   specular_weight: float, specular_slope: float, specular_index: float | None = None) -> np.ndarray:
+                   specular_weight: float, specular_slope: float, specular_index: float | None = None,
+                   fuzz_albedo: float = 0.0) -> np.ndarray:
         """The cloth BRDF (n_views, C), 1/sr, that a sun-mode sweep of the yarn material measures.
 
         ``atlas``: the BRDF atlas image (N_i·N_o, N_i·N_o, C) (``brdf.exr``); ``attenuation``: the
         unscattered light's table (M, C) or (1, M, C) (``unscattered.exr``), or None for a material
         without it; ``layout`` must describe both.  ``specular_weight``, ``specular_slope``,
         ``specular_index``: the shader's ``SpecularWeight``, ``Slope`` (Beckmann rms slope m) and
-        ``SpecularIOR`` (None: the layout's host index).
+        ``SpecularIOR`` (None: the layout's host index); ``fuzz_albedo``: its ``FuzzAlbedo``.
         """
         atlas = np.asarray(atlas, float)
         side = layout.incidence_resolution * layout.exit_resolution
@@ -174,7 +180,7 @@ class ClothResponse:
                                      f"({layout.unscattered_samples}, C): the layout's attenuation table")
             brdf = brdf + unscattered_map @ attenuation
         index = layout.index if specular_index is None else specular_index
-        return brdf + self.specular_brdf(specular_weight, specular_slope, index)[:, None]
+        return brdf + self.specular_brdf(specular_weight, specular_slope, index, fuzz_albedo)[:, None]
 
     def save(self, path) -> pathlib.Path:
         """Write the response to ``path`` (``.npz``, compressed)."""

@@ -76,7 +76,7 @@ class ForwardModel(Protocol):
     """A forward model: the cloth's (n_views, 3) BRDF, 1/sr, at the views it was built for."""
 
     def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
-                 seed: int) -> np.ndarray: ...
+                 seed: int, fuzz_albedo: float = 0.0) -> np.ndarray: ...
 
 
 class FitCancelled(KeyboardInterrupt):
@@ -544,7 +544,7 @@ class CandidateEvaluator:
                                                               seed=forward_seed)
         values = fit_profiled_specular(self.score, medium_part, specular_part, self.profiled, keywords)
         keywords = {**keywords, **{p.path: values[p.name] for p in self.profiled}}
-        return medium_part + specular_part(keywords["specular_weight"], keywords["specular_slope"])[:, None], values
+        return medium_part + cloth_terms(specular_part, keywords)[:, None], values
 
     def __call__(self, parameters: dict, relative_error: float, forward_seed: int) -> float | tuple | Refused:
         candidate, keywords = apply(self.config, self.specular, parameters)
@@ -589,7 +589,10 @@ def evaluate_on_cluster(executor, shared_evaluate, evaluate: CandidateEvaluator,
 #: the misfit over (weight, slope) has more than one basin (a broad faint lobe and a narrow bright
 #: one can both explain a grazing rise), and a local search from fixed starts ended in the worse one
 #: (fibre_red_cotton's sheen 0.84, m 0.58: relative RMS 0.349, against 0.231 at 0.11, m 0.23).
-PROFILE_GRID_POINTS = 13
+#: About this many points in all: 19 per parameter for two (the sheen), 7 for three (and the fuzz),
+PROFILE_GRID_SIZE = 343
+#: and never fewer than this per parameter.
+PROFILE_MIN_POINTS = 7
 #: How many of the grid's best points the bounded local search starts from.
 PROFILE_POLISHED = 3
 
@@ -607,11 +610,18 @@ def back_front_penalty(swatch_rgb: np.ndarray, max_back_front: float) -> float:
     return max(0.0, math.log(max(back, 1e-300) / front / max_back_front))
 
 
+def cloth_terms(specular_part: Callable, keywords: Mapping[str, float]) -> np.ndarray:
+    """What the cloth-scale terms add (n,), 1/sr: ``specular_part`` (a forward model's, ``parts``) at the
+    sheen's weight and slope of ``keywords``, and at its fuzz albedo where ``keywords`` holds one."""
+    fuzz = {"fuzz_albedo": keywords["fuzz_albedo"]} if keywords.get("fuzz_albedo") else {}
+    return specular_part(keywords["specular_weight"], keywords["specular_slope"], **fuzz)
+
+
 def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part: np.ndarray, specular_part: Callable,
                           profiled: Sequence[FitParameter], keywords: Mapping[str, float]) -> dict[str, float]:
     """The values of the specular parameters ``profiled`` that minimise ``objective`` for one medium:
     its cloth BRDF without the specular term ``medium_part`` (n, 3) plus ``specular_part(weight,
-    slope)`` (n,).  A grid of :data:`PROFILE_GRID_POINTS` per parameter over their [0, 1] box (log
+    slope, fuzz_albedo)`` (n,).  A grid of about :data:`PROFILE_GRID_SIZE` points over their [0, 1] box (log
     where they say), then bounded L-BFGS-B from its :data:`PROFILE_POLISHED` best points; no forward
     evaluation.  Variable projection: the optimiser outside searches only the medium, whose every
     candidate gets its best sheen."""
@@ -619,9 +629,10 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
 
     def misfit(u) -> float:
         values = {**keywords, **{p.path: p.from_unit(float(x)) for p, x in zip(profiled, u)}}
-        return objective(medium_part + specular_part(values["specular_weight"], values["specular_slope"])[:, None])
+        return objective(medium_part + cloth_terms(specular_part, values)[:, None])
 
-    axes = [np.linspace(0.0, 1.0, PROFILE_GRID_POINTS)] * len(profiled)
+    points = max(PROFILE_MIN_POINTS, round(PROFILE_GRID_SIZE ** (1.0 / len(profiled))))
+    axes = [np.linspace(0.0, 1.0, points)] * len(profiled)
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(profiled))
     scanned = np.array([misfit(u) for u in grid])
     best = None

@@ -89,8 +89,9 @@ class FitParameter:
 
     @property
     def is_specular(self) -> bool:
-        """Whether it is a forward-model keyword rather than a medium value."""
-        return self.path.startswith("specular_")
+        """Whether it is a forward-model keyword (a cloth-scale term: the sheen, the fuzz) rather than a
+        medium value."""
+        return self.path in SPECULAR_DEFAULTS
 
     def check(self, value: float) -> float:
         """``value`` as a float if it lies in the fit range; ParameterError naming it otherwise."""
@@ -243,6 +244,10 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
     FitParameter("specular_slope", "specular_slope", "", 0.05, 1.0, log=True,
                  note="the Beckmann rms slope m (the paper's 0.8): below 0.05 the lobe falls between the "
                       "measured views; 1.0 is the garment closure fit's largest gloss roughness"),
+    FitParameter("fuzz_albedo", "fuzz_albedo", "", 0.0, 0.5, log=False,
+                 note="the white Lommel–Seeliger term of the surface fibres' first reflections (the shader's "
+                      "FuzzAlbedo, precompute.optics.lommel_seeliger): 0 is none; a fibre reflects 4–10 % "
+                      "undyed, so half of all light is far more than any fuzz returns"),
 )}
 
 

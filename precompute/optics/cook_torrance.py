@@ -32,12 +32,15 @@ from scipy.special import erf
 DEFAULT_WEIGHT = 1.0
 DEFAULT_SLOPE = 0.8
 DEFAULT_IOR = 1.557
-#: The preset table holding the fitted specular term (``[fit]``, keys ``specular_weight`` and
-#: ``specular_slope``, the shader's SpecularWeight and Slope; ``python -m clothlight.fit`` writes it);
-#: the medium's loader ignores it.
+#: The shader's default fuzz albedo (``FuzzAlbedo``, :mod:`precompute.optics.lommel_seeliger`): none.
+DEFAULT_FUZZ_ALBEDO = 0.0
+#: The preset table holding the fitted cloth-scale terms (``[fit]``, keys ``specular_weight``,
+#: ``specular_slope`` and ``fuzz_albedo``, the shader's SpecularWeight, Slope and FuzzAlbedo;
+#: ``python -m clothlight.fit`` writes it); the medium's loader ignores it.
 FIT_TABLE = "fit"
 #: The ``[fit]`` table's keys and the shader's defaults for them.
-SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE}
+SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE,
+                     "fuzz_albedo": DEFAULT_FUZZ_ALBEDO}
 
 
 def cook_torrance_between(light, view, m=DEFAULT_SLOPE, n=DEFAULT_IOR) -> float:
@@ -140,6 +143,6 @@ def specular_from_config(config: Mapping) -> dict[str, float]:
     return {key: float(table.get(key, default)) for key, default in SPECULAR_DEFAULTS.items()}
 
 
-__all__ = ["DEFAULT_IOR", "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "SPECULAR_DEFAULTS", "cloth_specular",
-           "cook_torrance", "cook_torrance_between", "dielectric_fresnel", "direction", "sheen_index",
+__all__ = ["DEFAULT_FUZZ_ALBEDO", "DEFAULT_IOR", "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "SPECULAR_DEFAULTS",
+           "cloth_specular", "cook_torrance", "cook_torrance_between", "dielectric_fresnel", "direction", "sheen_index",
            "specular_from_config"]

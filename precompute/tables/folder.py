@@ -170,15 +170,16 @@ def default_specular() -> dict:
     :mod:`precompute.optics.cook_torrance`, their ``source`` saying so."""
     from precompute.optics.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT  # (SciPy) only where a default is needed
 
-    return {"weight": float(DEFAULT_WEIGHT), "slope": float(DEFAULT_SLOPE),
+    return {"weight": float(DEFAULT_WEIGHT), "slope": float(DEFAULT_SLOPE), "fuzz_albedo": 0.0,
             "source": f"default (paper §6: m = {DEFAULT_SLOPE:g})"}
 
 
 def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
     """The specular record of a yarn bake's summary (:data:`SPECULAR_KEY`): ``weight`` (a finite number
-    ≥ 0), ``slope`` (finite, > 0), ``index`` (finite, ≥ 1) and ``source``; :func:`default_specular` where
-    the summary has none (a folder baked before bakes recorded it), and the summary's ``host_index``
-    where it has no ``index`` (baked before bakes recorded that).  :class:`TableError` naming the
+    ≥ 0), ``slope`` (finite, > 0), ``index`` (finite, ≥ 1), ``fuzz_albedo`` (in [0, 1]) and ``source``;
+    :func:`default_specular` where the summary has none (a folder baked before bakes recorded it), the
+    summary's ``host_index`` where it has no ``index`` and no fuzz (0) where it has no ``fuzz_albedo``
+    (baked before bakes recorded those).  :class:`TableError` naming the
     summary otherwise."""
     value = summary.get(SPECULAR_KEY)
     if value is None:
@@ -190,10 +191,13 @@ def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
                     and (v >= low if inclusive else v > low))
 
         if not (isinstance(value, dict) and number("weight", 0.0, True) and number("slope", 0.0, False)
-                and ("index" not in value or number("index", 1.0, True)) and isinstance(value.get("source"), str)):
+                and ("index" not in value or number("index", 1.0, True))
+                and ("fuzz_albedo" not in value or (number("fuzz_albedo", 0.0, True) and value["fuzz_albedo"] <= 1.0))
+                and isinstance(value.get("source"), str)):
             raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SPECULAR_KEY} {value!r} is not an object of "
-                             "weight (≥ 0), slope (> 0), index (≥ 1) and source")
-        record = {key: float(value[key]) for key in ("weight", "slope", "index") if key in value}
+                             "weight (≥ 0), slope (> 0), index (≥ 1), fuzz_albedo (in [0, 1]) and source")
+        record = {key: float(value[key]) for key in ("weight", "slope", "index", "fuzz_albedo") if key in value}
+        record.setdefault("fuzz_albedo", 0.0)
         record["source"] = value["source"]
     if "index" not in record and "host_index" in summary:
         record["index"] = float(summary["host_index"])

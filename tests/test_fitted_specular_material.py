@@ -26,7 +26,8 @@ def test_the_yarn_material_takes_the_recorded_specular_or_the_defaults(tmp_path)
     for tables, expected in ((fitted, RECORDED), (older, {**default_specular(), "index": older.host_index})):
         material = build_yarn_material(tables, name="test fitted specular")
         node, inputs = shader_node(material), specular_inputs(material)
-        assert inputs == {key: pytest.approx(expected[key], rel=1e-6) for key in ("weight", "slope")}
+        assert inputs == {**{key: pytest.approx(expected[key], rel=1e-6) for key in ("weight", "slope")},
+                          "fuzz_albedo": 0.0}
         # the sheen's Fresnel index apart from the host's, which refracts the unscattered light
         assert node.inputs["SpecularIOR"].default_value == pytest.approx(expected["index"], rel=1e-6)
         assert node.inputs["IOR"].default_value == pytest.approx(tables.host_index, rel=1e-6)
@@ -37,3 +38,7 @@ def test_the_yarn_material_takes_the_recorded_specular_or_the_defaults(tmp_path)
     assert measurement_inputs(fitted, settings) != measurement_inputs(older, settings)
     other_index = yarn_tables_from_bake(folder(tmp_path / "other index", specular={**RECORDED, "index": 1.4}))
     assert measurement_inputs(other_index, settings) != measurement_inputs(fitted, settings)
+    # the fuzz is part of what the material emits with ρ, and so of the measurement
+    fuzzy = yarn_tables_from_bake(folder(tmp_path / "fuzz", specular={**RECORDED, "fuzz_albedo": 0.1}))
+    assert measurement_inputs(fuzzy, settings) != measurement_inputs(fitted, settings)
+    assert specular_inputs(build_yarn_material(fuzzy, name="test fuzz"))["fuzz_albedo"] == pytest.approx(0.1)

@@ -76,16 +76,21 @@ def measurement_inputs(yarn_tables, settings: GoniometerSettings) -> dict:
 def yarn_inputs(yarn_tables) -> dict:
     """What the sun-mode yarn material reads of a yarn bake: ρ and the unscattered light's
     attenuation (the pixels' hashes, not the bake's cache key, which also changes with the closure
-    fit), the host index and the weight, slope and index of the specular term (a fitted preset's,
-    ``YarnTableFiles.specular``; None: the shader's defaults)."""
+    fit), the host index, the weight, slope and index of the specular term (a fitted preset's,
+    ``YarnTableFiles.specular``; None: the shader's defaults) and the fuzz albedo where there is one
+    (the key only then: the cloth bakes of yarns without fuzz keep theirs)."""
     rho = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").pixels
     attenuation = precompute_tables.read_table(yarn_tables.unscattered_path, "unscattered").pixels
     specular = yarn_tables.specular
-    return {"yarn_rho_sha256": precompute_tables.content_hash(rho),
-            "yarn_unscattered_sha256": precompute_tables.content_hash(attenuation),
-            "host_index": yarn_tables.host_index,
-            "specular": None if specular is None else {key: float(specular[key]) for key in ("weight", "slope")},
-            "specular_index": yarn_tables.specular_index}
+    inputs = {"yarn_rho_sha256": precompute_tables.content_hash(rho),
+              "yarn_unscattered_sha256": precompute_tables.content_hash(attenuation),
+              "host_index": yarn_tables.host_index,
+              "specular": None if specular is None else {key: float(specular[key]) for key in ("weight", "slope")},
+              "specular_index": yarn_tables.specular_index}
+    fuzz = float((specular or {}).get("fuzz_albedo", 0.0))
+    if fuzz:
+        inputs["fuzz_albedo"] = fuzz
+    return inputs
 
 
 def response_method() -> str:

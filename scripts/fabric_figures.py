@@ -27,7 +27,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 def bake_folder_brdf(model, folder: pathlib.Path):
     """The cloth BRDF (n_views + 2, 3) of a bake folder's tables through ``model``'s response, with
-    the specular term its summary records."""
+    the specular term and the fuzz its summary records."""
     from clothlight.validation.response import TableLayout
     from precompute.optics import ballistic
     from precompute.tables import folder as table_folder
@@ -40,7 +40,8 @@ def bake_folder_brdf(model, folder: pathlib.Path):
     atlas = checked.tables[files["brdf"]].pixels[..., :3]
     attenuation = checked.tables[files["unscattered"]].pixels[..., :3]
     return model.cloth_brdf(atlas, attenuation, layout, specular_weight=float(specular["weight"]),
-                            specular_slope=float(specular["slope"]), specular_index=float(specular["index"]))
+                            specular_slope=float(specular["slope"]), specular_index=float(specular["index"]),
+                            fuzz_albedo=float(specular["fuzz_albedo"]))
 
 
 def fit_folder_brdf(folder: pathlib.Path, measured):
@@ -90,8 +91,7 @@ def main() -> int:
             label = f"tables {args.tables}"
         else:
             sheen = specular_from_config(config)
-            cloth = model(config, specular_weight=sheen["specular_weight"], specular_slope=sheen["specular_slope"],
-                          relative_error=args.relative_error, seed=args.seed)
+            cloth = model(config, **sheen, relative_error=args.relative_error, seed=args.seed)
             label = f"preset {args.preset} at relative error {args.relative_error:g}"
     baseline = fit_baseline(objective)
     fitted = baseline_brdf(views.angles_deg, baseline.albedo, baseline.weight, baseline.slope)

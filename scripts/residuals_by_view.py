@@ -39,7 +39,8 @@ def main() -> int:
     medium, specular = model.parts(config, relative_error=args.relative_error, seed=1)
     sheen = specular_from_config(config)
     count = len(views.forward_views)
-    cloth = (medium + specular(sheen["specular_weight"], sheen["specular_slope"])[:, None])[:count]
+    terms = specular(sheen["specular_weight"], sheen["specular_slope"], sheen["fuzz_albedo"])
+    cloth = (medium + terms[:, None])[:count]
     baseline = fit_baseline(objective)
     fitted = baseline_brdf(views.angles_deg, baseline.albedo, baseline.weight, baseline.slope)
     measured = objective.measured

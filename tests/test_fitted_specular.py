@@ -196,3 +196,14 @@ def test_a_summary_that_drops_the_record_of_tables_that_have_one_is_refused(tmp_
     (path / SUMMARY_FILE).write_text(json.dumps(summary))
     with pytest.raises(TableError, match="header specular"):
         check_yarn_table_folder(path)
+
+
+@pytest.mark.parametrize("path", sorted((PRESET_DIR / "experimental").glob("*.toml")), ids=lambda p: p.stem)
+def test_every_experimental_preset_loads_and_its_fit_is_what_its_bake_records(path):
+    # presets loaded by their path: the medium, the dye mixture and the [fit] terms the bake records
+    config, base_dir = load_preset_config(path)
+    record = bake_module.specular_settings(config, medium_from_dict(config, base_dir))
+    fit = config.get(FIT_TABLE, {})
+    for key, recorded in (("specular_weight", "weight"), ("specular_slope", "slope"), ("fuzz_albedo", "fuzz_albedo")):
+        if key in fit:
+            assert record[recorded] == fit[key], key

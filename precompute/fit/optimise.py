@@ -585,11 +585,11 @@ def evaluate_on_cluster(executor, shared_evaluate, evaluate: CandidateEvaluator,
         raise
 
 
-#: Points per profiled parameter of the grid the profiled specular fit scans before it polishes:
-#: the misfit over (weight, slope) has more than one basin (a broad faint lobe and a narrow bright
-#: one can both explain a grazing rise), and a local search from fixed starts ended in the worse one
-#: (fibre_red_cotton's sheen 0.84, m 0.58: relative RMS 0.349, against 0.231 at 0.11, m 0.23).
-#: About this many points in all: 19 per parameter for two (the sheen), 7 for three (and the fuzz),
+#: The points in all of the grid the profiled specular fit scans before it polishes (19 per parameter
+#: for two, the sheen; 7 for three, with the fuzz): the misfit over (weight, slope) has more than one
+#: basin (a broad faint lobe and a narrow bright one can both explain a grazing rise), and a local
+#: search from fixed starts ended in the worse one (fibre_red_cotton's sheen 0.84, m 0.58: relative
+#: RMS 0.349, against 0.231 at 0.11, m 0.23),
 PROFILE_GRID_SIZE = 343
 #: and never fewer than this per parameter.
 PROFILE_MIN_POINTS = 7

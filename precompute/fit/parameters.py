@@ -134,8 +134,8 @@ class FitParameter:
         preset leaves it out (the yarn radius)."""
         if self.is_specular:
             return float((specular or {}).get(self.path, SPECULAR_DEFAULTS[self.path]))
-        if self.path == DYE_SHARE_PATH:
-            return float(two_dye_table(config, self.name)["shares"][1])
+        if self.path == DYE_SHARE_PATH:  # no shares written: an even mixture
+            return float((two_dye_table(config, self.name).get("shares") or (0.5, 0.5))[1])
         table, key = self._place(config)
         if key not in table:
             if self.path in _MEDIUM_DEFAULTS:
@@ -172,15 +172,14 @@ class FitParameter:
 
 
 def two_dye_table(config: Mapping, parameter: str) -> dict:
-    """The ``[dye]`` table of ``config`` when it mixes two dyes (``spectrum_csv`` a list of two CSVs),
-    its ``shares`` filled in equal where it has none; MissingSpeciesError saying what to write otherwise."""
+    """The ``[dye]`` table of ``config`` when it mixes two dyes (``spectrum_csv`` a list of two CSVs);
+    MissingSpeciesError saying what to write otherwise."""
     table = config.get("dye")
     csvs = table.get("spectrum_csv") if isinstance(table, dict) else None
     if not (isinstance(csvs, list) and len(csvs) == 2):
         raise MissingSpeciesError("dye.spectrum_csv", csvs, f"two dye spectra for the free parameter {parameter} "
                                                             '(e.g. spectrum_csv = ["congo_red.csv", '
                                                             '"red_dye_band_model.csv"] in the [dye] table)')
-    table.setdefault("shares", [0.5, 0.5])
     return table
 
 

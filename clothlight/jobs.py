@@ -230,6 +230,8 @@ class ChildJob:
         self.bytecode_cache_dir = bytecode_cache_dir
         self.blender = blender
         self.progress = 0.0
+        # each rise of the progress, for wait() to report every one whenever it looks
+        self._progress_news: list[float] = []
         #: What the child is doing, as its last progress event said ("" when it does not say).
         self.stage = ""
         self.outcome = None
@@ -358,15 +360,20 @@ class ChildJob:
     def _handle(self, event: dict) -> None:
         kind = event.get("event")
         if kind == "progress":
-            self.progress = max(self.progress, float(event["fraction"]))
+            self._rise_to(float(event["fraction"]))
             self.stage = str(event.get("stage", self.stage))
         elif kind == "done":
-            self.progress = 1.0
+            self._rise_to(1.0)
             self.outcome = self.outcome_from(event)
         elif kind == "error":
             self.error = self.failure(event["message"], self.log, bad_input=bool(event.get("bad_input")))
         elif kind == "cancelled":
             self.error = self.cancellation(f"{self.what} cancelled: {self.cancelled_note}")
+
+    def _rise_to(self, fraction: float) -> None:
+        if fraction > self.progress:
+            self.progress = fraction
+            self._progress_news.append(fraction)
 
     def _conclude(self) -> None:
         if self.done:
@@ -404,13 +411,22 @@ class ChildJob:
         raises :attr:`failure` / :attr:`cancellation`."""
         if self._process is None:
             self.start()
-        reported = -1.0
+
+        def report() -> None:
+            # every rise the child sent, not the progress when looked at: a fast child's views all
+            # arrive between two looks
+            news, self._progress_news = self._progress_news, []
+            if on_progress is not None:
+                for fraction in news:
+                    on_progress(fraction)
+
+        if on_progress is not None:
+            on_progress(self.progress)
         try:
             while not self.poll():
-                if on_progress is not None and self.progress != reported:
-                    reported = self.progress
-                    on_progress(reported)
+                report()
                 time.sleep(interval)
+            report()
         except KeyboardInterrupt:
             self.cancel()
             while not self.poll():

@@ -85,6 +85,7 @@ from precompute.tables.color import (
 from precompute.distributed import LOCAL, check_scheduler, open_executor
 from precompute.errors import ParameterError
 from precompute.optics.cook_torrance import FIT_TABLE, sheen_index, specular_from_config
+from precompute.fit.measured_sample import SAMPLE_TABLE, sample_weave_name
 from precompute.tables.grids import AngularGrid
 from precompute.optics.medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from precompute.optics.coefficients import medium_optics, planned_phase_grid
@@ -94,6 +95,7 @@ from precompute.tables.layout import brdf_atlas, interpolate_attenuation, interp
 from precompute.tables.folder import (
     FILE_HASHES_KEY,
     SPECULAR_FROM_PRESET,
+    SAMPLE_WEAVE_KEY,
     SPECULAR_KEY,
     SUMMARY_FILE,
     YARN_FOLDER_FILES,
@@ -169,12 +171,15 @@ UNITS = {
 @dataclasses.dataclass(frozen=True)
 class BakeConfiguration:
     """Everything a bake is made from: the medium, the ``[transport]`` and the ``[bake]`` settings,
-    and the specular term the tables record (:func:`specular_settings`)."""
+    the specular term the tables record (:func:`specular_settings`) and the sample weave the preset
+    was fitted on where its ``[sample]`` table names one (:mod:`precompute.fit.measured_sample`),
+    else None."""
 
     medium: MediumParameters
     transport: dict
     colour: dict
     specular: dict
+    sample_weave: str | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -409,7 +414,8 @@ def bake_configuration(
     # Checks the illuminant, the observer and that the wavelengths lie where colour is defined,
     # before any simulation.
     spectral_weights(medium.wavelengths.values, colour["illuminant"], colour["observer"])
-    return BakeConfiguration(medium, settings, colour, specular_settings(config, medium))
+    sample_weave = sample_weave_name(config) if SAMPLE_TABLE in config else None
+    return BakeConfiguration(medium, settings, colour, specular_settings(config, medium), sample_weave)
 
 
 # ---- the two stages -----------------------------------------------------------------------------
@@ -438,7 +444,13 @@ def table_inputs(spectral_key: str, configuration: BakeConfiguration) -> dict:
         "colour": configuration.colour,
         # the shader's specular term, recorded in the tables (not simulated: no part of the spectral key)
         SPECULAR_KEY: configuration.specular,
+        **_sample_weave_record(configuration),
     }
+
+
+def _sample_weave_record(configuration: BakeConfiguration) -> dict:
+    # Only where the preset names one, so that the tables of every other preset keep their keys.
+    return {} if configuration.sample_weave is None else {SAMPLE_WEAVE_KEY: configuration.sample_weave}
 
 
 def _simulation_record(inputs: dict, key: str, optics, transport, brdf, checks, seconds: dict) -> dict:
@@ -729,6 +741,7 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
             "units": UNITS,
             "host_index": spectral["host_index"],
             SPECULAR_KEY: configuration.specular,
+            **_sample_weave_record(configuration),
             "wavelengths_nm": wavelengths.tolist(),
         }
         layout = {"incidence_resolution": n_i, "exit_resolution": n_o}

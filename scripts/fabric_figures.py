@@ -2,7 +2,7 @@
 
 The cloth BRDF at every measured view comes from the fit's forward model (the cloth response,
 rendered once per view set and cached, docs/fitting.md): for ``--tables`` the bake's own atlas,
-unscattered table and specular term; for ``--preset`` a candidate's tables simulated at
+unscattered table and specular term, on the sample weave it records; for ``--preset`` a candidate's tables simulated at
 ``--relative-error`` with the preset's ``[fit]`` sheen; for ``--fit`` the views a fit's
 ``fit.json`` holds (its final evaluation, python -m clothlight.fit --out), no render.  Beside it, the paper's Lambert +
 Cook–Torrance baseline fitted to the plane of incidence.  Printed (and with ``--json`` written):
@@ -42,6 +42,18 @@ def bake_folder_brdf(model, folder: pathlib.Path):
     return model.cloth_brdf(atlas, attenuation, layout, specular_weight=float(specular["weight"]),
                             specular_slope=float(specular["slope"]), specular_index=float(specular["index"]),
                             fuzz_albedo=float(specular["fuzz_albedo"]))
+
+
+def bake_folder_sample(config: dict, folder: pathlib.Path) -> dict:
+    """``config`` with the yarn radius and the sample weave (``[sample]``) of a bake folder's summary,
+    which decide the weave its response renders."""
+    from precompute.fit.measured_sample import SAMPLE_TABLE, SAMPLE_WEAVE_KEY
+    from precompute.tables import folder as table_folder
+
+    summary = table_folder.check_yarn_table_folder(folder.resolve()).summary
+    yarn = {**config["yarn"], "radius_mm": summary["medium"]["yarn"]["radius_mm"]}
+    weave = table_folder.summary_sample_weave(summary, folder)
+    return {**config, "yarn": yarn, SAMPLE_TABLE: {SAMPLE_WEAVE_KEY: weave}}
 
 
 def fit_folder_brdf(folder: pathlib.Path, measured):
@@ -85,6 +97,8 @@ def main() -> int:
         cloth, label = fit_folder_brdf(args.fit, objective.measured)
     else:
         config, base_dir = load_preset_config(args.preset or "red_cotton")
+        if args.tables is not None:
+            config = bake_folder_sample(config, args.tables)
         model = build_forward_model(views.forward_views, config, base_dir, seed=0)
         if args.tables is not None:
             cloth = bake_folder_brdf(model, args.tables)

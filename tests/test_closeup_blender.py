@@ -13,7 +13,8 @@ bpy = pytest.importorskip("bpy")
 
 from clothlight.blender import closeup_operator, properties  # noqa: E402
 from clothlight.blender.flyaway_object import FLYAWAY_PROPERTY, build_flyaway_object, flyaway_name  # noqa: E402
-from clothlight.blender.sample_object import WEAVE_PROPERTY, build_sample_object, weave_from_record  # noqa: E402
+from clothlight.blender.sample_object import WEAVE_PROPERTY, build_sample_object  # noqa: E402
+from clothlight.weave.record import weave_from_record  # noqa: E402
 from clothlight.weave import build_woven_mesh  # noqa: E402
 from clothlight.weave.closeup import CloseupSettings, closeup_settings, sheeting_weave  # noqa: E402
 from clothlight.weave.fibre_optics import fibre_radius_mm, hair_absorption_coefficient  # noqa: E402

@@ -9,6 +9,7 @@ import os
 import signal
 import sys
 import time
+import tomllib
 import types
 
 import pytest
@@ -193,3 +194,19 @@ def test_without_the_forward_model_module_it_is_an_internal_error(inputs, tmp_pa
     monkeypatch.setitem(sys.modules, "clothlight.fit.forward", None)  # import fails as if the file were absent
     assert fit(inputs, tmp_path / "fit") == 1
     assert not (tmp_path / "fit").exists()
+
+
+def test_a_sample_weave_the_fit_cannot_render_exits_2_before_any_work_and_a_known_one_reaches_the_preset(
+        inputs, tmp_path, fake_forward, plots_as_text, capsys):
+    config = tomllib.loads(inputs["config"].read_text())
+    inputs["config"].write_text(fit_report.to_toml({**config, "sample": {"weave": "satin"}}))
+    assert fit(inputs, tmp_path / "refused") == 2
+    error = capsys.readouterr().err
+    assert "sample.weave" in error and "satin" in error and "sheeting" in error
+    assert not fake_forward.calls and not (tmp_path / "refused").exists()
+
+    inputs["config"].write_text(fit_report.to_toml({**config, "sample": {"weave": "sheeting"}}))
+    assert fit(inputs, tmp_path / "fit") == 0
+    assert tomllib.loads((tmp_path / "fit" / "preset.toml").read_text())["sample"] == {"weave": "sheeting"}
+    assert "sample weave (the cloth the forward model renders, `[sample]`): sheeting" in (
+        tmp_path / "fit" / "report.md").read_text()

@@ -15,7 +15,8 @@ import bpy
 from precompute.errors import ParameterError
 
 from .operators import is_sample
-from .sample_object import WEAVE_PROPERTY, weave_from_record
+from ..weave.record import weave_from_record
+from .sample_object import WEAVE_PROPERTY
 
 
 class CLOTHLIGHT_OT_add_flyaways(bpy.types.Operator):

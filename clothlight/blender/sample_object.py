@@ -15,6 +15,7 @@ import numpy as np
 
 from ..mesh_attributes import CLOTH_NORMAL, IS_WARP, YARN_ID, YARN_TANGENT, YARN_UV
 from ..weave import WeaveParameterError, WeaveParameters, build_woven_mesh
+from ..weave.record import weave_record
 
 DEFAULT_NAME = "ClothLight Sample"
 #: Custom property of a sample object: the parameters it was built from.
@@ -53,43 +54,6 @@ def woven_mesh_data(params: WeaveParameters, name: str = DEFAULT_NAME) -> bpy.ty
     attributes[YARN_UV].data.foreach_set("vector", woven.corner_uv().astype(np.float32).ravel())
     mesh.update()
     return mesh
-
-
-def weave_record(params: WeaveParameters) -> dict:
-    """What a sample was built from, as JSON-ready values.  The section's relaxation, the plies, twist
-    and irregularity are recorded only where they change the geometry, so that a plain regular sample records what it
-    always did (the garment's measurement cache is keyed by this record)."""
-    record = {
-        "units": "mm",
-        "spacing_mm": params.spacing_mm,
-        "semi_axes_mm": list(params.cross_section_mm),
-        "crimp_amplitude_mm": list(params.crimp_amplitudes_mm),
-        "warp_count": params.warp_count,
-        "weft_count": params.weft_count,
-        "interlacing": params.interlacing.astype(int).tolist(),
-        "segments_per_crossing": params.segments_per_crossing,
-        "segments_around": params.segments_around,
-    }
-    if params.ply_count > 1 or params.is_irregular or params.ply_radius_jitter > 0:
-        record.update(ply_count=params.ply_count, twist_angle_deg=params.twist_angle_deg,
-                      spacing_jitter=params.spacing_jitter, height_jitter=params.height_jitter,
-                      ply_radius_jitter=params.ply_radius_jitter, seed=params.seed)
-    if params.section_relaxation > 0:
-        record.update(section_relaxation=params.section_relaxation)
-    return record
-
-
-def weave_from_record(record) -> WeaveParameters:
-    """The parameters a sample was built from, read back from its :func:`weave_record` (a dict or
-    the object's ID property)."""
-    record = record.to_dict() if hasattr(record, "to_dict") else dict(record)
-    closeup = {key: record[key] for key in ("ply_count", "twist_angle_deg", "spacing_jitter", "height_jitter",
-                                            "ply_radius_jitter", "seed", "section_relaxation") if key in record}
-    return WeaveParameters(
-        interlacing=np.array(record["interlacing"], dtype=bool), warp_count=record["warp_count"],
-        weft_count=record["weft_count"], spacing_mm=record["spacing_mm"],
-        semi_axes_mm=tuple(record["semi_axes_mm"]), crimp_amplitude_mm=tuple(record["crimp_amplitude_mm"]),
-        segments_per_crossing=record["segments_per_crossing"], segments_around=record["segments_around"], **closeup)
 
 
 def build_sample_object(params: WeaveParameters = WeaveParameters(), name: str = DEFAULT_NAME,

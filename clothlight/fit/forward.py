@@ -30,12 +30,15 @@ from precompute.cache.entries import cache_key, canonical_json, default_cache_di
 from precompute.tables.color import clip_to_gamut, spectral_to_rgb
 from precompute.errors import ParameterError
 from precompute.optics.medium import medium_from_dict
+from precompute.fit.measured_sample import sample_weave_name
 from precompute.optics.coefficients import medium_optics
 from precompute.optics.cook_torrance import sheen_index
 from precompute.cache.sources import stage_digest
 from precompute.tables.layout import brdf_atlas
 
 from ..weave import WeaveParameters
+from ..weave.record import weave_record
+from ..weave.sample_weaves import sample_weave
 
 PROJECT_ROOT = pathlib.Path(__file__).resolve().parents[2]
 #: Incidence grid of a candidate's eq. (5): the shipped tables' (an odd N_i puts the planes across
@@ -110,10 +113,11 @@ def lookup_tables_folder(root: pathlib.Path = PROJECT_ROOT) -> pathlib.Path:
                             f"pre-baked folder in {root / 'prebaked'}")
 
 
-def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
+def cloth_response(measured_views, *, weave: WeaveParameters | None = None, seed: int = 0, cache_dir=None,
                    progress: Callable[[int, int], None] | None = None):
     """The cloth response at ``measured_views`` and :data:`SAMPLE_AZIMUTHS_DEG`, from the cache or
-    rendered (Blender as the ``bpy`` module; a minute or two) with Cycles' ``seed``."""
+    rendered (Blender as the ``bpy`` module; a minute or two) with Cycles' ``seed``, on ``weave``
+    (None: the validation weave, or :data:`WIDE_VIEW_WEAVE` where the views need it)."""
     from ..validation.response import ClothResponse
 
     views = [(*view, azimuth) for view in (*rig_views(measured_views), *SWATCH_VIEWS)
@@ -128,8 +132,10 @@ def cloth_response(measured_views, *, seed: int = 0, cache_dir=None,
     }
     wide = (max(abs(v[1]) for v in views) > VALIDATION_WEAVE_MAX_VIEW_DEG
             or max(min(v[0], 180.0 - v[0]) for v in views) > VALIDATION_WEAVE_MAX_INCIDENCE_DEG)
-    sample = WIDE_VIEW_WEAVE if wide else None
-    if wide:  # (responses of the validation weave keep the keys they had)
+    sample = weave or (WIDE_VIEW_WEAVE if wide else None)
+    if weave is not None:
+        inputs["sample_weave"] = weave_record(weave)
+    elif wide:  # (responses of the validation weave keep the keys they had)
         inputs["sample_yarns"] = [WIDE_VIEW_WEAVE.warp_count, WIDE_VIEW_WEAVE.weft_count]
     cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
     key = cache_key(inputs)
@@ -304,15 +310,17 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
                         dye_range: tuple[float, float] | None = None) -> ForwardModel:
     """The forward model at ``measured_views`` ((θi, φi, θo, φo) in degrees, the CSV's convention)
     for media written like ``preset_config`` (checked here, before any render; relative files
-    resolve against ``base_dir``).  ``progress(done, total)`` follows the response's renders when it
+    resolve against ``base_dir``), on the sample weave its ``[sample]`` table names
+    (:mod:`precompute.fit.measured_sample`).  ``progress(done, total)`` follows the response's renders when it
     is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call).  With
     ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone."""
     medium = medium_from_dict(preset_config, pathlib.Path(base_dir))
     if dye_range is not None and medium.fibres is not None:
         # the dye of fibres changes their scattering (their index), not only the medium's absorption
         raise ParameterError("--dye-series", "a medium of fibres", "a medium whose dye only absorbs (no [fibres])")
+    weave = sample_weave(sample_weave_name(preset_config), medium.yarn.radius_mm)
     measured_views = [tuple(float(a) for a in view) for view in measured_views]
-    response = cloth_response(measured_views, seed=seed, cache_dir=cache_dir, progress=progress)
+    response = cloth_response(measured_views, weave=weave, seed=seed, cache_dir=cache_dir, progress=progress)
     if dye_range is not None:
         return DyeSeriesForwardModel(response, len(measured_views), base_dir, dye_range, threads, seed=seed)
     return ForwardModel(response, len(measured_views), base_dir, threads)

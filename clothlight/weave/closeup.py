@@ -117,15 +117,23 @@ def sheeting_weave(preset: str = DEFAULT_PRESET, **overrides) -> WeaveParameters
     these parameters."""
     medium = load_preset(preset)
     settings = closeup_settings(load_preset_config(preset)[0])
-    radius = medium.yarn.radius_mm
-    spacing = 28.0 * 2.0 * radius / SHEETING_COVER_FACTOR
-    scale = math.sqrt(SHEETING_SECTION_SHARE)
-    semi_axes = (radius * scale * math.sqrt(SHEETING_FLATTENING), radius * scale / math.sqrt(SHEETING_FLATTENING))
     values = dict(
-        interlacing="plain", warp_count=16, weft_count=16, spacing_mm=spacing, semi_axes_mm=semi_axes,
-        # above the least that clears (1.02 × the half-thickness), so that the crossings can jitter
-        crimp_amplitude_mm=1.13 * semi_axes[1], segments_per_crossing=16, segments_around=12,
+        sheeting_shape(medium.yarn.radius_mm), warp_count=16, weft_count=16, segments_per_crossing=16,
         ply_count=medium.yarn.ply_count, twist_angle_deg=medium.yarn.twist_angle_deg,
-        section_relaxation=SHEETING_SECTION_RELAXATION, spacing_jitter=settings.spacing_jitter,
-        height_jitter=settings.height_jitter, ply_radius_jitter=settings.ply_radius_jitter, seed=settings.seed)
+        spacing_jitter=settings.spacing_jitter, height_jitter=settings.height_jitter,
+        ply_radius_jitter=settings.ply_radius_jitter, seed=settings.seed)
     return WeaveParameters(**(values | overrides))
+
+
+def sheeting_shape(yarn_radius_mm: float) -> dict:
+    """The shape of cotton sheeting woven of round yarns of radius ``yarn_radius_mm`` (mm), as
+    :class:`.params.WeaveParameters` keywords (module docstring): plain weave, spacing, pressed
+    section, crimp and relaxation; the sample's size, tessellation, plies and irregularity are the
+    caller's."""
+    spacing = 28.0 * 2.0 * yarn_radius_mm / SHEETING_COVER_FACTOR
+    scale = math.sqrt(SHEETING_SECTION_SHARE)
+    semi_axes = (yarn_radius_mm * scale * math.sqrt(SHEETING_FLATTENING),
+                 yarn_radius_mm * scale / math.sqrt(SHEETING_FLATTENING))
+    # the crimp above the least that clears (1.02 × the half-thickness), so that the crossings can jitter
+    return dict(interlacing="plain", spacing_mm=spacing, semi_axes_mm=semi_axes, crimp_amplitude_mm=1.13 * semi_axes[1],
+                segments_around=12, section_relaxation=SHEETING_SECTION_RELAXATION)

@@ -34,6 +34,7 @@ import numpy as np
 from precompute.optics import medium as medium_module
 from precompute.outputs import json_ready
 from precompute.tables.folder import check_output_folder, replace_folder
+from precompute.fit.measured_sample import sample_weave_name
 from precompute.fit.objective import CHANNELS
 from precompute.fit.optimise import FitResult
 from precompute.optics.cook_torrance import FIT_TABLE
@@ -205,7 +206,8 @@ def report_markdown(result: FitResult, measured_name: str = "", figures: bool = 
              f"- {result.forward_evaluations} forward evaluations in {result.generations} generations, "
              f"{result.seconds:.1f} s; stopped by {result.stop_reason}",
              f"- seed {result.seed}; accuracy schedule {result.schedule.loose:g} → {result.schedule.tight:g} "
-             f"(final {result.schedule.final:g})"]
+             f"(final {result.schedule.final:g})",
+             f"- sample weave (the cloth the forward model renders, `[sample]`): {sample_weave_name(result.config)}"]
     if result.swatches:
         limit = result.swatches["max_back_front"]
         lines.append(f"- §6.1 swatches at normal view: lit from behind / from the front, luminance "

@@ -15,8 +15,8 @@ Presets are TOML files in ``precompute/presets``.  The top-level keys ``name``
 and ``description`` and the tables ``[wavelengths]``, ``[host]``,
 ``[[particles]]``, ``[fibres]``, ``[dye]``, ``[yarn]`` and ``[medium]`` belong to this
 module, which rejects unknown keys in them; ``[transport]`` and ``[bake]``
-belong to the bake and ``[fit]`` (a fitted preset's specular term) to
-:mod:`precompute.fit`, and are ignored here.  Relative file paths in a preset
+belong to the bake, ``[fit]`` (a fitted preset's specular term) and ``[sample]`` (the weave it was
+fitted on) to :mod:`precompute.fit`, ``[closeup]`` to the add-on's close-ups, and are ignored here.  Relative file paths in a preset
 resolve next to the TOML file, then in ``precompute/data``.
 
 Issue 43's yarn of fibres: a ``[fibres]`` table (:class:`Fibres`) puts the dye in the fibres and the
@@ -48,7 +48,7 @@ MAX_FIBRE_VOLUME_FRACTION = 0.90
 DEPENDENT_SCATTERING_MODELS = ("none", "percus-yevick")
 #: ``medium.phase_samples`` value that lets the optics choose the cos θ grid (the default).
 AUTO_PHASE_SAMPLES = "auto"
-_FOREIGN_TABLES = ("transport", "bake", "fit", "closeup")
+_FOREIGN_TABLES = ("transport", "bake", "fit", "closeup", "sample")
 
 
 def _finite(name: str, value, allowed: str = "a finite number") -> float:

@@ -29,7 +29,8 @@ from ..measurement_render import (
     remove_data_blocks,
     render_to_array,
 )
-from ..sample_object import build_sample_object, weave_record
+from ...weave.record import weave_record
+from ..sample_object import build_sample_object
 from ..validation.rig import sample_bounds
 
 DEFAULT_RESOLUTION = 128

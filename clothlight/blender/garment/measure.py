@@ -44,9 +44,10 @@ from ...render_bounds import (
     GONIO_SEED,
     check_render_memory,
 )
-from ..sample_object import build_sample_object, weave_record
+from ..sample_object import build_sample_object
 from ..validation.rig import VALIDATION_WEAVE, sample_bounds
 from ...weave import WeaveParameters
+from ...weave.record import weave_record
 from ...garment.goniometry import (
     RAY_OFFSET_MM,
     SIDES,

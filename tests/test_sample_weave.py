@@ -1,0 +1,117 @@
+"""The measured sample's weave (``[sample]``): read and checked by name, built as a woven sample,
+recorded by the bake and keyed into the fit's cloth response."""
+
+from __future__ import annotations
+
+import pytest
+
+from clothlight.fit import forward
+from clothlight.weave.record import weave_record
+from clothlight.weave.sample_weaves import SAMPLE_SIDE_MM, sample_weave
+from precompute import bake as bake_module
+from precompute.errors import ParameterError
+from precompute.fit.measured_sample import SAMPLE_WEAVES, sample_weave_name
+from precompute.optics.medium import load_preset_config, medium_from_dict
+from precompute.tables.exr import TableError
+from precompute.tables.folder import SAMPLE_WEAVE_KEY, summary_sample_weave
+
+#: The raw-data curves' widest view and light (views to 80°, light to 75°), which need the wide sample.
+WIDE_VIEWS = [(75.0, 180.0, 80.0, 0.0), (0.0, 180.0, 10.0, 90.0)]
+
+
+def test_a_preset_names_its_sample_weave_or_gets_the_open_one():
+    assert sample_weave_name({}) == "open"
+    assert sample_weave_name({"sample": {"weave": "sheeting"}}) == "sheeting"
+    with pytest.raises(ParameterError, match=r"sample\.weave.*satin.*open, sheeting"):
+        sample_weave_name({"sample": {"weave": "satin"}})
+    with pytest.raises(ParameterError, match=r"sample\.spacing_mm"):
+        sample_weave_name({"sample": {"weave": "sheeting", "spacing_mm": 0.3}})
+    with pytest.raises(ParameterError, match="sample"):
+        sample_weave_name({"sample": "sheeting"})
+
+
+def test_the_medium_reads_a_preset_with_a_sample_table():
+    config, base = load_preset_config("red_cotton")
+    assert medium_from_dict({**config, "sample": {"weave": "sheeting"}}, base) == medium_from_dict(config, base)
+
+
+@pytest.mark.parametrize("radius_mm", [0.1, 0.12])
+def test_the_sheeting_sample_is_packed_sheeting_of_the_yarn_about_ten_millimetres_wide(radius_mm):
+    weave = sample_weave("sheeting", radius_mm)
+    assert weave.spacing_mm == pytest.approx(0.4 * radius_mm / 0.1)  # Peirce's K = 14
+    width, thickness = weave.cross_section_mm
+    assert width / thickness == pytest.approx(1.6) and width * thickness == pytest.approx(0.9 * radius_mm**2)
+    assert weave.cover_factor == pytest.approx(0.84, abs=0.01)
+    assert weave.ply_count == 1 and not weave.is_irregular
+    assert weave.sample_size_mm[0] == pytest.approx(SAMPLE_SIDE_MM, rel=0.05)
+    assert sample_weave("open", radius_mm) is None
+    for name in SAMPLE_WEAVES:  # every name the presets may give has a sample (an unknown one raises)
+        sample_weave(name, radius_mm)
+
+
+def test_the_bake_records_a_named_sample_weave_and_keys_its_tables_by_it():
+    config, _ = load_preset_config("red_cotton")
+    plain = bake_module.bake_configuration(config)
+    sheeting = bake_module.bake_configuration({**config, "sample": {"weave": "sheeting"}})
+    assert plain.sample_weave is None and sheeting.sample_weave == "sheeting"
+    # the tables of a preset without the table keep their key; the simulation is shared
+    assert SAMPLE_WEAVE_KEY not in bake_module.table_inputs("k", plain)
+    assert bake_module.table_inputs("k", sheeting)[SAMPLE_WEAVE_KEY] == "sheeting"
+    assert bake_module.spectral_inputs(plain) == bake_module.spectral_inputs(sheeting)
+    with pytest.raises(ParameterError, match=r"sample\.weave"):
+        bake_module.bake_configuration({**config, "sample": {"weave": "twill"}})
+
+
+def test_a_bake_summary_names_its_sample_weave_or_the_open_one(tmp_path):
+    assert summary_sample_weave({}, tmp_path) == "open"
+    assert summary_sample_weave({SAMPLE_WEAVE_KEY: "sheeting"}, tmp_path) == "sheeting"
+    with pytest.raises(TableError, match="summary.json.*satin"):
+        summary_sample_weave({SAMPLE_WEAVE_KEY: "satin"}, tmp_path)
+
+
+class _Rendered(Exception):
+    pass
+
+
+@pytest.fixture
+def response_inputs(monkeypatch, tmp_path):
+    """What cloth_response would render and key (its store stood in for: no Blender)."""
+    seen = []
+
+    def store(cache_dir, kind, key, inputs, write):
+        seen.append(inputs)
+        raise _Rendered
+
+    monkeypatch.setattr(forward, "store", store)
+
+    def inputs(**kwargs):
+        with pytest.raises(_Rendered):
+            forward.cloth_response(WIDE_VIEWS, cache_dir=tmp_path, **kwargs)
+        return seen[-1]
+
+    return inputs
+
+
+def test_the_response_is_keyed_by_the_sample_weave_it_renders(response_inputs):
+    wide = response_inputs()
+    assert wide["sample_yarns"] == [20, 20] and "sample_weave" not in wide
+    sheeting = response_inputs(weave=sample_weave("sheeting", 0.1))
+    assert "sample_yarns" not in sheeting
+    assert sheeting["sample_weave"]["spacing_mm"] == pytest.approx(0.4)
+    assert sheeting["sample_weave"]["semi_axes_mm"] == pytest.approx([0.12, 0.075])
+
+
+def test_the_forward_model_renders_the_weave_its_preset_names(monkeypatch):
+    weaves = []
+
+    def cloth_response(views, *, weave=None, **kwargs):
+        weaves.append(weave)
+        raise _Rendered
+
+    monkeypatch.setattr(forward, "cloth_response", cloth_response)
+    config, base = load_preset_config("red_cotton")
+    for table in ({}, {"sample": {"weave": "sheeting"}}):
+        with pytest.raises(_Rendered):
+            forward.build_forward_model(WIDE_VIEWS, {**config, **table}, base)
+    assert weaves[0] is None
+    assert weave_record(weaves[1]) == weave_record(sample_weave("sheeting", 0.1))

@@ -54,7 +54,8 @@ def build_parser():
     parser.add_argument("--blend", help="open this .blend first (with the bpy module; a real Blender takes it "
                                         "before -P)")
     parser.add_argument("--object", metavar="NAME", help="measure this object of the open file (a ClothLight "
-                                                          "sample) instead of building the default woven sample")
+                                                          "sample) instead of building the default woven sample "
+                                                          "(the --tables' sample weave, [sample], where they name one)")
     parser.add_argument("--material", nargs="+", choices=MATERIALS,
                         help="materials to sweep (default: yarn and baseline with --tables, else baseline); "
                              "yarn_general is the general-lighting mode, compared with yarn when both run; "
@@ -149,6 +150,17 @@ def stdout_to_stderr():
         os.close(saved)
 
 
+def tables_sample_weave(tables_dir):
+    """The woven sample a bake folder's preset was fitted on (its summary's sample weave,
+    :mod:`precompute.fit.measured_sample`), or None for the validation's own."""
+    from precompute.tables import folder as table_folder
+
+    from .weave.sample_weaves import sample_weave
+
+    summary = table_folder.check_yarn_table_folder(pathlib.Path(tables_dir).resolve()).summary
+    return sample_weave(table_folder.summary_sample_weave(summary, tables_dir), summary["medium"]["yarn"]["radius_mm"])
+
+
 def _sweep(args, interrupt) -> dict:
     from .blender import scene_files
     from .blender.validation.rig import RigSettings
@@ -178,6 +190,8 @@ def _sweep(args, interrupt) -> dict:
         sample = scene_files.object_named(args.object)
         if sample is None:
             raise ParameterError("--object", args.object, f"an object of the open file: {scene_files.object_names()}")
+    elif args.tables:
+        sample = tables_sample_weave(args.tables)
     try:
         with stdout_to_stderr() if args.json else contextlib.nullcontext():
             return run_validation(sample, args.out, scheduler=args.scheduler, materials=args.material,

@@ -3,6 +3,9 @@ recorded by the bake and keyed into the fit's cloth response."""
 
 from __future__ import annotations
 
+import json
+
+import numpy as np
 import pytest
 
 from clothlight.fit import forward
@@ -14,6 +17,7 @@ from precompute.fit.measured_sample import SAMPLE_WEAVES, sample_weave_name
 from precompute.optics.medium import load_preset_config, medium_from_dict
 from precompute.tables.exr import TableError
 from precompute.tables.folder import SAMPLE_WEAVE_KEY, summary_sample_weave
+from tests.helpers import write_yarn_table_folder
 
 #: The raw-data curves' widest view and light (views to 80°, light to 75°), which need the wide sample.
 WIDE_VIEWS = [(75.0, 180.0, 80.0, 0.0), (0.0, 180.0, 10.0, 90.0)]
@@ -115,3 +119,20 @@ def test_the_forward_model_renders_the_weave_its_preset_names(monkeypatch):
             forward.build_forward_model(WIDE_VIEWS, {**config, **table}, base)
     assert weaves[0] is None
     assert weave_record(weaves[1]) == weave_record(sample_weave("sheeting", 0.1))
+
+
+def test_the_validation_of_a_bake_renders_the_sample_weave_it_records(tmp_path):
+    from clothlight.validate import tables_sample_weave
+
+    n_i, n_o, samples = 3, 3, 8
+    rng = np.random.default_rng(0)
+    folder = write_yarn_table_folder(tmp_path / "bake", rng.uniform(0.0, 1.0, (n_i * n_o, n_i * n_o, 3)),
+                                     rng.uniform(0.0, 1.0, (n_o, 2 * n_o, 3)), rng.uniform(0.0, 1.0, (1, samples, 3)),
+                                     incidence_resolution=n_i, exit_resolution=n_o)
+    summary_file = folder / "summary.json"
+    summary = json.loads(summary_file.read_text())
+    summary["medium"] = {"yarn": {"radius_mm": 0.12}}
+    summary_file.write_text(json.dumps(summary))
+    assert tables_sample_weave(folder) is None
+    summary_file.write_text(json.dumps({**summary, SAMPLE_WEAVE_KEY: "sheeting"}))
+    assert weave_record(tables_sample_weave(folder)) == weave_record(sample_weave("sheeting", 0.12))

@@ -152,7 +152,7 @@ def stdout_to_stderr():
 
 def tables_sample_weave(tables_dir):
     """The woven sample a bake folder's preset was fitted on (its summary's sample weave,
-    :mod:`precompute.fit.measured_sample`), or None for the validation's own."""
+    :mod:`precompute.optics.measured_sample`), or None for the validation's own."""
     from precompute.tables import folder as table_folder
 
     from .weave.sample_weaves import sample_weave

@@ -85,7 +85,7 @@ from precompute.tables.color import (
 from precompute.distributed import LOCAL, check_scheduler, open_executor
 from precompute.errors import ParameterError
 from precompute.optics.cook_torrance import FIT_TABLE, sheen_index, specular_from_config
-from precompute.fit.measured_sample import SAMPLE_TABLE, sample_weave_name
+from precompute.optics.measured_sample import SAMPLE_TABLE, sample_weave_name
 from precompute.tables.grids import AngularGrid
 from precompute.optics.medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from precompute.optics.coefficients import medium_optics, planned_phase_grid
@@ -172,7 +172,7 @@ UNITS = {
 class BakeConfiguration:
     """Everything a bake is made from: the medium, the ``[transport]`` and the ``[bake]`` settings,
     the specular term the tables record (:func:`specular_settings`) and the sample weave the preset
-    was fitted on where its ``[sample]`` table names one (:mod:`precompute.fit.measured_sample`),
+    was fitted on where its ``[sample]`` table names one (:mod:`precompute.optics.measured_sample`),
     else None."""
 
     medium: MediumParameters

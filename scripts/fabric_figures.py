@@ -47,7 +47,7 @@ def bake_folder_brdf(model, folder: pathlib.Path):
 def bake_folder_sample(config: dict, folder: pathlib.Path) -> dict:
     """``config`` with the yarn radius and the sample weave (``[sample]``) of a bake folder's summary,
     which decide the weave its response renders."""
-    from precompute.fit.measured_sample import SAMPLE_TABLE, SAMPLE_WEAVE_KEY
+    from precompute.optics.measured_sample import SAMPLE_TABLE, SAMPLE_WEAVE_KEY
     from precompute.tables import folder as table_folder
 
     summary = table_folder.check_yarn_table_folder(folder.resolve()).summary

@@ -13,7 +13,7 @@ from clothlight.weave.record import weave_record
 from clothlight.weave.sample_weaves import SAMPLE_SIDE_MM, sample_weave
 from precompute import bake as bake_module
 from precompute.errors import ParameterError
-from precompute.fit.measured_sample import SAMPLE_WEAVES, sample_weave_name
+from precompute.optics.measured_sample import SAMPLE_WEAVES, sample_weave_name
 from precompute.optics.medium import load_preset_config, medium_from_dict
 from precompute.tables.exr import TableError
 from precompute.tables.folder import SAMPLE_WEAVE_KEY, summary_sample_weave

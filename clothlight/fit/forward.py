@@ -30,7 +30,7 @@ from precompute.cache.entries import cache_key, canonical_json, default_cache_di
 from precompute.tables.color import clip_to_gamut, spectral_to_rgb
 from precompute.errors import ParameterError
 from precompute.optics.medium import medium_from_dict
-from precompute.fit.measured_sample import sample_weave_name
+from precompute.optics.measured_sample import sample_weave_name
 from precompute.optics.coefficients import medium_optics
 from precompute.optics.cook_torrance import sheen_index
 from precompute.cache.sources import stage_digest
@@ -311,7 +311,7 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
     """The forward model at ``measured_views`` ((θi, φi, θo, φo) in degrees, the CSV's convention)
     for media written like ``preset_config`` (checked here, before any render; relative files
     resolve against ``base_dir``), on the sample weave its ``[sample]`` table names
-    (:mod:`precompute.fit.measured_sample`).  ``progress(done, total)`` follows the response's renders when it
+    (:mod:`precompute.optics.measured_sample`).  ``progress(done, total)`` follows the response's renders when it
     is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call).  With
     ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone."""
     medium = medium_from_dict(preset_config, pathlib.Path(base_dir))

@@ -28,7 +28,7 @@ from precompute.outputs import check_writable_folder
 from precompute.fit.objective import Objective, Views, load_measurement, parse_target_ratios, split_views
 from precompute.fit.optimise import FIT_CODE, Budget, FitProgress, FitResult, check_budget, fit_medium
 from precompute.fit.parameters import FitParameter, initial_values, parse_free
-from precompute.fit.measured_sample import sample_weave_name
+from precompute.optics.measured_sample import sample_weave_name
 from precompute.optics.cook_torrance import FIT_TABLE, specular_from_config
 from precompute.fit.report import check_fit_folder
 
@@ -64,7 +64,7 @@ def check_fit_inputs(measured: str | pathlib.Path, preset: str | pathlib.Path, f
     """Every input of a fit, checked before any work: the free parameters (and whether a dye series
     can serve them), the measurement, the starting medium (a shipped preset's name or a preset TOML
     file, with ``overrides`` as ``precompute.bake.apply_overrides`` takes them: ``{"dye.weight_percent":
-    2.0}``), its sample weave (``[sample]``, :mod:`precompute.fit.measured_sample`) and the species
+    2.0}``), its sample weave (``[sample]``, :mod:`precompute.optics.measured_sample`) and the species
     the free parameters need, the colour targets, the budget, the back-lit limit, the output folder
     and the cache folder.  ParameterError (an InputError) naming the first bad one."""
     free_parameters = parse_free(free)

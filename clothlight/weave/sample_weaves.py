@@ -1,4 +1,4 @@
-"""The woven samples of :mod:`precompute.fit.measured_sample`'s names: what the fit's cloth response
+"""The woven samples of :mod:`precompute.optics.measured_sample`'s names: what the fit's cloth response
 renders for a preset's ``[sample]`` weave.
 
 Both are about :data:`SAMPLE_SIDE_MM` wide, which frames two weave repeats at the raw-data curves'
@@ -11,7 +11,7 @@ yarn, regular and of one ply, so that its response serves every medium of that y
 from __future__ import annotations
 
 from precompute.errors import ParameterError
-from precompute.fit.measured_sample import SAMPLE_TABLE, SAMPLE_WEAVE_KEY, SAMPLE_WEAVES
+from precompute.optics.measured_sample import SAMPLE_TABLE, SAMPLE_WEAVE_KEY, SAMPLE_WEAVES
 
 from .closeup import sheeting_shape
 from .params import WeaveParameters

@@ -34,7 +34,7 @@ import numpy as np
 from precompute.optics import medium as medium_module
 from precompute.outputs import json_ready
 from precompute.tables.folder import check_output_folder, replace_folder
-from precompute.fit.measured_sample import sample_weave_name
+from precompute.optics.measured_sample import sample_weave_name
 from precompute.fit.objective import CHANNELS
 from precompute.fit.optimise import FitResult
 from precompute.optics.cook_torrance import FIT_TABLE

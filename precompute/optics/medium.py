@@ -15,8 +15,9 @@ Presets are TOML files in ``precompute/presets``.  The top-level keys ``name``
 and ``description`` and the tables ``[wavelengths]``, ``[host]``,
 ``[[particles]]``, ``[fibres]``, ``[dye]``, ``[yarn]`` and ``[medium]`` belong to this
 module, which rejects unknown keys in them; ``[transport]`` and ``[bake]``
-belong to the bake, ``[fit]`` (a fitted preset's specular term) and ``[sample]`` (the weave it was
-fitted on) to :mod:`precompute.fit`, ``[closeup]`` to the add-on's close-ups, and are ignored here.
+belong to the bake, ``[fit]`` (a fitted preset's specular term) to :mod:`precompute.fit`,
+``[sample]`` (the weave it was fitted on) to :mod:`.measured_sample`, ``[closeup]`` to the add-on's
+close-ups, and are ignored here.
 Relative file paths in a preset resolve next to the TOML file, then in ``precompute/data``.
 
 Issue 43's yarn of fibres: a ``[fibres]`` table (:class:`Fibres`) puts the dye in the fibres and the

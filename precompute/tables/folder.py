@@ -73,7 +73,7 @@ SPECULAR_KEY = "specular"
 #: ``source`` of a specular term taken from a preset's ``[fit]`` table (``python -m clothlight.fit``).
 SPECULAR_FROM_PRESET = "preset [fit]"
 #: The key of a yarn bake's summary naming the sample weave its preset was fitted on
-#: (:mod:`precompute.fit.measured_sample`), where the preset names one.
+#: (:mod:`precompute.optics.measured_sample`), where the preset names one.
 SAMPLE_WEAVE_KEY = "sample_weave"
 #: Staging folders of :func:`replace_folder` whose process has died, or older than this (written by
 #: another machine, which this one cannot ask), are left by a run that was killed; a later one removes them.
@@ -180,7 +180,7 @@ def default_specular() -> dict:
 def summary_sample_weave(summary: dict, folder: str | pathlib.Path) -> str:
     """The sample weave a yarn bake's summary names (:data:`SAMPLE_WEAVE_KEY`), the default where it
     names none; :class:`TableError` naming the summary when it is not a known weave."""
-    from precompute.fit.measured_sample import DEFAULT_SAMPLE_WEAVE, SAMPLE_WEAVES
+    from precompute.optics.measured_sample import DEFAULT_SAMPLE_WEAVE, SAMPLE_WEAVES
 
     name = summary.get(SAMPLE_WEAVE_KEY, DEFAULT_SAMPLE_WEAVE)
     if name not in SAMPLE_WEAVES:

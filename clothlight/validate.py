@@ -153,12 +153,14 @@ def stdout_to_stderr():
 def tables_sample_weave(tables_dir):
     """The woven sample a bake folder's preset was fitted on (its summary's sample weave,
     :mod:`precompute.optics.measured_sample`), or None for the validation's own."""
+    from precompute.optics.measured_sample import DEFAULT_SAMPLE_WEAVE
     from precompute.tables import folder as table_folder
 
     from .weave.sample_weaves import sample_weave
 
     summary = table_folder.check_yarn_table_folder(pathlib.Path(tables_dir).resolve()).summary
-    return sample_weave(table_folder.summary_sample_weave(summary, tables_dir), summary["medium"]["yarn"]["radius_mm"])
+    name = table_folder.summary_sample_weave(summary, tables_dir)
+    return None if name == DEFAULT_SAMPLE_WEAVE else sample_weave(name, summary["medium"]["yarn"]["radius_mm"])
 
 
 def _sweep(args, interrupt) -> dict:

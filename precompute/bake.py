@@ -94,8 +94,8 @@ from precompute.cache.sources import stage_digest
 from precompute.tables.layout import brdf_atlas, interpolate_attenuation, interpolate_rho, lobe_atlas
 from precompute.tables.folder import (
     FILE_HASHES_KEY,
-    SPECULAR_FROM_PRESET,
     SAMPLE_WEAVE_KEY,
+    SPECULAR_FROM_PRESET,
     SPECULAR_KEY,
     SUMMARY_FILE,
     YARN_FOLDER_FILES,

@@ -1,8 +1,8 @@
 """The weave of the measured sample a preset was fitted on, by name: its ``[sample]`` table.
 
-A cloth BRDF depends on the weave as much as on the yarn: round yarns with open gaps, seen from the
-light's side, show only their lit faces (shadow hiding, a backscatter peak), and lit from behind
-pass light between them; flattened, packed yarns do neither as much.  MERL measured its fabrics
+A cloth BRDF depends on the weave as much as on the yarn: which faces of its yarns a view sees lit,
+at which local angles, and how much of the cloth is gap (docs/fitting.md, "The sample's weave",
+measures both weaves below against the raw-data fabrics).  MERL measured its fabrics
 wrapped round a cylinder, so their weave is unknown (``../shared/data/real_fabrics/README.md``); a
 preset names the weave its medium was fitted on, and the fit, the tables baked from it and the
 figures that compare it with a fabric use that weave::

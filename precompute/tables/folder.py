@@ -44,6 +44,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 import numpy as np
 
 from precompute.errors import ParameterError
+from precompute.optics.measured_sample import DEFAULT_SAMPLE_WEAVE, SAMPLE_WEAVES
 from precompute.outputs import can_create_in, existing_place
 from precompute.tables.exr import SCHEMA, Table, TableError, table_from_bytes
 
@@ -180,8 +181,6 @@ def default_specular() -> dict:
 def summary_sample_weave(summary: dict, folder: str | pathlib.Path) -> str:
     """The sample weave a yarn bake's summary names (:data:`SAMPLE_WEAVE_KEY`), the default where it
     names none; :class:`TableError` naming the summary when it is not a known weave."""
-    from precompute.optics.measured_sample import DEFAULT_SAMPLE_WEAVE, SAMPLE_WEAVES
-
     name = summary.get(SAMPLE_WEAVE_KEY, DEFAULT_SAMPLE_WEAVE)
     if name not in SAMPLE_WEAVES:
         raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SAMPLE_WEAVE_KEY} {name!r} is not one of "

@@ -6,5 +6,6 @@ give each species' scattering and absorption, :mod:`.phase` the tabulated phase 
 :mod:`.coefficients` combines them into the per-wavelength μs, μa, g and phase function the
 transport consumes.  Closed-form pieces that need no paths live here too: :mod:`.ballistic`, the
 light that crosses the yarn unscattered, and :mod:`.cook_torrance`, the cloth's specular term.
-:mod:`.plots` draws a medium's optics.  Nothing here imports numba.
+:mod:`.plots` draws a medium's optics, and :mod:`.measured_sample` reads the weave a preset was
+fitted on (its ``[sample]`` table).  Nothing here imports numba.
 """

@@ -527,6 +527,7 @@ def _simulate(configuration: BakeConfiguration, inputs: dict, key: str, threads,
             paths_per_cell=transport.paths_per_cell,
             mu_s=optics.mu_s,
             mu_a=optics.mu_a,
+            unscattered_mu_t=optics.unscattered_extinction_per_mm,
             g=optics.g,
         )
 
@@ -670,6 +671,7 @@ def _reweighted_spectral(configuration: BakeConfiguration, inputs: dict, key: st
             paths_per_cell=arrays["paths_per_cell"],
             mu_s=optics.mu_s,
             mu_a=optics.mu_a,
+            unscattered_mu_t=optics.unscattered_extinction_per_mm,
             g=optics.g,
         )
 
@@ -709,7 +711,7 @@ def _tables(configuration: BakeConfiguration, inputs: dict, key: str, spectral_f
         albedo, _ = clip_to_gamut(to_rgb(arrays["hemispherical_albedo"]))
         atlas = brdf_atlas(rho)
         attenuation_spectra = ballistic.attenuation(
-            arrays["mu_s"] + arrays["mu_a"], spectral["radius_mm"], ballistic.attenuation_lengths()
+            arrays["unscattered_mu_t"], spectral["radius_mm"], ballistic.attenuation_lengths()
         )
         attenuation, _ = clip_to_gamut(to_rgb(attenuation_spectra))
         unscattered_table = attenuation[None]

@@ -235,6 +235,12 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
     FitParameter("fibre_absorption_per_mm", "fibres.absorption_per_mm", "1/mm", 0.01, 100.0, log=True,
                  note="grey absorption of the fibre material beside its dye: 100 /mm takes 1/e within 10 µm, a "
                       "fibre's width"),
+    FitParameter("fibre_spread_deg", "fibres.orientation_spread_deg", "°", 0.0, 60.0, log=False,
+                 note="with fibres along the yarn axis (fibres.orientation = \"yarn_axis\"): σ of their spread "
+                      "about the twist's helix, from a combed, parallel yarn to a hairy, migrating one"),
+    FitParameter("fibre_roughness_deg", "fibres.roughness_deg", "°", 0.0, 60.0, log=False,
+                 note="with fibres along the yarn axis: σ of the blur of the light a fibre sends on, from a "
+                      "smooth cylinder's cone (0) to an irregular, convoluted fibre's broad lobes"),
     FitParameter("yarn_radius_mm", "yarn.radius_mm", "mm", 0.03, 0.5, log=True,
                  note="fine (Ne 100) to coarse (Ne 2) yarns after Peirce's d = 1/(28 √Ne) inch; the medium "
                       f"allows {bounds.YARN_RADIUS_MM.low:g}–{bounds.YARN_RADIUS_MM.high:g} mm"),

@@ -24,12 +24,14 @@ uniform in μ of that many samples, taken as given and refused when too coarse.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from precompute.optics.dye import dye_absorption_coefficient
-from precompute.optics.fibre import fibre_scattering, proxy_diameter_nm
+from precompute.optics.fibre import fibre_absorption_per_mm, fibre_scattering, proxy_diameter_nm
+from precompute.optics.fibre_orientation import OrientedFibres
 from precompute.optics.medium import AUTO_PHASE_SAMPLES, MediumParameters, ParticleSpecies, RefractiveIndex, load_preset
 from precompute.optics.mie import (
     MAX_AUTO_PHASE_SAMPLES,
@@ -58,6 +60,9 @@ class MediumOptics:
     phase : (L, M) phase function, 1/sr, 2π∫p dμ = 1
     phase_icdf : (L, K) μ at cumulative probability k/(K−1); sample by linear interpolation in u
     dependent_scattering : "none" or "percus-yevick", the model the coefficients were computed with
+    oriented_fibres : with ``fibres.orientation = "yarn_axis"``, the medium the transport traces instead
+        (:class:`precompute.optics.fibre_orientation.OrientedFibres`); μs, μa and the phase table
+        are then the randomly oriented fibres' (the Mie proxy), for reports and plots
     phase_grid : the kind of ``cos_theta`` (:data:`precompute.optics.phase.PHASE_GRID_KINDS`):
         "uniform-cos" (uniform in μ) or "uniform-angle" (uniform in θ)
     """
@@ -74,11 +79,21 @@ class MediumOptics:
     phase_icdf: np.ndarray
     dependent_scattering: str = "none"
     phase_grid: str = "uniform-cos"
+    oriented_fibres: OrientedFibres | None = None
 
     @property
     def phase_samples(self) -> int:
         """M, the number of cos θ samples of the phase table (the chosen count when ``"auto"``)."""
         return len(self.cos_theta)
+
+    @property
+    def unscattered_extinction_per_mm(self) -> np.ndarray:
+        """(L,) extinction of the light that crosses the yarn unscattered, 1/mm (the ``unscattered.exr``
+        table's, :mod:`precompute.optics.ballistic`): μt; for fibres along the yarn axis, theirs across it
+        (the unscattered light of a cloth crosses its yarns across them)."""
+        if self.oriented_fibres is None:
+            return self.mu_t
+        return np.full(len(self.wavelengths_nm), self.oriented_fibres.across_axis_extinction_per_mm)
 
     @property
     def boundary_index(self) -> float:
@@ -154,6 +169,23 @@ def medium_optics(params: MediumParameters, *, icdf_size: int = DEFAULT_ICDF_SIZ
         phase_icdf=phase_inverse_cdf(cos_theta, phase, icdf_size),
         dependent_scattering=params.dependent_scattering,
         phase_grid=kind,
+        oriented_fibres=_oriented_fibres(params, wavelengths, host_index),
+    )
+
+
+def _oriented_fibres(params: MediumParameters, wavelengths: np.ndarray, host_index: np.ndarray):
+    """The medium of fibres along the yarn axis that ``params`` describes, or None (random fibres, none)."""
+    fibres = params.fibres
+    if fibres is None or fibres.orientation == "random":
+        return None
+    return OrientedFibres(
+        extinction_per_mm=4.0 * fibres.volume_fraction / (math.pi * fibres.diameter_um * 1e-3),
+        relative_index=float(np.mean(fibres.refractive_index.at(wavelengths).real) / np.mean(host_index)),
+        radius_mm=0.5 * fibres.diameter_um * 1e-3,
+        helix_angle_deg=float(params.yarn.twist_angle_deg),
+        spread_deg=float(fibres.orientation_spread_deg),
+        roughness_deg=float(fibres.roughness_deg),
+        absorption_per_mm=fibre_absorption_per_mm(fibres, params.dye, wavelengths),
     )
 
 

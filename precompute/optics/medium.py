@@ -38,6 +38,7 @@ import numpy as np
 
 from precompute import bounds
 from precompute.errors import ParameterError
+from precompute.optics.fibre_orientation import FIBRE_ORIENTATIONS
 
 PRESET_DIR = pathlib.Path(__file__).resolve().parents[1] / "presets"
 DATA_DIR = pathlib.Path(__file__).resolve().parents[1] / "data"
@@ -280,6 +281,15 @@ class Fibres:
         ``"circle"``: the only one modelled so far.
     absorption_per_mm
         Grey absorption of the fibre material itself beside the dye, 1/mm.
+    orientation
+        ``"random"``: fibres in every direction, scattering as their Mie proxy (:mod:`precompute.optics.fibre`);
+        ``"yarn_axis"``: along the yarn at its twist's helix angle (``yarn.twist_angle_deg``), every
+        collision traced through a fibre (:mod:`precompute.optics.fibre_orientation`).
+    orientation_spread_deg
+        With ``"yarn_axis"``: σ of the fibres' spread about their helix (migration, hairiness), degrees.
+    roughness_deg
+        With ``"yarn_axis"``: σ of the blur of the direction a fibre sends light in (a fibre surface
+        rougher than a smooth cylinder's), degrees.
     """
 
     refractive_index: RefractiveIndex
@@ -287,6 +297,9 @@ class Fibres:
     volume_fraction: float
     cross_section: str = "circle"
     absorption_per_mm: float = 0.0
+    orientation: str = "random"
+    orientation_spread_deg: float = 0.0
+    roughness_deg: float = 0.0
 
     def __post_init__(self):
         if not isinstance(self.refractive_index, RefractiveIndex):
@@ -300,6 +313,12 @@ class Fibres:
         value = _finite("fibres.absorption_per_mm", self.absorption_per_mm, "a finite number ≥ 0")
         if value < 0:
             raise ParameterError("fibres.absorption_per_mm", self.absorption_per_mm, "a finite number ≥ 0")
+        if self.orientation not in FIBRE_ORIENTATIONS:
+            raise ParameterError("fibres.orientation", self.orientation, f"one of {FIBRE_ORIENTATIONS}")
+        for name in ("orientation_spread_deg", "roughness_deg"):
+            angle = _finite(f"fibres.{name}", getattr(self, name), "[0, 90] degrees")
+            if not 0.0 <= angle <= 90.0:
+                raise ParameterError(f"fibres.{name}", getattr(self, name), "[0, 90] degrees")
 
 
 @dataclass(frozen=True)
@@ -439,6 +458,13 @@ class MediumParameters:
             )
         if self.fibres is not None and not isinstance(self.fibres, Fibres):
             raise ParameterError("fibres", self.fibres, "a Fibres")
+        if self.fibres is not None and self.fibres.orientation != "random":
+            # the transport traces oriented fibres alone, in a host that neither absorbs nor scatters
+            if self.particles:
+                raise ParameterError("particles", len(self.particles), "none beside fibres along the yarn axis")
+            if self.host.absorption_per_mm != 0.0:
+                raise ParameterError("host.absorption_per_mm", self.host.absorption_per_mm,
+                                     "0 with fibres along the yarn axis (theirs is fibres.absorption_per_mm)")
         if not all(isinstance(p, ParticleSpecies) for p in self.particles):
             raise ParameterError("particles", self.particles, "a sequence of ParticleSpecies")
         total = self.total_volume_fraction
@@ -683,8 +709,8 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
     fibres = None
     if "fibres" in config:
         spec = _table(config, "fibres", "")
-        _check_keys(spec, {"refractive_index", "diameter_um", "volume_fraction", "cross_section", "absorption_per_mm"},
-                    "fibres")
+        _check_keys(spec, {"refractive_index", "diameter_um", "volume_fraction", "cross_section", "absorption_per_mm",
+                           "orientation", "orientation_spread_deg", "roughness_deg"}, "fibres")
         for key in ("refractive_index", "diameter_um", "volume_fraction"):
             if key not in spec:
                 raise ParameterError(f"fibres.{key}", None, "a value")
@@ -694,6 +720,9 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
             volume_fraction=spec["volume_fraction"],
             cross_section=spec.get("cross_section", "circle"),
             absorption_per_mm=spec.get("absorption_per_mm", 0.0),
+            orientation=spec.get("orientation", "random"),
+            orientation_spread_deg=spec.get("orientation_spread_deg", 0.0),
+            roughness_deg=spec.get("roughness_deg", 0.0),
         )
     yarn = _table(config, "yarn", "")
     _check_keys(yarn, {"radius_mm", "cross_section", "semi_axes_mm", "ply_count", "twist_angle_deg"}, "yarn")

@@ -319,6 +319,10 @@ def bake_wavelength(spectral_path, wavelength_nm: float) -> BakeWavelength:
     k = int(np.argmin(np.abs(wavelengths - float(wavelength_nm))))
     params = medium_from_record(metadata["medium"])
     optics = medium_optics(params)
+    if optics.oriented_fibres is not None:
+        # the brute-force renderer's medium is one phase function of cos Θ: it has no oriented fibres
+        raise ParameterError("fibres.orientation", params.fibres.orientation,
+                             "'random' for the reference renderer (a phase function of cos Θ)")
     recorded = metadata.get("phase_grid")
     if recorded is not None and recorded != {"kind": optics.phase_grid, "samples": optics.phase_samples}:
         raise RuntimeError(f"{spectral_path}: the bake's phase grid {recorded} is not the one the medium record "

@@ -24,6 +24,8 @@ from precompute.transport._rng import uniform
 
 PHASE_TABLE = 0
 PHASE_HG = 1
+#: Not a phase function of cos Θ: a medium of oriented fibres, traced by :mod:`._fibres`.
+PHASE_FIBRES = 2
 _INV_4PI = 1.0 / (4.0 * math.pi)
 
 

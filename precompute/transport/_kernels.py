@@ -3,7 +3,8 @@
 Every kernel runs independent tasks in parallel (``prange``); a task draws from
 its own random stream (:mod:`._rng`) and writes only its own tally slots, so
 the tallies are bitwise identical whatever the number of threads.  The paths
-themselves are traced by :func:`._paths.trace`.  A task's paths run in a function of
+themselves are traced by :func:`._fibres.trace_medium` (:func:`._paths.trace`, or a medium of
+oriented fibres' own).  A task's paths run in a function of
 their own (``_slab_task``, ``_trace_cell``, ``_beam_task``), which takes every array it
 reads from its caller and works on :mod:`._borrow` views of them: its caller holds the
 arrays for the whole call.  Inputs are validated by the
@@ -32,7 +33,8 @@ from precompute.slab.layout import (
 )
 from precompute.transport._borrow import borrowed
 from precompute.transport._interactions import fresnel_reflectance, refract
-from precompute.transport._paths import CYLINDER, EXITED, LOST, SLAB, path_arrays, trace
+from precompute.transport._fibres import trace_medium
+from precompute.transport._paths import CYLINDER, EXITED, LOST, SLAB, path_arrays
 from precompute.transport._prefetch import prefetch_for_write
 from precompute.transport._rng import seed_stream, uniform
 
@@ -106,7 +108,7 @@ def _slab_task(count, dims, eta, medium, specular, hero_p, hero_cdf, importance,
         pos[0] = pos[1] = pos[2] = 0.0
         d[0] = d[1] = 0.0
         d[2] = 1.0
-        status, collisions, _ = trace(SLAB, dims, eta, medium, hero, hero_p, importance, 1.0 - specular, arrays,
+        status, collisions, _ = trace_medium(SLAB, dims, eta, medium, hero, hero_p, importance, 1.0 - specular, arrays,
                                       absorbed)
         collisions_total += collisions
         if status == EXITED:
@@ -283,7 +285,7 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
             z = uniform(state) * cell_length
             reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d)
             hero = _pick_hero(state, hero_cdf)
-            status, collisions, length = trace(CYLINDER, dims, eta, medium, hero, hero_p, importance,
+            status, collisions, length = trace_medium(CYLINDER, dims, eta, medium, hero, hero_p, importance,
                                                1.0 - reflectance, arrays, cell_absorbed)
             cell_events += collisions
             for k in range(n_wl):
@@ -436,7 +438,7 @@ def _beam_task(count, dims, eta, medium, hero_p, hero_cdf, importance, toward_li
         for k in range(n_wl):
             specular[k] += reflectance
         hero = _pick_hero(state, hero_cdf)
-        status, collisions, _ = trace(CYLINDER, dims, eta, medium, hero, hero_p, importance, 1.0 - reflectance,
+        status, collisions, _ = trace_medium(CYLINDER, dims, eta, medium, hero, hero_p, importance, 1.0 - reflectance,
                                       arrays, absorbed)
         collisions_total += collisions
         if status == EXITED:

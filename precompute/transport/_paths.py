@@ -92,11 +92,12 @@ RESCALE = 1e100
 PHASE_WIDTH = 4
 
 #: The medium as :func:`trace` reads it (``TransportMedium.kernel()``); ``albedo_powers`` (interval + 1, L):
-#: row r holds α_λ^r up to the roulette interval (:func:`albedo_power_table`).
+#: row r holds α_λ^r up to the roulette interval (:func:`albedo_power_table`); ``fibre_params``, ``fibre_sine``,
+#: ``fibre_absorption``: a medium of oriented fibres' (:mod:`._fibres`; length-1 zeros for any other).
 KernelMedium = namedtuple(
     "KernelMedium",
     ["mu_t", "log_mu_t", "albedo", "brightest", "roulette_interval", "albedo_powers", "phase_kind", "hg_g",
-     "phase_by_mu", "phase_max", "alias_threshold", "alias", "grey"],
+     "phase_by_mu", "phase_max", "alias_threshold", "alias", "grey", "fibre_params", "fibre_sine", "fibre_absorption"],
 )
 
 #: A task's random stream and the arrays :func:`trace` works in: ``state`` (2,) uint64 (:mod:`._rng`);

@@ -13,8 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from precompute.errors import ParameterError
+from precompute.optics.fibre_orientation import OrientedFibres
 from precompute.optics.phase import DEFAULT_PHASE_SAMPLES, henyey_greenstein_phase, resample_uniform_cos
-from precompute.transport._interactions import PHASE_HG, PHASE_TABLE, alias_tables, hg_phase_max
+from precompute.transport._interactions import PHASE_FIBRES, PHASE_HG, PHASE_TABLE, alias_tables, hg_phase_max
 from precompute.transport._paths import KernelMedium, albedo_power_table, padded_width, roulette_interval
 
 
@@ -30,6 +31,10 @@ class TransportMedium:
     phase_table : (L, M) phase function on the uniform grid of M values of cos θ over
         [−1, 1], 1/sr, linear between grid points; or None.  Exactly one of ``hg_g`` and
         ``phase_table`` is given.
+    fibres : a medium of oriented fibres (:class:`precompute.optics.fibre_orientation.OrientedFibres`), or
+        None.  Given, the transport traces every collision through a fibre (:mod:`._fibres`) and reads
+        neither μs, μa nor the phase function (which then describe the randomly oriented fibres, for
+        reports).
     """
 
     wavelengths_nm: np.ndarray
@@ -37,6 +42,7 @@ class TransportMedium:
     mu_a: np.ndarray
     hg_g: np.ndarray | None = None
     phase_table: np.ndarray | None = None
+    fibres: OrientedFibres | None = None
 
     def __post_init__(self):
         wavelengths = np.atleast_1d(np.asarray(self.wavelengths_nm, float))
@@ -65,6 +71,9 @@ class TransportMedium:
             if not np.all(np.isfinite(table)) or np.any(table < 0) or np.any(table.sum(axis=1) <= 0):
                 raise ParameterError("phase_table", "negative, non-finite or all-zero rows", "a phase function ≥ 0")
             arrays["phase_table"] = table
+        if self.fibres is not None and (not isinstance(self.fibres, OrientedFibres)
+                                        or self.fibres.absorption_per_mm.shape != (n_wl,)):
+            raise ParameterError("fibres", self.fibres, f"OrientedFibres with {n_wl} absorption values")
         for name, value in arrays.items():
             object.__setattr__(self, name, np.ascontiguousarray(value))
 
@@ -101,8 +110,15 @@ class TransportMedium:
         interval = roulette_interval(albedo)
         powers = np.empty((interval + 1, len(albedo)))
         albedo_power_table(albedo, powers)
+        if self.fibres is None:
+            fibre_params = fibre_sine = fibre_absorption = np.zeros(1)
+        else:
+            kind = PHASE_FIBRES
+            fibre_params = self.fibres.parameters()
+            fibre_sine = np.ascontiguousarray(self.fibres.mean_sine)
+            fibre_absorption = self.fibres.absorption_per_mm
         return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), interval, powers, kind, hg_g, table,
-                            phase_max, alias_threshold, alias, grey)
+                            phase_max, alias_threshold, alias, grey, fibre_params, fibre_sine, fibre_absorption)
 
 
 def phase_sampling_tables(phase: np.ndarray):
@@ -132,7 +148,8 @@ def medium_from_optics(optics) -> TransportMedium:
     its weight, and g moves by less than half that spacing times the peak's probability.
     """
     phase = resample_uniform_cos(optics.cos_theta, optics.phase, len(optics.cos_theta))
-    return TransportMedium(optics.wavelengths_nm, optics.mu_s, optics.mu_a, phase_table=phase)
+    return TransportMedium(optics.wavelengths_nm, optics.mu_s, optics.mu_a, phase_table=phase,
+                           fibres=optics.oriented_fibres)
 
 
 def henyey_greenstein_medium(albedo, g, mu_t=1.0, wavelengths_nm=None, *, tabulated: bool = False,

@@ -88,7 +88,8 @@ def hg_slab_tasks(first_task, tasks, counts_p, seed, thickness, eta, albedo, g, 
     # one wavelength: grey, its own brightest (as TransportMedium.kernel() makes them)
     medium = KernelMedium(work[_MU_T:_MU_T + 1], work[_LOG_MU_T:_LOG_MU_T + 1], albedos, 0, interval, powers,
                           PHASE_HG, hg_g, rows[_TABLE_ROW:_TABLE_ROW + 1], hg_phase_max(hg_g),
-                          rows[_THRESHOLD_ROW:_THRESHOLD_ROW + 1], carray(alias_p, (1, 1)), True)
+                          rows[_THRESHOLD_ROW:_THRESHOLD_ROW + 1], carray(alias_p, (1, 1)), True,
+                          hg_g, hg_g, hg_g)  # (no fibres: never read)
     arrays = PathArrays(carray(state_p, (2,)), work[_POS:_POS + 3], work[_D:_D + 3], work[_WEIGHTS:_WEIGHTS + 1],
                         work[_PRODUCT:_PRODUCT + PHASE_WIDTH], work[_BANKED:_BANKED + 1],
                         work[_ALBEDO_N:_ALBEDO_N + 1], work[_ALBEDO_MARK:_ALBEDO_MARK + 1],

@@ -254,7 +254,7 @@ def _candidate_tables(config: dict, optics, geometry, rho: np.ndarray):
                                              colour["observer"]))[0]
 
     atlas = brdf_atlas(to_rgb(rho))
-    attenuation = to_rgb(ballistic.attenuation(optics.mu_s + optics.mu_a, geometry.radius_mm,
+    attenuation = to_rgb(ballistic.attenuation(optics.unscattered_extinction_per_mm, geometry.radius_mm,
                                                ballistic.attenuation_lengths()))
     exit_resolution = round(math.sqrt(rho.shape[1]))
     layout = TableLayout(FIT_INCIDENCE_RESOLUTION, exit_resolution, ballistic.ATTENUATION_SAMPLES,

@@ -16,7 +16,7 @@ from precompute.optics.fibre import fresnel_reflectance
 from precompute.optics.fibre_orientation import OrientedFibres, fibre_axes, mean_sine_table
 from precompute.optics.medium import PRESET_DIR, load_preset_config, medium_from_dict
 from precompute.transport import TransportGrids, YarnGeometry, simulate_yarn
-from precompute.transport._fibres import fibre_axis_samples, scatter_off_fibre, trace_fibres
+from precompute.transport._fibres import sample_fibre_axis, scatter_off_fibre, trace_fibres
 from precompute.transport._paths import CYLINDER, EXITED, path_arrays
 from precompute.transport._rng import seed_stream
 from precompute.transport.media import TransportMedium
@@ -33,6 +33,16 @@ def oriented_medium(fibres):
     n_wl = len(fibres.absorption_per_mm)
     return TransportMedium(np.arange(n_wl, dtype=float) + 400.0, np.full(n_wl, 1.0), np.zeros(n_wl),
                            hg_g=np.zeros(n_wl), fibres=fibres)
+
+
+@numba.njit
+def _fibre_axes(params, count, seed):
+    state = np.empty(2, dtype=np.uint64)
+    seed_stream(state, seed, 0, 0)
+    out = np.empty((count, 3))
+    for s in range(count):
+        out[s, 0], out[s, 1], out[s, 2] = sample_fibre_axis(params, state)
+    return out
 
 
 @numba.njit
@@ -77,8 +87,7 @@ def test_fibres_along_the_axis_present_the_sine_of_the_angle_to_it():
 
 def test_the_kernel_draws_fibre_axes_from_the_distribution_the_extinction_averages_over():
     fibres = oriented(helix_deg=35.0, spread_deg=15.0)
-    axes = np.empty((40000, 3))
-    fibre_axis_samples(fibres.parameters(), 3, axes)
+    axes = _fibre_axes(fibres.parameters(), 40000, 3)
     reference = fibre_axes(35.0, 15.0, 40000, np.random.default_rng(5))
     np.testing.assert_allclose(np.linalg.norm(axes, axis=1), 1.0, atol=1e-12)
     # the distribution of the tilt from the axis (|cos| to z), by its quantiles
@@ -140,24 +149,26 @@ def test_a_yarn_of_clear_oriented_fibres_loses_nothing_and_absorbing_ones_absorb
 
 def test_the_fibre_white_preset_along_the_axis():
     config, base_dir = load_preset_config(FIBRE_WHITE)
-    config = copy.deepcopy(config)
-    random_optics = medium_optics(medium_from_dict(config, base_dir))
-    assert random_optics.oriented_fibres is None
-    np.testing.assert_array_equal(random_optics.unscattered_extinction_per_mm, random_optics.mu_t)
-    config["fibres"]["orientation"] = "yarn_axis"
-    config["fibres"]["orientation_spread_deg"] = 10.0
     medium = medium_from_dict(config, base_dir)
     optics = medium_optics(medium)
     fibres = optics.oriented_fibres
     phi, d_mm = medium.fibres.volume_fraction, medium.fibres.diameter_um * 1e-3
     assert fibres.extinction_per_mm == pytest.approx(4.0 * phi / (math.pi * d_mm))
-    assert fibres.helix_angle_deg == medium.yarn.twist_angle_deg and fibres.spread_deg == 10.0
+    assert fibres.helix_angle_deg == medium.yarn.twist_angle_deg
+    assert (fibres.spread_deg, fibres.roughness_deg) == (config["fibres"]["orientation_spread_deg"],
+                                                         config["fibres"]["roughness_deg"])
     assert fibres.relative_index == pytest.approx(1.557)
     # the dye is absorbed inside the fibres, beside their grey absorption
     assert fibres.absorption_per_mm.min() >= medium.fibres.absorption_per_mm and np.ptp(fibres.absorption_per_mm) > 0
     np.testing.assert_allclose(optics.unscattered_extinction_per_mm, fibres.extinction(0.0))
     # random fibres (⟨sin⟩ = π/4) meet light less often across the axis than fibres lying across its path
     assert fibres.across_axis_extinction_per_mm > phi / d_mm
+    # the same fibres in random orientation: the Mie proxy's medium, its own extinction for the unscattered light
+    random = copy.deepcopy(config)
+    random["fibres"]["orientation"] = "random"
+    random_optics = medium_optics(medium_from_dict(random, base_dir))
+    assert random_optics.oriented_fibres is None
+    np.testing.assert_array_equal(random_optics.unscattered_extinction_per_mm, random_optics.mu_t)
 
 
 def test_the_fibres_table_refuses_an_unknown_orientation_and_particles_beside_oriented_fibres():

@@ -31,13 +31,12 @@ from __future__ import annotations
 import math
 
 import numba
-import numpy as np
 
 from precompute.transport._interactions import PHASE_FIBRES, fresnel_reflectance, reflect, refract, turn
 from precompute.transport._paths import (EXITED, LOST, MAX_INTERACTIONS, ROULETTE_SURVIVAL, ROULETTE_THRESHOLD,
                                          TERMINATED, boundary_distance, boundary_normal, boundary_shape, inside,
                                          trace)
-from precompute.transport._rng import exponential, seed_stream, uniform
+from precompute.transport._rng import exponential, uniform
 
 EXTINCTION = 0
 RELATIVE_INDEX = 1
@@ -82,16 +81,6 @@ def gaussian_angle(sigma, state):
     """|N(0, σ²)|, radians (Box–Muller)."""
     u = max(uniform(state), 1e-300)
     return abs(math.sqrt(-2.0 * math.log(u)) * math.cos(2.0 * math.pi * uniform(state))) * sigma
-
-
-@numba.njit(cache=True, error_model="numpy")
-def fibre_axis_samples(params, seed, out):
-    """``out`` (S, 3) filled with fibre axes from :func:`sample_fibre_axis` on the stream of ``seed``:
-    the distribution the optics average the extinction over."""
-    state = np.empty(2, dtype=np.uint64)
-    seed_stream(state, seed, 0, 0)
-    for s in range(out.shape[0]):
-        out[s, 0], out[s, 1], out[s, 2] = sample_fibre_axis(params, state)
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")

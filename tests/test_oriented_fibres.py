@@ -190,3 +190,21 @@ def test_the_fibres_table_refuses_an_unknown_orientation_and_particles_beside_or
     bad["host"]["absorption_per_mm"] = 1.0
     with pytest.raises(ParameterError, match="host.absorption_per_mm"):
         medium_from_dict(bad, base_dir)
+
+
+def test_a_bake_of_oriented_fibres_tabulates_their_unscattered_light_across_the_yarn_axis(tmp_path):
+    from precompute.bake import SPECTRAL_FILE, bake, load_spectral
+    from precompute.optics import ballistic
+    from precompute.tables.exr import read_table
+
+    result = bake(FIBRE_WHITE, ["transport.angular_resolution=6", "transport.n_around=8", "transport.n_along=3"],
+                  paths_per_cell=64, threads=1, cache_dir=tmp_path / "cache")
+    arrays, _ = load_spectral(result.folder / SPECTRAL_FILE)
+    config, base_dir = load_preset_config(FIBRE_WHITE)
+    medium = medium_from_dict(config, base_dir)
+    across = medium_optics(medium).oriented_fibres.across_axis_extinction_per_mm
+    np.testing.assert_allclose(arrays["unscattered_mu_t"], across)
+    # air and the fibres' Fresnel take no colour from the light that misses every fibre: a grey e^{−μt ℓ}
+    table = read_table(result.table("unscattered")).pixels.reshape(-1, 3)
+    expected = ballistic.attenuation(np.array([across]), medium.yarn.radius_mm, ballistic.attenuation_lengths())[:, 0]
+    np.testing.assert_allclose(table, np.repeat(expected[:, None], 3, axis=1), atol=2e-3)

@@ -21,9 +21,8 @@ crossing of a fibre by ``exp(−μa_λ ℓ)``.  No hero wavelength, no MIS ratio
 The medium's arrays (:data:`._paths.KernelMedium`): ``fibre_params`` = (extinction coefficient
 4φ/(πd) in 1/mm, fibre index over the host's, fibre radius in mm, tan of the helix angle at the yarn's
 surface, σ of the orientation spread in radians, σ of the fibre surface's roughness in radians);
-``fibre_sine`` (N,): the mean sine between a
-direction and the fibres at |cos| of the direction to the axis uniform on [0, 1]; ``fibre_absorption``
-(L,): μa inside the fibre, 1/mm.
+``fibre_sine`` (N,): the mean sine between a direction and the fibres at |cos| of the direction to the
+axis uniform on [0, 1]; ``fibre_absorption`` (L,): μa inside the fibre, 1/mm.
 """
 
 from __future__ import annotations
@@ -34,8 +33,7 @@ import numba
 
 from precompute.transport._interactions import PHASE_FIBRES, fresnel_reflectance, reflect, refract, turn
 from precompute.transport._paths import (EXITED, LOST, MAX_INTERACTIONS, ROULETTE_SURVIVAL, ROULETTE_THRESHOLD,
-                                         TERMINATED, boundary_distance, boundary_normal, boundary_shape, inside,
-                                         trace)
+                                         TERMINATED, boundary_distance, boundary_shape, inside, meet_boundary, trace)
 from precompute.transport._rng import exponential, uniform
 
 EXTINCTION = 0
@@ -44,10 +42,9 @@ RADIUS_MM = 2
 HELIX_TAN = 3
 SPREAD_RAD = 4
 ROUGHNESS_RAD = 5
-PARAMETER_COUNT = 6
-#: Internal reflections followed inside one fibre before what is left is reported lost (a circle keeps
-#: the angle of incidence, so at cotton's index a ray inside keeps less than F ≤ 0.1 per reflection but
-#: near grazing; the 64th carries nothing a table can show).
+#: Internal reflections followed inside one fibre before what is left is reported lost: a circle keeps a
+#: ray's angle to its surface, so every internal reflection keeps the same Fresnel share, ≤ 0.1 at
+#: cotton's index but near grazing, and after 64 nothing a table can show is left.
 MAX_INTERNAL_REFLECTIONS = 64
 
 
@@ -107,7 +104,6 @@ def scatter_off_fibre(dx, dy, dz, tx, ty, tz, eta, state):
     px, py = -c, h
     inside = 0.0
     for _ in range(MAX_INTERNAL_REFLECTIONS):
-        along = dx * tx + dy * ty + dz * tz
         a = dx * ux + dy * uy + dz * uz
         b = dx * vx + dy * vy + dz * vz
         planar = a * a + b * b
@@ -187,17 +183,11 @@ def trace_fibres(geometry, dims, eta, medium, importance, enter_weight, arrays, 
         if to_boundary == math.inf:
             break
         length += to_boundary
-        px, py, pz, nx, ny, nz = boundary_normal(geometry, thickness, ia2, ib2, px + to_boundary * dx,
-                                                 py + to_boundary * dy, pz + to_boundary * dz)
-        cos_i = dx * nx + dy * ny + dz * nz
-        if cos_i > 0.0:  # ≤ 0 only by round-off at a grazing hit: the path stays inside
-            reflectance = fresnel_reflectance(cos_i, eta)
-            if reflectance >= 1.0 or uniform(state) < reflectance:
-                dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz, cos_i)
-            else:
-                dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, cos_i, eta)
-                status = EXITED
-                break
+        px, py, pz, dx, dy, dz, left = meet_boundary(geometry, thickness, ia2, ib2, eta, px, py, pz, dx, dy, dz,
+                                                     to_boundary, state)
+        if left:
+            status = EXITED
+            break
     pos[0], pos[1], pos[2] = px, py, pz
     d[0], d[1], d[2] = dx, dy, dz
     for k in range(n_wl):  # LOST: the flux still inside

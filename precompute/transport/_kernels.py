@@ -108,8 +108,8 @@ def _slab_task(count, dims, eta, medium, specular, hero_p, hero_cdf, importance,
         pos[0] = pos[1] = pos[2] = 0.0
         d[0] = d[1] = 0.0
         d[2] = 1.0
-        status, collisions, _ = trace_medium(SLAB, dims, eta, medium, hero, hero_p, importance, 1.0 - specular, arrays,
-                                      absorbed)
+        status, collisions, _ = trace_medium(SLAB, dims, eta, medium, hero, hero_p, importance, 1.0 - specular,
+                                             arrays, absorbed)
         collisions_total += collisions
         if status == EXITED:
             if d[2] < 0.0:
@@ -286,7 +286,7 @@ def _trace_cell(cell, row, first_task, sizes, seed, radius, eta, medium, hero_p,
             reflectance = _enter_yarn(radius, eta, psi, z, wx, wy, wz, pos, d)
             hero = _pick_hero(state, hero_cdf)
             status, collisions, length = trace_medium(CYLINDER, dims, eta, medium, hero, hero_p, importance,
-                                               1.0 - reflectance, arrays, cell_absorbed)
+                                                      1.0 - reflectance, arrays, cell_absorbed)
             cell_events += collisions
             for k in range(n_wl):
                 cell_specular[k] += reflectance
@@ -438,8 +438,8 @@ def _beam_task(count, dims, eta, medium, hero_p, hero_cdf, importance, toward_li
         for k in range(n_wl):
             specular[k] += reflectance
         hero = _pick_hero(state, hero_cdf)
-        status, collisions, _ = trace_medium(CYLINDER, dims, eta, medium, hero, hero_p, importance, 1.0 - reflectance,
-                                      arrays, absorbed)
+        status, collisions, _ = trace_medium(CYLINDER, dims, eta, medium, hero, hero_p, importance,
+                                             1.0 - reflectance, arrays, absorbed)
         collisions_total += collisions
         if status == EXITED:
             around, _, out_cell = _exit_bins(pos, d, dpsi, n_around, 1, 1.0, out_res)

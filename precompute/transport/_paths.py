@@ -195,6 +195,24 @@ def boundary_normal(geometry, thickness, ia2, ib2, px, py, pz):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
+def meet_boundary(geometry, thickness, ia2, ib2, eta, px, py, pz, dx, dy, dz, to_boundary, state):
+    """A path at interior point (px, py, pz) going along (dx, dy, dz) reaches the boundary ``to_boundary``
+    mm on and is reflected (probability R, Fresnel at ``eta`` = n_inside / n_outside) or refracted out:
+    ``(px, py, pz, dx, dy, dz, left)``, the point on the boundary, the direction after, and whether it left."""
+    px, py, pz, nx, ny, nz = boundary_normal(geometry, thickness, ia2, ib2, px + to_boundary * dx,
+                                             py + to_boundary * dy, pz + to_boundary * dz)
+    cos_i = dx * nx + dy * ny + dz * nz
+    if cos_i > 0.0:  # ≤ 0 only by round-off at a grazing hit: the path stays inside
+        reflectance = fresnel_reflectance(cos_i, eta)
+        if reflectance >= 1.0 or uniform(state) < reflectance:
+            dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz, cos_i)
+        else:
+            dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, cos_i, eta)
+            return px, py, pz, dx, dy, dz, True
+    return px, py, pz, dx, dy, dz, False
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def boundary_shape(geometry, dims):
     """(thickness, 1/a², 1/b²) of the medium ``dims``, taken once per path: (thickness, 0, 0) for a SLAB,
     (0, 1/a², 1/b²) for a CYLINDER."""
@@ -463,17 +481,11 @@ def trace(geometry, dims, eta, medium, hero, hero_p, importance, enter_weight, a
         else:
             length += to_boundary
             flight -= to_boundary
-            px, py, pz, nx, ny, nz = boundary_normal(geometry, thickness, ia2, ib2, px + to_boundary * dx,
-                                                     py + to_boundary * dy, pz + to_boundary * dz)
-            cos_i = dx * nx + dy * ny + dz * nz
-            if cos_i > 0.0:  # ≤ 0 only by round-off at a grazing hit: the path stays inside
-                reflectance = fresnel_reflectance(cos_i, eta)
-                if reflectance >= 1.0 or uniform(state) < reflectance:
-                    dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz, cos_i)
-                else:
-                    dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, cos_i, eta)
-                    status = EXITED
-                    break
+            px, py, pz, dx, dy, dz, left = meet_boundary(geometry, thickness, ia2, ib2, eta, px, py, pz, dx, dy, dz,
+                                                         to_boundary, state)
+            if left:
+                status = EXITED
+                break
     pos[0], pos[1], pos[2] = px, py, pz
     d[0], d[1], d[2] = dx, dy, dz
     if spectral and n % medium.roulette_interval:  # α^n, short of the collisions since the last check

@@ -107,7 +107,8 @@ def test_every_ray_a_fibre_scatters_leaves_on_its_cone():
     np.testing.assert_allclose(np.linalg.norm(out, axis=1), 1.0, atol=1e-12)
     np.testing.assert_allclose(out @ t, d @ t, atol=1e-12)
     assert 0.02 < np.mean(chords == 0.0) < 0.15  # a few per cent reflected off the outside ...
-    assert np.all(chords[chords > 0.0] <= 2.0 * 64 + 1e-9)  # ... the rest crossed it, chords ≤ its diameter each
+    # ... the rest crossed it: at most 64 chords (MAX_INTERNAL_REFLECTIONS) of at most a diameter each
+    assert np.all(chords[chords > 0.0] <= 2.0 * 64 + 1e-9)
 
 
 def test_a_fibre_reflects_the_share_geometric_optics_gives_a_cylinder():

@@ -50,6 +50,7 @@ FREE_PARAMETERS = (
      "the spread of fibres along the yarn axis about the twist's helix (σ)"),
     ("fibre_roughness_deg", "Fibre Roughness", "°", 0.0, 60.0,
      "the blur of the light a fibre along the yarn axis sends on (σ)"),
+    ("twist_angle_deg", "Twist Angle", "°", 0.0, 45.0, "the surface fibres' helix angle about the yarn axis"),
     ("yarn_radius_mm", "Yarn Radius", "mm", 0.03, 0.5, "the yarn's radius"),
     ("specular_weight", "Sheen Weight", "", 0.0, 3.0, "the Cook–Torrance sheen's weight (the shader's SpecularWeight)"),
     ("specular_slope", "Sheen Slope", "", 0.05, 1.0,

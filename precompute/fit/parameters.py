@@ -242,8 +242,9 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
                  note="with fibres along the yarn axis: σ of the blur of the light a fibre sends on, from a "
                       "smooth cylinder's cone (0) to an irregular, convoluted fibre's broad lobes"),
     FitParameter("twist_angle_deg", "yarn.twist_angle_deg", "°", 0.0, 45.0, log=False,
-                 note="the surface fibres' helix angle: 0 is an untwisted yarn, 20–30° a cotton's, 45° a hard-twisted "
-                      "crepe; with fibres along the yarn axis it sets their helices (the close-ups' plies take it too)"),
+                 note="the surface fibres' helix angle: 0 is an untwisted yarn, 20–30° a cotton's, 45° a "
+                      "hard-twisted crepe; with fibres along the yarn axis it sets their helices (the close-ups' "
+                      "plies take it too)"),
     FitParameter("yarn_radius_mm", "yarn.radius_mm", "mm", 0.03, 0.5, log=True,
                  note="fine (Ne 100) to coarse (Ne 2) yarns after Peirce's d = 1/(28 √Ne) inch; the medium "
                       f"allows {bounds.YARN_RADIUS_MM.low:g}–{bounds.YARN_RADIUS_MM.high:g} mm"),

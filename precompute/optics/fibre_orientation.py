@@ -23,6 +23,7 @@ unscattered light read one table.  What a collision does is traced by the transp
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -105,13 +106,17 @@ def fibre_axes(helix_angle_deg: float, spread_deg: float, count: int, rng: np.ra
     return axes
 
 
+@functools.lru_cache(maxsize=64)
 def mean_sine_table(helix_angle_deg: float, spread_deg: float, size: int = SINE_TABLE_SIZE) -> np.ndarray:
-    """⟨sin ∠(ω, t)⟩ over D at |ω · z| = 0 … 1 in ``size`` uniform steps (module docstring)."""
+    """⟨sin ∠(ω, t)⟩ over D at |ω · z| = 0 … 1 in ``size`` uniform steps (module docstring), read-only:
+    kept per (helix, spread), since a fit's candidates that change neither share it (0.1 s to average)."""
     axes = fibre_axes(helix_angle_deg, spread_deg, AXIS_SAMPLES, np.random.default_rng(_AXIS_SEED))
     cos_axis = np.linspace(0.0, 1.0, size)
     directions = np.stack([np.sqrt(1.0 - cos_axis**2), np.zeros(size), cos_axis], axis=-1)
     cosines = directions @ axes.T
-    return np.sqrt(np.clip(1.0 - cosines**2, 0.0, 1.0)).mean(axis=1)
+    table = np.sqrt(np.clip(1.0 - cosines**2, 0.0, 1.0)).mean(axis=1)
+    table.flags.writeable = False
+    return table
 
 
 def _turned(axes: np.ndarray, angle: np.ndarray, azimuth: np.ndarray) -> np.ndarray:

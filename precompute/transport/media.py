@@ -115,7 +115,7 @@ class TransportMedium:
         else:
             kind = PHASE_FIBRES
             fibre_params = self.fibres.parameters()
-            fibre_sine = np.ascontiguousarray(self.fibres.mean_sine)
+            fibre_sine = np.array(self.fibres.mean_sine)  # (writable: the kernels take one array type)
             fibre_absorption = self.fibres.absorption_per_mm
         return KernelMedium(mu_t, np.log(mu_t), albedo, int(np.argmax(albedo)), interval, powers, kind, hg_g, table,
                             phase_max, alias_threshold, alias, grey, fibre_params, fibre_sine, fibre_absorption)

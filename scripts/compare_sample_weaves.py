@@ -6,7 +6,9 @@ the preset's sheen and fuzz on it, as a fit does for every candidate medium
 (``precompute.fit.optimise.fit_profiled_specular``), with the preset's own medium at
 ``--relative-error``.  Printed per weave: relative RMS per channel (their mean, then R, G, B) on the
 plane of incidence and held out, the profiled sheen and fuzz, and the backscatter model / measured in
-the fabric's main channel at θi 60°, θv −60° and −40° and θi 45°, θv −60°.
+the fabric's main channel at θi 60°, θv −60° and −40° and θi 45°, θv −60°; and the shape of the
+medium's own cloth BRDF (without the sheen and the fuzz) in that channel, over its value at normal
+light and view, at :data:`SHAPE_VIEWS`, the measured fabric's beside it.
 
     python scripts/compare_sample_weaves.py --measured ../shared/data/real_fabrics/neural/white-fabric.csv \\
         --preset precompute/presets/experimental/fibre_white_cotton.toml
@@ -22,6 +24,9 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 #: The backscatter views (θi, signed θv), degrees, as the fabric figures give them.
 BACKSCATTER_VIEWS = ((60.0, -60.0), (60.0, -40.0), (45.0, -60.0))
+#: Where the shape is given (θi, signed θv), degrees: normal light seen at grazing, grazing light
+#: seen along the normal and from the light's side; all over normal light and view.
+SHAPE_VIEWS = ((0.0, 80.0), (75.0, 0.0), (75.0, -80.0))
 
 
 def main() -> int:
@@ -55,15 +60,24 @@ def main() -> int:
         values = fit_profiled_specular(lambda rgb: objective(rgb[:count]), medium, specular, profiled, {})
         rgb = (medium + cloth_terms(specular, {p.path: values[p.name] for p in profiled})[:, None])[:count]
         fit, held = objective.channel_errors(rgb), objective.channel_errors(rgb, "held_out")
+        def row(theta_i, theta_v):
+            return np.flatnonzero(in_plane & (angles[:, 0] == theta_i) & (signed == theta_v))[0]
+
         backscatter = []
         for theta_i, theta_v in BACKSCATTER_VIEWS:
-            row = np.flatnonzero(in_plane & (angles[:, 0] == theta_i) & (signed == theta_v))[0]
-            channel = int(np.argmax(objective.measured[row]))
-            backscatter.append(rgb[row, channel] / objective.measured[row, channel])
+            r = row(theta_i, theta_v)
+            channel = int(np.argmax(objective.measured[r]))
+            backscatter.append(rgb[r, channel] / objective.measured[r, channel])
+        normal = row(0.0, 0.0)
+        channel = int(np.argmax(objective.measured[normal]))
+        shape = [f"{medium[row(*v), channel] / medium[normal, channel]:.2f} "
+                 f"({objective.measured[row(*v), channel] / objective.measured[normal, channel]:.2f})"
+                 for v in SHAPE_VIEWS]
         print(f"{weave:9s} plane {fit.mean():.3f} {np.round(fit, 3).tolist()}, held out {held.mean():.3f} "
               f"{np.round(held, 3).tolist()}; sheen w {values['specular_weight']:.3g}, "
               f"m {values['specular_slope']:.3g}, fuzz {values['fuzz_albedo']:.3g}; "
-              f"backscatter {np.round(backscatter, 2).tolist()}")
+              f"backscatter {np.round(backscatter, 2).tolist()}; the medium's shape (measured) "
+              f"{', '.join(shape)}")
     return 0
 
 

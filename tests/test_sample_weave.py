@@ -53,6 +53,19 @@ def test_the_sheeting_sample_is_packed_sheeting_of_the_yarn_about_ten_millimetre
         sample_weave(name, radius_mm)
 
 
+@pytest.mark.parametrize("radius_mm", [0.1, 0.12])
+def test_the_pressed_sample_is_the_sheeting_yarn_pressed_flat_with_no_gap(radius_mm):
+    sheeting, pressed = sample_weave("sheeting", radius_mm), sample_weave("pressed", radius_mm)
+    width, thickness = pressed.cross_section_mm
+    assert width / thickness == pytest.approx(5.0)
+    assert width * thickness == pytest.approx(np.prod(sheeting.cross_section_mm))  # the same yarn, pressed
+    assert pressed.section_relaxation == 0.0  # flat all along, not only where the yarns cross
+    assert pressed.spacing_mm == pytest.approx(4.6 * radius_mm)
+    assert pressed.cover_factor > 0.99 > sheeting.cover_factor
+    assert pressed.ply_count == 1 and not pressed.is_irregular
+    assert pressed.sample_size_mm[0] == pytest.approx(SAMPLE_SIDE_MM, rel=0.05)
+
+
 def test_the_bake_records_a_named_sample_weave_and_keys_its_tables_by_it():
     config, _ = load_preset_config("red_cotton")
     plain = bake_module.bake_configuration(config)

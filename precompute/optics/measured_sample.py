@@ -14,7 +14,9 @@ figures that compare it with a fabric use that weave::
     the validation weave: plain, round yarns at 0.5 mm covering 0.64 of the cloth;
 ``"sheeting"``
     cotton sheeting: plain, the yarns pressed 1.6 : 1 where they cross and relaxing between, at
-    Peirce's cover factor 14, covering 0.84.
+    Peirce's cover factor 14, covering 0.84;
+``"pressed"``
+    plain, the yarns pressed 5 : 1 all along, side by side with no gap between them, covering 0.99.
 
 The geometry of each is the add-on's (``clothlight.weave.sample_weaves``); this module only reads
 and checks the name, so that the bake can record it without the add-on.
@@ -28,7 +30,7 @@ from precompute.errors import ParameterError
 
 SAMPLE_TABLE = "sample"
 SAMPLE_WEAVE_KEY = "weave"
-SAMPLE_WEAVES = ("open", "sheeting")
+SAMPLE_WEAVES = ("open", "sheeting", "pressed")
 DEFAULT_SAMPLE_WEAVE = "open"
 
 

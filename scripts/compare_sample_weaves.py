@@ -53,6 +53,10 @@ def main() -> int:
     profiled = [PARAMETERS[name] for name in ("specular_weight", "specular_slope", "fuzz_albedo")]
     angles, signed = np.asarray(views.angles_deg, float), np.asarray(views.signed_view_deg, float)
     in_plane = np.isclose((angles[:, 3] - angles[:, 1]) % 180.0, 0.0)
+
+    def row(theta_i, theta_v):
+        return np.flatnonzero(in_plane & (angles[:, 0] == theta_i) & (signed == theta_v))[0]
+
     for weave in SAMPLE_WEAVES:
         model = build_forward_model(views.forward_views, {**config, SAMPLE_TABLE: {SAMPLE_WEAVE_KEY: weave}},
                                     base_dir, seed=0)
@@ -60,9 +64,6 @@ def main() -> int:
         values = fit_profiled_specular(lambda rgb: objective(rgb[:count]), medium, specular, profiled, {})
         rgb = (medium + cloth_terms(specular, {p.path: values[p.name] for p in profiled})[:, None])[:count]
         fit, held = objective.channel_errors(rgb), objective.channel_errors(rgb, "held_out")
-        def row(theta_i, theta_v):
-            return np.flatnonzero(in_plane & (angles[:, 0] == theta_i) & (signed == theta_v))[0]
-
         backscatter = []
         for theta_i, theta_v in BACKSCATTER_VIEWS:
             r = row(theta_i, theta_v)

@@ -11,19 +11,19 @@ yarn, regular and of one ply, so that its response serves every medium of that y
 
 from __future__ import annotations
 
+import math
+
 from precompute.errors import ParameterError
 from precompute.optics.measured_sample import SAMPLE_TABLE, SAMPLE_WEAVE_KEY, SAMPLE_WEAVES
-
-import math
 
 from .closeup import SHEETING_SECTION_SHARE, sheeting_shape
 from .params import WeaveParameters
 
 #: The side of a sample, mm (module docstring).
 SAMPLE_SIDE_MM = 10.0
-#: The pressed weave's yarn: width over thickness, kept all along (no relaxation between crossings),
-#: the spacing in yarn radii (covering 0.99 of the cloth) and the crimp in half-thicknesses, the least
-#: of these steps that clears the crossing yarns at that spacing.
+#: The pressed weave's yarn: width over thickness, kept all along (no relaxation between crossings);
+#: the spacing in yarn radii (covering 0.99 of the cloth); the crimp in half-thicknesses, enough to
+#: clear the crossing yarns at that spacing (1.5 is not).
 PRESSED_FLATTENING = 5.0
 PRESSED_SPACING_RADII = 4.6
 PRESSED_CRIMP_HALF_THICKNESSES = 2.0

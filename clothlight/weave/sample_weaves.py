@@ -42,13 +42,17 @@ def pressed_shape(yarn_radius_mm: float) -> dict:
                 section_relaxation=0.0)
 
 
+#: The shape of each named sample weave but the open one, from its yarn's radius (mm).
+SAMPLE_SHAPES = {"sheeting": sheeting_shape, "pressed": pressed_shape}
+
+
 def sample_weave(name: str, yarn_radius_mm: float) -> WeaveParameters | None:
     """The woven sample ``name`` of yarns of radius ``yarn_radius_mm`` (mm), or None for the open
     weave: the validation's own sample (``clothlight.fit.forward.cloth_response``)."""
     if name == "open":
         return None
-    if name in ("sheeting", "pressed"):
-        shape = sheeting_shape(yarn_radius_mm) if name == "sheeting" else pressed_shape(yarn_radius_mm)
-        count = round(SAMPLE_SIDE_MM / shape["spacing_mm"])
-        return WeaveParameters(**shape, warp_count=count, weft_count=count, segments_per_crossing=8)
-    raise ParameterError(f"{SAMPLE_TABLE}.{SAMPLE_WEAVE_KEY}", name, f"one of {', '.join(SAMPLE_WEAVES)}")
+    if name not in SAMPLE_SHAPES:
+        raise ParameterError(f"{SAMPLE_TABLE}.{SAMPLE_WEAVE_KEY}", name, f"one of {', '.join(SAMPLE_WEAVES)}")
+    shape = SAMPLE_SHAPES[name](yarn_radius_mm)
+    count = round(SAMPLE_SIDE_MM / shape["spacing_mm"])
+    return WeaveParameters(**shape, warp_count=count, weft_count=count, segments_per_crossing=8)

@@ -46,12 +46,27 @@ def shortest_unscattered_path(host_index: float) -> float:
     return 2.0 * math.sqrt(max(0.0, 1.0 - 1.0 / host_index**2))
 
 
+def has_unscattered_light(tables: YarnTableFiles) -> bool:
+    """Whether the general mode of ``tables`` renders any unscattered light: a path as short as
+    the shortest chord is still above the shader's floor (False for a medium that scatters within
+    that chord, as the fitted round-yarn presets do; True for a nearly clear yarn, ``paper_2008``,
+    and for a yarn of fibres in air, whose light passes between the fibres at its edges)."""
+    return tables.unscattered_reach > 0.0 and tables.unscattered_reach >= shortest_unscattered_path(tables.host_index)
+
+
+def unscattered_light_is_straight(tables: YarnTableFiles) -> bool:
+    """Whether the unscattered light crosses the yarn in a straight line: a host of index 1 (fibres in
+    air) neither refracts nor reflects it at the yarn's boundary, so its one path leaves along the
+    light's own direction, and a plain Refraction BSDF about the view renders it (yarn_nodes)."""
+    return abs(tables.host_index - 1.0) < 1e-9
+
+
 def renders_in_nodes(tables: YarnTableFiles) -> bool:
-    """Whether the general mode of ``tables`` has no unscattered light to render (its reach is
-    shorter than the shortest unscattered path, so the OSL shader would add none of it either) and
-    can be plain Cycles nodes (clothlight.blender.yarn_nodes).  True for a medium that scatters
-    (every fitted preset); False for a nearly clear yarn (``paper_2008``)."""
-    return tables.unscattered_reach < shortest_unscattered_path(tables.host_index)
+    """Whether the general mode of ``tables`` can be plain Cycles nodes (clothlight.blender.yarn_nodes):
+    it has no unscattered light to render, or only the straight path of a yarn of fibres in air.  The
+    refracted and reflected paths of a denser host (one lobe each, about a direction computed per
+    shading point) need the OSL shader."""
+    return not has_unscattered_light(tables) or unscattered_light_is_straight(tables)
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ import pytest
 from clothlight.yarn_tables import (
     GENERAL_MODE_MIN_WEIGHT,
     attenuation_reach,
+    has_unscattered_light,
     renders_in_nodes,
     shortest_unscattered_path,
 )
@@ -54,3 +55,32 @@ def test_a_medium_renders_in_plain_nodes_only_where_no_unscattered_path_reaches_
     assert renders_in_nodes(tables["scattering"])
     assert not renders_in_nodes(tables["clear"])
     assert not renders_in_nodes(tables["at the shortest chord"])  # that path would still be rendered
+
+
+def test_a_yarn_of_fibres_in_air_renders_its_unscattered_light_in_plain_nodes():
+    # Its host is air: light passes straight between the fibres at the yarn's edges, a path plain
+    # nodes render.  A denser host with the same reach refracts it, and only the OSL shader can.
+    air = SimpleNamespace(unscattered_reach=0.43, host_index=1.0)
+    assert has_unscattered_light(air) and renders_in_nodes(air)
+    glass_rod = SimpleNamespace(unscattered_reach=math.inf, host_index=1.557)
+    assert has_unscattered_light(glass_rod) and not renders_in_nodes(glass_rod)
+    scattering = SimpleNamespace(unscattered_reach=0.43, host_index=1.557)  # shorter than any chord
+    assert not has_unscattered_light(scattering) and renders_in_nodes(scattering)
+    opaque = SimpleNamespace(unscattered_reach=0.0, host_index=1.0)
+    assert not has_unscattered_light(opaque)
+
+
+def test_in_air_the_one_unscattered_path_runs_straight_along_the_views_chord():
+    # What the plain-node material assumes (yarn_nodes._straight_unscattered_light): at η = 1 the
+    # closed form's first path carries everything, leaves along the view's own line, and is
+    # 2 ω_z / (1 − ω_x²) radii long.
+    rng = np.random.default_rng(11)
+    z = rng.uniform(0.01, 1.0, 2000)
+    phi = rng.uniform(0.0, 2.0 * math.pi, z.size)
+    planar = np.sqrt(1.0 - z**2)
+    wo = np.stack([planar * np.cos(phi), planar * np.sin(phi), z], axis=-1)
+    toward_light, factor, length = ballistic.unscattered_paths(wo, 1.0)
+    np.testing.assert_allclose(toward_light[:, 0], -wo, atol=1e-12)
+    np.testing.assert_allclose(factor[:, 0], 1.0)
+    np.testing.assert_allclose(factor[:, 1:], 0.0, atol=1e-12)
+    np.testing.assert_allclose(length[:, 0], 2.0 * wo[:, 2] / (1.0 - wo[:, 0] ** 2), rtol=1e-9)

@@ -153,19 +153,24 @@ def test_sun_mode_adds_the_unscattered_light_as_its_numpy_twin(tmp_path, synthet
 
 
 @pytest.mark.blender
-@pytest.mark.parametrize("view_zenith, view_azimuth", [(0.0, 0.0), (30.0, 60.0), (55.0, 170.0)])
+@pytest.mark.parametrize("index, plain_nodes", [(INDEX, False), (1.0, False), (1.0, True)],
+                         ids=["refracting-host", "fibres-in-air-osl", "fibres-in-air-plain-nodes"])
+@pytest.mark.parametrize("view_zenith, view_azimuth", [(0.0, 0.0), (30.0, 60.0), (55.0, 170.0), (70.0, 20.0)])
 def test_general_mode_renders_each_unscattered_path_as_a_lobe_of_its_weight(
-        tmp_path, synthetic_tables, view_zenith, view_azimuth):
+        tmp_path, synthetic_tables, view_zenith, view_azimuth, index, plain_nodes):
     # Under a uniform sky of radiance 1 each lobe of unit integral gives its weight: the patch
     # (no scattered light: ρ and the lobe weights zero) must shine with the closed form's
-    # ∫ρ_u dω_i, and the lit-from-behind lobes (GGX refraction) are not lost.
+    # ∫ρ_u dω_i, and the lit-from-behind lobes (GGX refraction) are not lost.  A host of index 1
+    # (fibres in air) has one straight path, which the plain nodes render too.
     tables = synthetic_tables[0]
     folder = tmp_path
     write_exr(folder / "rho.exr", np.zeros((N_I * N_O, N_I * N_O, 3)))
     write_exr(folder / "lobes.exr", np.zeros((N_O, len(LOBES) * N_O, 3)))
     dark = YarnTableFiles(folder / "rho.exr", folder / "lobes.exr", tables.unscattered_path, N_I, N_O,
-                          LobeShape().to_dict(), INDEX, ballistic.ATTENUATION_SAMPLES)
-    scene, wo = patch_scene(dark, GENERAL_MODE, view_zenith, view_azimuth, unit([0.0, 0.0, 1.0]))
+                          LobeShape().to_dict(), index, ballistic.ATTENUATION_SAMPLES)
+    scene, wo = patch_scene(dark, GENERAL_MODE, view_zenith, view_azimuth, unit([0.0, 0.0, 1.0]),
+                            plain_nodes=plain_nodes)
+    assert (shader_node(bpy.context.active_object.active_material) is None) == plain_nodes
     scene.cycles.samples = 256
     for obj in [o for o in scene.objects if o.type == "LIGHT"]:
         bpy.data.objects.remove(obj)
@@ -176,7 +181,7 @@ def test_general_mode_renders_each_unscattered_path_as_a_lobe_of_its_weight(
     pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
     attenuation = synthetic_tables[3]
     expected = ballistic.unscattered_radiance_factor(
-        wo, INDEX, lambda length: np.asarray(interpolate_attenuation(attenuation, length)))
+        wo, index, lambda length: np.asarray(interpolate_attenuation(attenuation, length)))
     np.testing.assert_allclose(pixels.mean(axis=0), expected, rtol=0.02)
 
 
@@ -333,22 +338,26 @@ def test_plain_nodes_carry_a_specular_weight_above_one(tmp_path, synthetic_table
 
 
 @pytest.mark.blender
+@pytest.mark.parametrize("fibres_in_air", [False, True], ids=["opaque-yarn", "fibres-in-air"])
 @pytest.mark.parametrize("light_between_yarns", [False, True], ids=["sun", "sun-sky-bounces"])
-def test_plain_nodes_render_the_woven_sample_as_the_osl_general_mode(tmp_path, synthetic_tables, light_between_yarns):
+def test_plain_nodes_render_the_woven_sample_as_the_osl_general_mode(tmp_path, synthetic_tables, light_between_yarns,
+                                                                    fibres_in_air):
     # The same closures with the same weights on a woven sample.  Under the sun alone, direct light:
     # pixel for pixel the same image.  With a grey sky and four bounces (light between yarns and
     # through their far faces) the two pick closures to sample in another order, so their noise
     # differs, and their means agree.  The camera frames the inside of the sample: through a cut
     # yarn end it would see the yarn's far face, where the OSL shader turns its frame outward and a
-    # Hair BSDF node cannot.
+    # Hair BSDF node cannot.  A yarn of fibres in air (host index 1) lets light through unscattered
+    # along a straight line, one more lobe in both.
     from clothlight.blender.sample_object import build_sample_object
     from clothlight.weave import WeaveParameters
 
     tables, _, weights, _ = synthetic_tables
     weights = weights * np.random.default_rng(4).uniform(0.3, 1.0, weights.shape)
     write_exr(tmp_path / "lobes.exr", lobe_atlas(weights))
-    tables = dataclasses.replace(without_unscattered_light(tables, tmp_path), lobe_path=tmp_path / "lobes.exr",
-                                 specular={"weight": 0.5, "slope": 0.3})
+    tables = dataclasses.replace(tables if fibres_in_air else without_unscattered_light(tables, tmp_path),
+                                 lobe_path=tmp_path / "lobes.exr", specular={"weight": 0.5, "slope": 0.3},
+                                 host_index=1.0 if fibres_in_air else tables.host_index)
     scene = empty_render_scene(resolution=48, samples=64 if light_between_yarns else 4,
                                bounces=4 if light_between_yarns else 0)
     if light_between_yarns:

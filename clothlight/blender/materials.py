@@ -6,9 +6,10 @@ a packed image instead), and the mesh attributes the
 shader needs arrive through linked sockets: in Cycles ``getattribute`` alone
 does not see them.
 
-The general mode of a medium without unscattered light to render (every fitted
-preset) is built from plain Cycles nodes instead (:mod:`.yarn_nodes`): it needs
-no OSL and renders under Cycles' default SVM, on the CPU or a GPU.
+The general mode of a medium without unscattered light to render (the fitted
+round-yarn presets) or with only the straight path of a yarn of fibres in air is
+built from plain Cycles nodes instead (:mod:`.yarn_nodes`): it needs no OSL and
+renders under Cycles' default SVM, on the CPU or a GPU.
 """
 
 from __future__ import annotations
@@ -20,8 +21,8 @@ import bpy
 
 from ..mesh_attributes import CLOTH_NORMAL, YARN_TANGENT
 from .osl_shaders import add_script_node
-from ..yarn_tables import renders_in_nodes
-from .yarn_nodes import general_mode_surface
+from ..yarn_tables import has_unscattered_light, renders_in_nodes
+from .yarn_nodes import UNSCATTERED_LOBE_ALPHA, general_mode_surface
 
 from precompute.optics import ballistic as _ballistic
 
@@ -55,6 +56,8 @@ UNSCATTERED_REACH_NEVER = 1e9
 LOBE_IMAGE_LABEL = "ClothLight lobe weights"
 #: Name of a packed ``lobes.exr``, followed by a digest of its content.
 LOBE_IMAGE_PREFIX = "ClothLight lobes "
+#: The same for a packed ``unscattered.exr`` (the general mode in plain nodes of a yarn of fibres in air).
+UNSCATTERED_IMAGE_PREFIX = "ClothLight unscattered "
 #: Custom properties of a yarn material: the folder of the tables it reads, and (for the general
 #: mode in plain nodes, which has no SunMode socket) its mode.
 TABLES_PROPERTY = "clothlight_tables"
@@ -80,12 +83,12 @@ def _object_to_world(tree, attribute_name: str, vector_type: str, location):
 
 def _fresh_material(name: str):
     """The material named ``name`` (made if missing) emptied of its nodes and ClothLight properties;
-    lobe atlases only it used are removed (a material built again must not leave orphans)."""
+    packed tables only it used are removed (a material built again must not leave orphans)."""
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
     images = {node.image for node in material.node_tree.nodes if node.type == "TEX_IMAGE" and node.image}
     material.node_tree.nodes.clear()
     for image in images:
-        if image.users == 0 and image.name.startswith(LOBE_IMAGE_PREFIX):
+        if image.users == 0 and image.name.startswith((LOBE_IMAGE_PREFIX, UNSCATTERED_IMAGE_PREFIX)):
             bpy.data.images.remove(image)
     for key in ("clothlight_shader", MODE_PROPERTY, TABLES_PROPERTY):
         material.pop(key, None)
@@ -166,7 +169,7 @@ def build_yarn_material(
     plain_nodes
         General mode: build it from plain Cycles nodes (no OSL: SVM, CPU or GPU). None (the default):
         wherever the medium allows (:func:`clothlight.yarn_tables.renders_in_nodes`); True refuses a medium
-        with unscattered light to render; False: the OSL shader.
+        with refracted unscattered light to render; False: the OSL shader.
     """
     if mode not in (SUN_MODE, GENERAL_MODE):
         raise ValueError(f"mode must be {SUN_MODE!r} or {GENERAL_MODE!r}, not {mode!r}")
@@ -174,8 +177,9 @@ def build_yarn_material(
         plain_nodes = not needs_osl(tables, mode)
     if plain_nodes:
         if needs_osl(tables, mode):
-            raise ValueError("only the general mode of a medium without unscattered light to render is built "
-                             f"from plain nodes (unscattered reach {tables.unscattered_reach:.3g} R)")
+            raise ValueError("only the general mode of a medium without refracted unscattered light to render is "
+                             f"built from plain nodes (host index {tables.host_index:.4g}, unscattered reach "
+                             f"{tables.unscattered_reach:.3g} R)")
         return _build_plain_general_material(tables, name)
     material, shader = _new_material(name, "cloth_yarn")
     tree = material.node_tree
@@ -192,7 +196,10 @@ def _build_plain_general_material(tables, name: str):
     tree = material.node_tree
     tangent = _object_to_world(tree, YARN_TANGENT, "VECTOR", (-2200, 200))
     cloth_normal = _object_to_world(tree, CLOTH_NORMAL, "NORMAL", (-2200, -700))
-    surface = general_mode_surface(tree, tables, tangent, cloth_normal, _packed_lobe_image(tables.lobe_path))
+    unscattered = (_packed_table_image(tables.unscattered_path, UNSCATTERED_IMAGE_PREFIX)
+                   if has_unscattered_light(tables) else None)
+    surface = general_mode_surface(tree, tables, tangent, cloth_normal,
+                                   _packed_table_image(tables.lobe_path, LOBE_IMAGE_PREFIX), unscattered)
     output = tree.nodes.new("ShaderNodeOutputMaterial")
     output.location = (1200, 0)
     tree.links.new(surface, output.inputs["Surface"])
@@ -233,12 +240,12 @@ def lobe_image_nodes(material) -> list:
     return [node for node in material.node_tree.nodes if node.type == "TEX_IMAGE" and node.label == LOBE_IMAGE_LABEL]
 
 
-def _packed_lobe_image(path: pathlib.Path):
-    """``lobes.exr`` as a packed float image: Cycles reads a packed image's pixels through its own
-    image manager (a file path would go to OpenImageIO under OSL).  Named by its content, so that
-    materials of the same tables share one image and a table folder written again in place is never
-    served from an older copy."""
-    name = LOBE_IMAGE_PREFIX + hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+def _packed_table_image(path: pathlib.Path, prefix: str):
+    """A table (``lobes.exr``, ``unscattered.exr``) as a packed float image: Cycles reads a packed
+    image's pixels through its own image manager (a file path would go to OpenImageIO under OSL).
+    Named ``prefix`` and a digest of its content, so that materials of the same tables share one
+    image and a table folder written again in place is never served from an older copy."""
+    name = prefix + hashlib.sha256(path.read_bytes()).hexdigest()[:16]
     image = bpy.data.images.get(name)
     if image is None or image.packed_file is None:
         image = bpy.data.images.load(str(path), check_existing=False)
@@ -274,8 +281,8 @@ _SUN_SOCKETS = ("SunDirection", "SunIrradiance")
 #: The shader inputs :func:`_read_tables` sets and the lobe weights the general mode feeds: a shader
 #: without one of them is older than this version.
 _TABLE_SOCKETS = ("Table", "IncidenceResolution", "ExitResolution", "UnscatteredTable", "UnscatteredSamples",
-                  "UnscatteredReach", "UnscatteredSpread", "IOR", "SpecularIOR", *LOBE_SHAPE_SOCKETS,
-                  *SPECULAR_SOCKETS, *LOBE_WEIGHT_SOCKETS.values())
+                  "UnscatteredReach", "UnscatteredSpread", "UnscatteredRoughness", "IOR", "SpecularIOR",
+                  *LOBE_SHAPE_SOCKETS, *SPECULAR_SOCKETS, *LOBE_WEIGHT_SOCKETS.values())
 
 
 def read_other_tables(material, tables) -> None:
@@ -305,7 +312,7 @@ def _read_tables(material, shader, tables) -> None:
     shader.inputs["Table"].default_value = str(tables.brdf_path)
     shader.inputs["IncidenceResolution"].default_value = tables.incidence_resolution
     shader.inputs["ExitResolution"].default_value = tables.exit_resolution
-    image = _packed_lobe_image(tables.lobe_path)
+    image = _packed_table_image(tables.lobe_path, LOBE_IMAGE_PREFIX)
     for texture in lobe_image_nodes(material):
         previous, texture.image = texture.image, image
         if previous is not None and previous.users == 0:
@@ -317,6 +324,7 @@ def _read_tables(material, shader, tables) -> None:
     shader.inputs["UnscatteredSamples"].default_value = tables.unscattered_samples
     shader.inputs["UnscatteredReach"].default_value = min(tables.unscattered_reach, UNSCATTERED_REACH_NEVER)
     shader.inputs["UnscatteredSpread"].default_value = _ballistic.SUN_MODE_SPREAD_RAD
+    shader.inputs["UnscatteredRoughness"].default_value = UNSCATTERED_LOBE_ALPHA
     for socket, key in LOBE_SHAPE_SOCKETS.items():
         shader.inputs[socket].default_value = tables.lobe_shape[key]
     shader.inputs["IOR"].default_value = tables.host_index

@@ -14,10 +14,11 @@ Beckmann surface of roughness √m: the reflection-only dielectric Beckmann lobe
 makes.  A Mix Shader scales it by the specular weight (its factor is at most 1; a larger weight is
 made of that many copies).
 
-What plain nodes cannot hold is the unscattered light through a nearly clear yarn (one lobe per
-refracted path, about a direction computed per shading point):
-:func:`clothlight.yarn_tables.renders_in_nodes` says whether a medium has any the general mode would
-render.
+The unscattered light of a yarn of fibres in air (host index 1) crosses it in a straight line, so its
+one path is a Refraction BSDF about the view, weighted by the attenuation table at the chord
+(``cl_unscattered_closures`` for η = 1).  What plain nodes cannot hold is the refracted and reflected
+paths of a denser host (one lobe per path, about a direction computed per shading point):
+:func:`clothlight.yarn_tables.renders_in_nodes` says which media the plain nodes serve.
 """
 
 from __future__ import annotations
@@ -25,6 +26,12 @@ from __future__ import annotations
 import math
 
 from .node_builder import NodeBuilder
+
+#: GGX α of the general mode's lobe for each unscattered path (cloth_yarn.osl's UnscatteredRoughness).
+UNSCATTERED_LOBE_ALPHA = 0.05
+#: The index that places a GGX refraction lobe about the view straight through a surface seen head-on
+#: (``cl_unscattered_closures``: η_l = max(1.3, −1.5 / cos(V, L)) at L = −V).
+STRAIGHT_THROUGH_INDEX = 1.5
 
 #: Roughness inputs of the Hair BSDF nodes for the bake's ``lobe_shape``, per hair component.
 HAIR_ROUGHNESS = {
@@ -48,11 +55,13 @@ def lobes_present(lobe_image) -> tuple[bool, ...]:
     return tuple(bool((rgb[:, k] > 0.0).any()) for k in range(lobe_count))
 
 
-def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
+def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image, unscattered_image=None):
     """Add the general mode's nodes to ``tree``; returns the socket of its surface closure.
 
     ``tangent`` and ``cloth_normal`` are world-space vector sockets (the yarn axis and the cloth's
-    macroscopic normal); ``lobe_image`` is ``lobes.exr`` as a Blender image.  Like the OSL shader,
+    macroscopic normal); ``lobe_image`` is ``lobes.exr`` as a Blender image; ``unscattered_image``,
+    ``unscattered.exr`` as one where the yarn's unscattered light is straight and rendered
+    (:func:`clothlight.yarn_tables.unscattered_light_is_straight`), else None.  Like the OSL shader,
     a yarn's far face lets every ray but the camera's pass (the tables hold the light through the
     yarn), and other yarns' front faces block shadow rays.
 
@@ -97,6 +106,8 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image):
                                         "Normal": toward_view})
         closures.append(closure.outputs[0])
     closures += _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal)
+    if unscattered_image is not None:
+        closures.append(_straight_unscattered_light(nodes, tables, view, toward_view, unscattered_image))
     surface = nodes.add_shaders(closures, x=560) if closures else None
 
     # A far face (backfacing) passes every ray but the camera's: backfacing > is-camera-ray.
@@ -141,6 +152,39 @@ def _held_square_coordinates(nodes, view, half_texel: float):
     return nodes.node("ShaderNodeCombineXYZ", (-300, 1150),
                       (held(omega_x, omega_y, 1.0, (-800, 1300)), held(omega_y, omega_x, -1.0, (-800, 1000)), 0.0)
                       ).outputs[0]
+
+
+def _straight_unscattered_light(nodes, tables, view, toward_view, image):
+    """The unscattered light through a yarn of fibres in air: its one path runs straight along the
+    view's chord, ℓ / R = 2 ω_z / (1 − ω_x²) (``precompute.optics.ballistic.unscattered_paths`` at
+    η = 1: no Fresnel loss, no internal reflection), weighted by the attenuation table there and
+    left out below the shader's floor in every channel (``cl_unscattered_closures``).  A GGX
+    Refraction BSDF of α = :data:`UNSCATTERED_LOBE_ALPHA` about the view sends it on toward the light
+    behind, as the OSL shader's lobe does; ω_z below the horizon (a silhouette) counts as 0."""
+    from clothlight.yarn_tables import GENERAL_MODE_MIN_WEIGHT
+    from precompute.optics.ballistic import MAX_LENGTH_OVER_RADIUS
+
+    omega_x, _, omega_z = view
+    across = nodes.math("MAXIMUM", nodes.math("MULTIPLY_ADD", omega_x, nodes.math("MULTIPLY", omega_x, -1.0,
+                                                                               location=(-500, -1700)),
+                                              1.0, location=(-350, -1700)), 1e-6, location=(-200, -1700))
+    half_chord = nodes.math("DIVIDE", nodes.math("MAXIMUM", omega_z, 0.0, location=(-350, -1850)), across,
+                       location=(-50, -1750))
+    # The table's pixel centres span ℓ / R in [0, MAX_LENGTH_OVER_RADIUS] (cl_unscattered_attenuation).
+    samples = tables.unscattered_samples
+    fraction = _clamped(nodes.math("MULTIPLY", half_chord, 2.0 / MAX_LENGTH_OVER_RADIUS, location=(100, -1750)))
+    u = nodes.math("MULTIPLY_ADD", fraction, (samples - 1) / samples, 0.5 / samples, location=(250, -1750))
+    where = nodes.node("ShaderNodeCombineXYZ", (400, -1750), (u, 0.5, 0.0)).outputs[0]
+    weight = nodes.node("ShaderNodeTexImage", (550, -1750), {"Vector": where}, image=image,
+                        interpolation="Linear", extension="EXTEND", label="unscattered attenuation")
+    channels = nodes.node("ShaderNodeSeparateColor", (800, -1900), {"Color": weight.outputs["Color"]}).outputs
+    strongest = nodes.math("MAXIMUM", channels[0], nodes.math("MAXIMUM", channels[1], channels[2],
+                                                              location=(950, -1950)), location=(1100, -1900))
+    kept = nodes.math("GREATER_THAN", strongest, GENERAL_MODE_MIN_WEIGHT, location=(1250, -1900))
+    lobe = nodes.node("ShaderNodeBsdfRefraction", (800, -1700),
+                      {"Color": weight.outputs["Color"], "Roughness": math.sqrt(UNSCATTERED_LOBE_ALPHA),
+                       "IOR": STRAIGHT_THROUGH_INDEX, "Normal": toward_view}, distribution="GGX")
+    return nodes.node("ShaderNodeMixShader", (1400, -1750), (kept, None, lobe.outputs[0])).outputs[0]
 
 
 def _clamped(socket):

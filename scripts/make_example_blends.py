@@ -254,15 +254,16 @@ def yarn_albedo_colour(folder: pathlib.Path) -> tuple[float, float, float]:
 
 
 def packed_yarn_material(tables, name: str):
-    """The general-mode yarn material of ``tables`` (plain nodes, its lobe table packed in the file), with
-    nothing in it that names this machine: the packed image's path is ``//lobes.exr`` and the material
-    does not record its bake folder (a cache path here, meaningless wherever the blend goes)."""
+    """The general-mode yarn material of ``tables`` (plain nodes, its tables packed in the file), with
+    nothing in it that names this machine: a packed image's path is its file's name (``//lobes.exr``,
+    ``//unscattered.exr``) and the material does not record its bake folder (a cache path here,
+    meaningless wherever the blend goes)."""
     from clothlight.blender.materials import TABLES_PROPERTY
 
     material = build_yarn_material(tables, name, mode=GENERAL_MODE, plain_nodes=True)  # SVM; refuses OSL
     for node in material.node_tree.nodes:
         if node.type == "TEX_IMAGE" and node.image is not None and node.image.packed_file is not None:
-            node.image.filepath_raw = "//lobes.exr"
+            node.image.filepath_raw = "//" + pathlib.PurePath(node.image.filepath_raw).name
     if TABLES_PROPERTY in material:
         del material[TABLES_PROPERTY]
     return material

@@ -109,14 +109,24 @@ def test_the_face_is_mostly_the_blue_material_and_the_back_the_undyed_one(blend)
     assert face > 0.55 and back < 0.45 and face - back > 0.15, (face, back)
 
 
+def _lobe_image(material):
+    """The material's one packed lobe table."""
+    from clothlight.blender.materials import LOBE_IMAGE_PREFIX
+
+    (lobes,) = {node.image for node in material.node_tree.nodes
+                if node.type == "TEX_IMAGE" and node.image.name.startswith(LOBE_IMAGE_PREFIX)}
+    return lobes
+
+
 def _packed_lobes(material):
     """The material's one lobe table, packed, and the mean weights of its diffuse lobe (tile 0)."""
     assert material.get("clothlight_mode") == "GENERAL"
     assert "clothlight_tables" not in material  # the bake folder was a path in this machine's cache
     images = {node.image for node in material.node_tree.nodes if node.type == "TEX_IMAGE"}
-    assert len(images) == 1
-    lobes = images.pop()
-    assert lobes.packed_file is not None and lobes.filepath_raw == "//lobes.exr"
+    assert all(image.packed_file is not None for image in images)
+    lobes = _lobe_image(material)
+    assert lobes.filepath_raw == "//lobes.exr"
+    assert {image.filepath_raw for image in images - {lobes}} <= {"//unscattered.exr"}
     width, height = lobes.size
     pixels = np.array(lobes.pixels[:], dtype=np.float64).reshape(height, width, 4)
     return lobes, pixels[:, : width // 5, :3].mean(axis=(0, 1))
@@ -132,8 +142,8 @@ def test_the_clothlight_materials_read_blue_cotton_and_white_cotton_packed(blend
     weft_lobes, weft_diffuse = _packed_lobes(weft)
     assert weft_lobes != lobes and weft_lobes.packed_file.data != lobes.packed_file.data
     # undyed: every channel far above the indigo's red and green, the three nearly alike
-    assert (weft_diffuse > 0).all() and weft_diffuse[0] > 20 * diffuse[0] and weft_diffuse[1] > 2 * diffuse[1]
-    assert weft_diffuse[0] / weft_diffuse[2] > 10 * diffuse[0] / diffuse[2], (weft_diffuse, diffuse)
+    assert (weft_diffuse > 0).all() and weft_diffuse[0] > 10 * diffuse[0] and weft_diffuse[1] > 2 * diffuse[1]
+    assert weft_diffuse[0] / weft_diffuse[2] > 2 * diffuse[0] / diffuse[2], (weft_diffuse, diffuse)
     assert weft_diffuse.max() < 1.25 * weft_diffuse.min(), weft_diffuse  # grey-white, no dye
 
     fit = load_preset_config(PRESET)[0]["fit"]
@@ -182,7 +192,7 @@ def test_principled_copy_has_each_yarns_colour(blend):
         colours.append(np.array(node.inputs["Base Color"].default_value[:3]))
     blue, undyed = colours
     assert blue[2] > blue[1] > blue[0] >= 0
-    assert (undyed > blue).all() and undyed[0] > 20 * blue[0] and undyed.max() < 1.25 * undyed.min()  # grey-white
+    assert (undyed > blue).all() and undyed[0] > 10 * blue[0] and undyed.max() < 1.25 * undyed.min()  # grey-white
 
 
 def test_the_fibres_are_the_warps_blue(blend):
@@ -226,7 +236,7 @@ def test_the_packed_lobe_table_is_blue_cottons_bake(blend):
     for preset, material in ((PRESET, YARN_MATERIAL), (WEFT_PRESET, WEFT_MATERIAL)):
         baked = BakeJob(preset_request(preset), cache_dir=cache.default_cache_dir()).wait()
         table = read_table(baked.folder / "lobes.exr").pixels
-        lobes = next(node.image for node in blend.materials[material].node_tree.nodes if node.type == "TEX_IMAGE")
+        lobes = _lobe_image(blend.materials[material])
         width, height = lobes.size
         pixels = np.array(lobes.pixels[:], dtype=np.float32).reshape(height, width, 4)[::-1, :, :3]  # bottom first
         assert pixels.shape == table.shape

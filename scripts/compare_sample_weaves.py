@@ -11,7 +11,7 @@ medium's own cloth BRDF (without the sheen and the fuzz) in that channel, over i
 light and view, at :data:`SHAPE_VIEWS`, the measured fabric's beside it.
 
     python scripts/compare_sample_weaves.py --measured ../shared/data/real_fabrics/neural/white-fabric.csv \\
-        --preset precompute/presets/experimental/fibre_white_cotton.toml
+        --preset white_cotton
 """
 
 from __future__ import annotations

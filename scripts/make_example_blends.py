@@ -20,7 +20,7 @@
   the cloth), sharing the cloth's collection.  8 × 8 yarns, so that the file stays small.
 * ``closeup_denim_twill.blend`` — the same close-up as denim: ``sheeting_weave("blue_cotton",
   interlacing="twill_3_1")``, a warp-faced 3/1 twill of an indigo warp, the fitted ``blue_cotton``
-  yarn (MERL's blue-fabric), and an undyed weft, ``white_cotton``: plies, twist, irregularity and
+  yarn (MERL's blue-fabric), and an ecru weft, ``white_cotton`` (MERL's white-fabric): plies, twist, irregularity and
   fibres, each face in its own yarn's material (slot 0 the warp's, 1 the weft's; both lobe tables
   packed; the fibres all in the warp's hair BSDF), beside Principled+sheen of each yarn's own albedo;
   the same two scenes, a stop brighter.
@@ -232,7 +232,7 @@ class CloseupExample:
 RED_COTTON_CLOSEUP = CloseupExample(CLOSEUP_PRESET, "closeup_red_cotton", "ClothLight Red Cotton",
                                     principled_colour=(0.5, 0.02, 0.03))  # benchmarks/render_cost.py's reference
 #: Denim: a warp-faced 3/1 twill (Z, the diagonal rising to the right) of an indigo warp, the blue_cotton preset's
-#: yarn fitted to MERL's blue-fabric, and an undyed weft, white_cotton (no dye; fitted to MERL's white-fabric the
+#: yarn fitted to MERL's blue-fabric, and an ecru weft, white_cotton (fitted to MERL's warm white-fabric the
 #: same way): blue face, pale back; its Principled copy gets each yarn's own albedo.  A dark face: both scenes a
 #: stop up.  (undyed_cotton, the paper's medium without dye, is nearly clear: its unscattered light needs the OSL
 #: shader, which reads its tables by path, not packed, and not under SVM.)
@@ -390,7 +390,7 @@ def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
 
 def closeup_denim_twill(out_dir: pathlib.Path) -> pathlib.Path:
     """The denim close-up: a warp-faced 3/1 twill of an indigo warp (the fitted blue_cotton yarn) and an
-    undyed weft (white_cotton), beside Principled+sheen."""
+    ecru weft (white_cotton), beside Principled+sheen."""
     return closeup_example(out_dir, DENIM_TWILL_CLOSEUP)
 
 

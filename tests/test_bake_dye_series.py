@@ -82,7 +82,7 @@ def test_a_dye_outside_the_range_or_an_undyed_medium_is_refused(cache):
     with pytest.raises(ParameterError, match="dye_series"):
         bake("red_cotton", at_dye(1.0), paths_per_cell=PATHS, cache_dir=cache, dye_series=(3.0, 1.0))
     with pytest.raises(ParameterError, match="dye_series"):
-        bake("white_cotton", SMALL, paths_per_cell=PATHS, cache_dir=cache, dye_series=RANGE)
+        bake("undyed_cotton", SMALL, paths_per_cell=PATHS, cache_dir=cache, dye_series=RANGE)
 
 
 def test_cli_reads_from_the_series(cache, series_bake):

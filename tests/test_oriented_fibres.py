@@ -21,7 +21,7 @@ from precompute.transport._paths import CYLINDER, EXITED, path_arrays
 from precompute.transport._rng import seed_stream
 from precompute.transport.media import TransportMedium
 
-FIBRE_WHITE = PRESET_DIR / "experimental" / "fibre_white_cotton.toml"
+FIBRE_WHITE = PRESET_DIR / "white_cotton.toml"
 INDEX = 1.557
 
 

@@ -42,8 +42,8 @@ from .goniometry import SIDES
 #: (plain, 0.1 mm yarns at 20 threads/cm).  Measured with the path-traced sample of ``red_cotton``
 #: at normal incidence, where its red gains G = 1.143 from light between yarns over the same
 #: material without it: q = (G − 1) / (G a), a = 0.597 (``python benchmarks/bench_cloth_energy.py``
-#: prints the q each run implies; ``white_cotton``, a = 0.49, is the check).  Used for every density:
-#: how it changes with the weave is not measured.
+#: prints the q each run implies; the round-yarn white cotton of docs/garment.md, a = 0.49, is the
+#: check).  Used for every density: how it changes with the weave is not measured.
 LOST_TO_YARNS = 0.21
 #: Points around a yarn's circumference in :func:`cylinder_albedo`'s integral.
 ROUND_STEPS = 96

@@ -165,11 +165,11 @@ def _straight_unscattered_light(nodes, tables, view, toward_view, image):
     from precompute.optics.ballistic import MAX_LENGTH_OVER_RADIUS
 
     omega_x, _, omega_z = view
-    across = nodes.math("MAXIMUM", nodes.math("MULTIPLY_ADD", omega_x, nodes.math("MULTIPLY", omega_x, -1.0,
-                                                                               location=(-500, -1700)),
-                                              1.0, location=(-350, -1700)), 1e-6, location=(-200, -1700))
-    half_chord = nodes.math("DIVIDE", nodes.math("MAXIMUM", omega_z, 0.0, location=(-350, -1850)), across,
-                       location=(-50, -1750))
+    minus_omega_x = nodes.math("MULTIPLY", omega_x, -1.0, location=(-500, -1700))
+    across = nodes.math("MULTIPLY_ADD", omega_x, minus_omega_x, 1.0, location=(-350, -1700))  # 1 − ω_x²
+    across = nodes.math("MAXIMUM", across, 1e-6, location=(-200, -1700))
+    toward_normal = nodes.math("MAXIMUM", omega_z, 0.0, location=(-350, -1850))
+    half_chord = nodes.math("DIVIDE", toward_normal, across, location=(-50, -1750))
     # The table's pixel centres span ℓ / R in [0, MAX_LENGTH_OVER_RADIUS] (cl_unscattered_attenuation).
     samples = tables.unscattered_samples
     fraction = _clamped(nodes.math("MULTIPLY", half_chord, 2.0 / MAX_LENGTH_OVER_RADIUS, location=(100, -1750)))

@@ -1,6 +1,6 @@
 """Render cost of the yarn material vs a Principled BSDF with sheen on the same woven mesh
-(same resolution, samples, lights; CPU), on the default preset and on the paper's literal medium.
-The default's general mode is plain Cycles nodes (SVM); its OSL general mode is timed beside it.
+(same resolution, samples, lights; CPU), on the default preset, on a yarn of fibres in air and on the
+paper's literal medium.  A general mode in plain Cycles nodes (SVM) has its OSL general mode timed beside it.
 Target (issues 7, 18): at most 2x."""
 
 import pathlib
@@ -22,9 +22,10 @@ from render_cost import light_and_camera, print_render_cost
 
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-material-"))
 grids = ["transport.angular_resolution=8", "transport.incidence_resolution=9"]
-# The default (a scattering medium: almost no light crosses a yarn unscattered) and the paper's literal
-# medium (a tinted glass rod: the unscattered light is most of its red, and its closures cost).
-PRESETS = (DEFAULT_PRESET, "paper_2008")
+# The default (a scattering medium: almost no light crosses a yarn unscattered), a yarn of fibres in air
+# (its unscattered light, straight through the yarn's thin edges, one more closure in plain nodes) and the
+# paper's literal medium (a tinted glass rod: the unscattered light is most of its red, and its closures cost).
+PRESETS = (DEFAULT_PRESET, "blue_cotton", "paper_2008")
 tables = {name: yarn_tables_from_bake(bake(name, grids, paths_per_cell=500, cache_dir=out / "cache").folder)
           for name in PRESETS}
 

@@ -198,9 +198,11 @@ def test_a_summary_that_drops_the_record_of_tables_that_have_one_is_refused(tmp_
         check_yarn_table_folder(path)
 
 
-@pytest.mark.parametrize("path", sorted((PRESET_DIR / "experimental").glob("*.toml")), ids=lambda p: p.stem)
-def test_every_experimental_preset_loads_and_its_fit_is_what_its_bake_records(path):
-    # presets loaded by their path: the medium, the dye mixture and the [fit] terms the bake records
+@pytest.mark.parametrize("path", sorted([*PRESET_DIR.glob("*.toml"), *(PRESET_DIR / "experimental").glob("*.toml")]),
+                         ids=lambda p: p.stem)
+def test_every_preset_loads_and_its_fit_is_what_its_bake_records(path):
+    # presets loaded by their path, shipped and experimental: the medium, the dye mixture and the [fit]
+    # terms the bake records
     config, base_dir = load_preset_config(path)
     record = bake_module.specular_settings(config, medium_from_dict(config, base_dir))
     fit = config.get(FIT_TABLE, {})

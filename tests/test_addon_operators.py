@@ -701,6 +701,10 @@ def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come
         _draw_panels(context)
     scene.clothlight.medium.base = "undyed_cotton"
     assert "This medium is undyed" in _draw_panels(context)
+    from precompute.optics.medium import preset_names
+    for name in preset_names():  # every shipped medium, the yarns of fibres in air among them
+        scene.clothlight.medium.base = name
+        _draw_panels(context)  # raises where a panel cannot draw this medium
     scene.clothlight.medium.base = "red_cotton"
     tiny(scene.clothlight.medium)
     weave = scene.clothlight.weave

@@ -187,6 +187,13 @@ def medium_keys(config: dict) -> dict[str, str]:
     return keys
 
 
+def takes_dye_series(config: dict) -> bool:
+    """Whether the preset ``config`` can bake a dye series (the panel's Dye Range): a dyed medium whose
+    dye is not in fibres, since a fibre's dye changes how it scatters (``precompute.bake.check_dye_series``
+    refuses the rest)."""
+    return "dye_weight_percent" in medium_keys(config) and "fibres" not in config
+
+
 def config_value(config: dict, key: str):
     """The value of the dotted ``key`` in ``config`` (a list's items by index: ``particles.0.volume_fraction``);
     KeyError or IndexError when it has none."""

@@ -701,10 +701,16 @@ def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come
         _draw_panels(context)
     scene.clothlight.medium.base = "undyed_cotton"
     assert "This medium is undyed" in _draw_panels(context)
+    from clothlight.medium_settings import preset_config
     from precompute.optics.medium import preset_names
+    scene.clothlight.medium.use_dye_series = True
     for name in preset_names():  # every shipped medium, the yarns of fibres in air among them
         scene.clothlight.medium.base = name
-        _draw_panels(context)  # raises where a panel cannot draw this medium
+        labels = _draw_panels(context)  # raises where a panel cannot draw this medium
+        in_fibres = "Dye Range: not for dye in fibres (a dye change re-simulates)" in labels
+        assert in_fibres == ("fibres" in scene.clothlight.medium.base_config() and "dye" in preset_config(name))
+        assert (scene.clothlight.medium.request().dye_series is None) == (in_fibres or "dye" not in preset_config(name))
+    scene.clothlight.medium.use_dye_series = False
     scene.clothlight.medium.base = "red_cotton"
     tiny(scene.clothlight.medium)
     weave = scene.clothlight.weave

@@ -9,6 +9,7 @@ from clothlight.medium_settings import (
     preset_config,
     request_overrides,
     shown_key,
+    takes_dye_series,
     typed_number,
 )
 
@@ -43,3 +44,18 @@ def test_the_exposed_keys_follow_what_the_preset_has():
     assert "dye_weight_percent" not in medium_keys(preset_config("delustred_polyester"))
     assert shown_key("particles.1.volume_fraction", preset_config("red_cotton")) == "voids.volume_fraction"
     assert shown_key("dye.weight_percent", preset_config("red_cotton")) == "dye.weight_percent"
+
+
+@pytest.mark.parametrize("name, takes", [("red_cotton", True), ("paper_2008", True), ("undyed_cotton", False),
+                                         ("blue_cotton", False)])
+def test_the_dye_range_is_offered_where_the_bake_can_reweight_the_dye(name, takes):
+    # the bake's dye series reweights absorption along paths it traced once: a dye in fibres changes
+    # their index, hence their scattering, and the bake refuses it (precompute.bake.check_dye_series)
+    from precompute.bake import bake_configuration, check_dye_series
+    from precompute.errors import ParameterError
+
+    config = preset_config(name)
+    assert takes_dye_series(config) == takes
+    if not takes:
+        with pytest.raises(ParameterError, match="dye_series"):
+            check_dye_series(bake_configuration(name), (0.5, 5.0))

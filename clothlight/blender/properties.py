@@ -47,6 +47,7 @@ from ..medium_settings import (
     preset_request,
     request_overrides,
     shown_key,
+    takes_dye_series,
     typed_number,
 )
 from . import running_jobs
@@ -534,7 +535,7 @@ class ClothLightMediumSettings(bpy.types.PropertyGroup):
         overrides = request_overrides(config, values, self.extra_overrides())
         fixed = self.budget == "PATHS"
         series = None
-        if self.use_dye_series and "dye_weight_percent" in medium_keys(config):
+        if self.use_dye_series and takes_dye_series(config):
             series = (typed_number(self.dye_series_low), typed_number(self.dye_series_high))
         return BakeRequest(
             dye_series=series,

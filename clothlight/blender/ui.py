@@ -15,7 +15,7 @@ from .closeup_operator import CLOTHLIGHT_OT_add_flyaways
 from ..colour_match_job import dye_label, srgb_hex
 from ..fit_job import fit_unavailable_reason
 from ..jobs import bake_unavailable_reason
-from ..medium_settings import CUSTOM_BASE
+from ..medium_settings import CUSTOM_BASE, takes_dye_series
 from ..prebaked import prebaked_tables
 from ..weave import WeaveParameterError
 from .garment.operator import BAKE_COMMAND
@@ -198,6 +198,8 @@ class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
             row.operator("clothlight.clear_fitted_values", text="", icon="X")
         if "dye_weight_percent" not in keys:
             layout.label(text="This medium is undyed", icon="INFO")
+        elif not takes_dye_series(medium.base_config()):
+            layout.label(text="Dye Range: not for dye in fibres (a dye change re-simulates)", icon="INFO")
         else:
             row = layout.row(heading="Dye Range")
             row.prop(medium, "use_dye_series", text="")

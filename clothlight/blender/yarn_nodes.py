@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 
+from ..yarn_tables import GENERAL_MODE_MIN_WEIGHT
 from .node_builder import NodeBuilder
 
 #: GGX α of the general mode's lobe for each unscattered path (cloth_yarn.osl's UnscatteredRoughness).
@@ -161,7 +162,6 @@ def _straight_unscattered_light(nodes, tables, view, toward_view, image):
     left out below the shader's floor in every channel (``cl_unscattered_closures``).  A GGX
     Refraction BSDF of α = :data:`UNSCATTERED_LOBE_ALPHA` about the view sends it on toward the light
     behind, as the OSL shader's lobe does; ω_z below the horizon (a silhouette) counts as 0."""
-    from clothlight.yarn_tables import GENERAL_MODE_MIN_WEIGHT
     from precompute.optics.ballistic import MAX_LENGTH_OVER_RADIUS
 
     omega_x, _, omega_z = view

@@ -189,9 +189,11 @@ def medium_keys(config: dict) -> dict[str, str]:
 
 def takes_dye_series(config: dict) -> bool:
     """Whether the preset ``config`` can bake a dye series (the panel's Dye Range): a dyed medium whose
-    dye is not in fibres, since a fibre's dye changes how it scatters (``precompute.bake.check_dye_series``
-    refuses the rest)."""
-    return "dye_weight_percent" in medium_keys(config) and "fibres" not in config
+    dye only absorbs (``MediumParameters.dye_only_absorbs``): not in randomly oriented fibres, whose
+    scattering it changes (``precompute.bake.check_dye_series`` refuses those)."""
+    fibres = config.get("fibres")
+    return "dye_weight_percent" in medium_keys(config) and (
+        fibres is None or fibres.get("orientation", "random") != "random")
 
 
 def config_value(config: dict, key: str):

@@ -111,6 +111,8 @@ from precompute.transport.absorption import (
     absorption_steps,
     albedo_relative_stderr,
     interpolate_absorption,
+    reweighted_absorption,
+    reweighted_scattering,
     step_transport,
 )
 from precompute.transport.brdf import INCIDENCE_RESOLUTIONS, YarnBRDF, yarn_brdf, yarn_brdf_to_tolerance
@@ -148,7 +150,7 @@ TABLE_FILES = YARN_TABLE_FILES
 SPECTRAL_FILE = "spectral.npz"
 #: A dye series' file and format (:func:`bake` with ``dye_series``): eq. (5)'s ρ at the absorption steps.
 SERIES_FILE = "series.npz"
-SERIES_FORMAT = "clothlight-dye-series/1"
+SERIES_FORMAT = "clothlight-dye-series/2"
 #: The cache namespace of dye series: a folder per medium without its dye amount, an entry per range.
 SERIES_NAMESPACE = "dye_series"
 UNITS = {
@@ -542,9 +544,10 @@ def check_dye_series(configuration: BakeConfiguration, dye_series) -> tuple[floa
     dye = configuration.medium.dye
     if dye is None:
         raise ParameterError("dye_series", dye_series, "a dyed medium (this preset has no [dye])")
-    if configuration.medium.fibres is not None:  # their dye changes their index, hence their scattering
-        raise ParameterError("dye_series", dye_series, "a medium without [fibres]: a fibre's dye changes how it "
-                                                       "scatters, so a dye change needs a new simulation")
+    if not configuration.medium.dye_only_absorbs:
+        raise ParameterError("dye_series", dye_series, "a medium whose dye only absorbs: in randomly oriented "
+                                                       "fibres it changes how they scatter, so a dye change needs "
+                                                       "a new simulation (fibres along the yarn axis take a series)")
     low, high = bounds.check_dye_range(dye_series)
     if not low <= dye.weight_percent <= high:
         raise ParameterError("dye.weight_percent", dye.weight_percent, f"within the dye series' {low:g}–{high:g} %")
@@ -571,7 +574,7 @@ def _simulate_series(configuration: BakeConfiguration, inputs: dict, key: str, d
         start = time.perf_counter()
         reference = medium_optics(configuration.medium.with_dye(dye_range[0]))
         largest = medium_optics(configuration.medium.with_dye(dye_range[1]))
-        steps = absorption_steps(reference.mu_a, largest.mu_a)
+        steps = absorption_steps(reweighted_absorption(reference), reweighted_absorption(largest))
         geometry = YarnGeometry(configuration.medium.yarn.radius_mm, reference.boundary_index)
         grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
         optics_seconds = time.perf_counter() - start
@@ -609,6 +612,8 @@ def _simulate_series(configuration: BakeConfiguration, inputs: dict, key: str, d
             paths_per_cell=transport.paths_per_cell,
             mu_s=reference.mu_s,
             mu_a=reference.mu_a,
+            reweighted_mu_a=reweighted_absorption(reference),
+            reweighted_scattering=reweighted_scattering(reference),
             g=reference.g,
         )
 
@@ -625,12 +630,12 @@ def _reweighted_spectral(configuration: BakeConfiguration, inputs: dict, key: st
         arrays, series = load_spectral(series_folder / SERIES_FILE)
         optics = medium_optics(configuration.medium)
         wavelengths = arrays["wavelengths_nm"]
-        if not np.allclose(optics.mu_s, arrays["mu_s"], rtol=1e-12, atol=0.0):
-            raise ParameterError("dye_series", series["key"], "a series of this medium's scattering (μs differs)")
+        if not np.allclose(reweighted_scattering(optics), arrays["reweighted_scattering"], rtol=1e-12, atol=0.0):
+            raise ParameterError("dye_series", series["key"], "a series of this medium's scattering (it differs)")
 
         def at_dye(values):
-            return interpolate_absorption(values, arrays["mu_a"], arrays["absorption_steps"], optics.mu_a,
-                                          wavelengths)
+            return interpolate_absorption(values, arrays["reweighted_mu_a"], arrays["absorption_steps"],
+                                          reweighted_absorption(optics), wavelengths)
 
         exit_fraction = at_dye(arrays["exit_fraction_steps"])
         albedo_rel_stderr = albedo_relative_stderr(exit_fraction, at_dye(arrays["exit_second_moment_steps"]),

@@ -704,11 +704,13 @@ def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come
     from clothlight.medium_settings import preset_config
     from precompute.optics.medium import preset_names
     scene.clothlight.medium.use_dye_series = True
-    for name in preset_names():  # every shipped medium, the yarns of fibres in air among them
+    for name in preset_names():  # every shipped medium, the yarns of fibres in air among them (pink_felt's random)
         scene.clothlight.medium.base = name
         labels = _draw_panels(context)  # raises where a panel cannot draw this medium
-        in_fibres = "Dye Range: not for dye in fibres (a dye change re-simulates)" in labels
-        assert in_fibres == ("fibres" in scene.clothlight.medium.base_config() and "dye" in preset_config(name))
+        in_fibres = "Dye Range: not for dye in random fibres (a dye change re-simulates)" in labels
+        fibres = scene.clothlight.medium.base_config().get("fibres")
+        random = fibres is not None and fibres.get("orientation", "random") == "random"
+        assert in_fibres == (random and "dye" in preset_config(name))
         assert (scene.clothlight.medium.request().dye_series is None) == (in_fibres or "dye" not in preset_config(name))
     scene.clothlight.medium.use_dye_series = False
     scene.clothlight.medium.base = "red_cotton"

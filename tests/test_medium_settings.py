@@ -47,10 +47,11 @@ def test_the_exposed_keys_follow_what_the_preset_has():
 
 
 @pytest.mark.parametrize("name, takes", [("red_cotton", True), ("paper_2008", True), ("undyed_cotton", False),
-                                         ("blue_cotton", False)])
+                                         ("blue_cotton", True), ("pink_felt", False)])
 def test_the_dye_range_is_offered_where_the_bake_can_reweight_the_dye(name, takes):
-    # the bake's dye series reweights absorption along paths it traced once: a dye in fibres changes
-    # their index, hence their scattering, and the bake refuses it (precompute.bake.check_dye_series)
+    # the bake's dye series reweights absorption along paths it traced once: a dye in randomly oriented
+    # fibres changes their index, hence their scattering, and the bake refuses it
+    # (precompute.bake.check_dye_series); in fibres along the yarn axis it only absorbs inside them
     from precompute.bake import bake_configuration, check_dye_series
     from precompute.errors import ParameterError
 

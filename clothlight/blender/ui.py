@@ -199,7 +199,7 @@ class CLOTHLIGHT_PT_medium(_SidebarPanel, bpy.types.Panel):
         if "dye_weight_percent" not in keys:
             layout.label(text="This medium is undyed", icon="INFO")
         elif not takes_dye_series(medium.base_config()):
-            layout.label(text="Dye Range: not for dye in fibres (a dye change re-simulates)", icon="INFO")
+            layout.label(text="Dye Range: not for dye in random fibres (a dye change re-simulates)", icon="INFO")
         else:
             row = layout.row(heading="Dye Range")
             row.prop(medium, "use_dye_series", text="")

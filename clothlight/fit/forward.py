@@ -227,19 +227,21 @@ def _yarn_and_grids(config: dict, medium, optics, seed: int, paths: int):
 def absorption_series(config: dict, medium, reference, largest_mu_a: np.ndarray, *, relative_error: float,
                       seed: int, threads: int | None = None):
     """One transport of ``medium`` at the ``reference`` optics (the least absorbing), its exits tallied at
-    the absorption steps up to ``largest_mu_a`` (L,), 1/mm (:mod:`precompute.transport.absorption`),
-    and eq. (5) at every step on the fit's incidence grid: (reference μa, steps (K, L), ρ (N_i², N_o²,
-    L, K) float32, yarn geometry), from which any absorption in between is read in about a second."""
+    the absorption steps up to ``largest_mu_a`` (L,), 1/mm (:mod:`precompute.transport.absorption`; the
+    absorption it reweights, :func:`~precompute.transport.absorption.reweighted_absorption`), and eq. (5)
+    at every step on the fit's incidence grid: (reference μa, steps (K, L), ρ (N_i², N_o², L, K) float32,
+    yarn geometry), from which any absorption in between is read in about a second."""
     from precompute.transport import simulate_yarn, yarn_brdf
-    from precompute.transport.absorption import absorption_steps, step_transport
+    from precompute.transport.absorption import absorption_steps, reweighted_absorption, step_transport
 
     geometry, grids, settings = _yarn_and_grids(config, medium, reference, seed, paths_per_cell(relative_error))
-    steps = absorption_steps(reference.mu_a, largest_mu_a)
+    reference_mu_a = reweighted_absorption(reference)
+    steps = absorption_steps(reference_mu_a, largest_mu_a)
     transport = simulate_yarn(reference, geometry, grids, paths_per_cell=settings["paths_per_cell"],
                               seed=settings["seed"], threads=threads, extra_absorption_per_mm=steps)
     rho_steps = np.stack([yarn_brdf(step_transport(transport, k), FIT_INCIDENCE_RESOLUTION).rho
                           for k in range(len(steps))], axis=-1).astype(np.float32)
-    return reference.mu_a, steps, rho_steps, geometry
+    return reference_mu_a, steps, rho_steps, geometry
 
 
 def _candidate_tables(config: dict, optics, geometry, rho: np.ndarray):
@@ -284,14 +286,16 @@ class DyeSeriesForwardModel(ForwardModel):
         identity = canonical_json(undyed)
         if self._series is not None and self._series[0] == identity:
             return self._series[1]
+        from precompute.transport.absorption import reweighted_absorption
+
         low, high = (medium_optics(medium.with_dye(w)) for w in self.dye_range)
-        series = absorption_series(config, medium, low, high.mu_a, relative_error=self.relative_error,
+        series = absorption_series(config, medium, low, reweighted_absorption(high), relative_error=self.relative_error,
                                    seed=self.seed, threads=self.threads)
         self._series = (identity, series)
         return series
 
     def tables(self, config: dict, *, relative_error: float, seed: int):
-        from precompute.transport.absorption import interpolate_absorption
+        from precompute.transport.absorption import interpolate_absorption, reweighted_absorption
 
         if "dye" not in config:
             raise ParameterError("dye", None, "a dyed medium (a dye series reads dye amounts)")
@@ -301,7 +305,8 @@ class DyeSeriesForwardModel(ForwardModel):
                                  f"within the series' {self.dye_range[0]:g}–{self.dye_range[1]:g} %")
         reference_mu_a, steps, rho_steps, geometry = self._series_for(config, medium)
         optics = medium_optics(medium)
-        rho = interpolate_absorption(rho_steps, reference_mu_a, steps, optics.mu_a, optics.wavelengths_nm)
+        rho = interpolate_absorption(rho_steps, reference_mu_a, steps, reweighted_absorption(optics),
+                                     optics.wavelengths_nm)
         return _candidate_tables(config, optics, geometry, rho)
 
 
@@ -315,9 +320,10 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
     is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call).  With
     ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone."""
     medium = medium_from_dict(preset_config, pathlib.Path(base_dir))
-    if dye_range is not None and medium.fibres is not None:
-        # the dye of fibres changes their scattering (their index), not only the medium's absorption
-        raise ParameterError("--dye-series", "a medium of fibres", "a medium whose dye only absorbs (no [fibres])")
+    if dye_range is not None and not medium.dye_only_absorbs:
+        # the dye of randomly oriented fibres changes their scattering (their index), not only the absorption
+        raise ParameterError("--dye-series", "a medium of randomly oriented fibres",
+                             "a medium whose dye only absorbs (no [fibres], or fibres along the yarn axis)")
     weave = sample_weave(sample_weave_name(preset_config), medium.yarn.radius_mm)
     measured_views = [tuple(float(a) for a in view) for view in measured_views]
     response = cloth_response(measured_views, weave=weave, seed=seed, cache_dir=cache_dir, progress=progress)

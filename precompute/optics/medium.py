@@ -476,6 +476,15 @@ class MediumParameters:
         """Fraction of the yarn volume taken by particles of every species."""
         return float(sum(p.volume_fraction for p in self.particles))
 
+    @property
+    def dye_only_absorbs(self) -> bool:
+        """Whether a change of the dye changes only what the medium absorbs, not how it scatters, so that
+        one transport reweighted reads every dye amount (a dye series, :mod:`precompute.transport.absorption`):
+        a dye in the host, or in fibres along the yarn axis, whose transport takes their index real and
+        follows their absorption alone along each chord (:mod:`precompute.transport._fibres`); not in
+        randomly oriented fibres, whose scattering their absorption index enters (:mod:`.fibre`)."""
+        return self.fibres is None or self.fibres.orientation != "random"
+
     def with_dye(self, weight_percent: float) -> MediumParameters:
         """The same medium with another dye amount, % of fibre weight (a dyed medium)."""
         return dataclasses.replace(self, dye=dataclasses.replace(self.dye, weight_percent=float(weight_percent)))

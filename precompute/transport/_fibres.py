@@ -128,7 +128,9 @@ def trace_fibres(geometry, dims, eta, medium, importance, enter_weight, arrays, 
     the path enters at ``arrays.pos`` along ``arrays.d``; on ``EXITED`` those hold its exit point and
     the direction outside and ``arrays.weights`` the flux per wavelength; ``absorbed`` gains what the
     fibres absorbed.  Russian roulette after every collision on the largest weight times ``importance``.
-    Returns ``(status, collisions, length)``, length in mm inside the yarn."""
+    Returns ``(status, collisions, length)``, length in mm inside the fibres: the length along which a
+    change of the fibres' absorption acts, so that a dye series reweights their exits exactly
+    (:mod:`precompute.transport.absorption`)."""
     state, pos, d, weights = arrays.state, arrays.pos, arrays.d, arrays.weights
     weight = arrays.ratios  # (scratch) the path's weight per wavelength per unit factor
     n_wl = weights.shape[0]
@@ -152,7 +154,6 @@ def trace_fibres(geometry, dims, eta, medium, importance, enter_weight, arrays, 
         qx, qy, qz = px + flight * dx, py + flight * dy, pz + flight * dz
         if flight < math.inf and inside(geometry, thickness, ia2, ib2, qx, qy, qz):
             px, py, pz = qx, qy, qz
-            length += flight
             n += 1
             while True:  # a fibre met along d: one drawn from the orientations, kept ∝ its projected width
                 tx, ty, tz = sample_fibre_axis(params, state)
@@ -164,6 +165,7 @@ def trace_fibres(geometry, dims, eta, medium, importance, enter_weight, arrays, 
             if params[ROUGHNESS_RAD] > 0.0:
                 dx, dy, dz = turn(dx, dy, dz, math.cos(gaussian_angle(params[ROUGHNESS_RAD], state)), state)
             if chord > 0.0:
+                length += chord * radius
                 largest = 0.0
                 for k in range(n_wl):
                     kept = math.exp(-mu_a[k] * chord * radius)
@@ -182,7 +184,6 @@ def trace_fibres(geometry, dims, eta, medium, importance, enter_weight, arrays, 
         to_boundary = boundary_distance(geometry, thickness, ia2, ib2, px, py, pz, dx, dy, dz)
         if to_boundary == math.inf:
             break
-        length += to_boundary
         px, py, pz, dx, dy, dz, left = meet_boundary(geometry, thickness, ia2, ib2, eta, px, py, pz, dx, dy, dz,
                                                      to_boundary, state)
         if left:

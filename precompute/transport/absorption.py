@@ -38,6 +38,21 @@ ABSORPTION_FLOOR_PER_MM = 0.1
 STEP_RATIO = 1.25
 
 
+def reweighted_absorption(optics) -> np.ndarray:
+    """The absorption (L,), 1/mm, whose change a transport's exits are reweighted for (its
+    ``extra_absorption_per_mm`` steps): for fibres along the yarn axis the fibres' own, since their
+    kernel measures each path's length inside them (:func:`._fibres.trace_fibres`); else the medium's μa."""
+    fibres = optics.oriented_fibres
+    return np.asarray(optics.mu_a if fibres is None else fibres.absorption_per_mm, float)
+
+
+def reweighted_scattering(optics) -> np.ndarray:
+    """What a transport's paths are drawn from besides that absorption, which a dye series takes to be
+    the same at every step: the oriented fibres' kernel parameters, else the medium's μs (L,), 1/mm."""
+    fibres = optics.oriented_fibres
+    return np.asarray(optics.mu_s if fibres is None else fibres.parameters(), float)
+
+
 def _log_absorption(mu_a: np.ndarray) -> np.ndarray:
     return np.log(np.asarray(mu_a, float) + ABSORPTION_FLOOR_PER_MM)
 

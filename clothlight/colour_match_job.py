@@ -31,7 +31,7 @@ from .medium_settings import BakeRequest, config_value, preset_request
 
 COLOUR_WORKER_MODULE = "clothlight.fit.colour_match_worker"
 #: Keys of the medium the recipe replaces: the panel's values of these are not the yarn's to keep.
-RECIPE_KEYS = ("dye.", "host.absorption_per_mm")
+RECIPE_KEYS = ("dye.", "host.absorption_per_mm", "fibres.absorption_per_mm")
 
 
 def srgb_hex(srgb) -> str:

@@ -59,6 +59,37 @@ def test_a_recipes_own_colour_is_matched_within_two_cie2000(model):
 
 @pytest.mark.slow
 @pytest.mark.render
+def test_a_yarn_of_fibres_along_its_axis_is_dyed_inside_its_fibres(cache):
+    # the recipe's dyes and grey absorption go into the fibres ([fibres] absorption_per_mm), whose
+    # transport the series reweights by each path's length inside them (precompute.transport._fibres)
+    config = copy.deepcopy(load_preset_config("blue_cotton")[0])
+    config["transport"] = dict(SMALL)
+    model = ShadeModel(config, PRESET_DIR, cache_dir=cache, seed=1)
+    assert model.base_fibre_absorption == config["fibres"]["absorption_per_mm"]
+    model([0.3, 0.02, 0.02, 5.0])
+    recipe = [0.05, 0.4, 0.02, 5.0]
+    shortcut = model(recipe)
+    np.testing.assert_allclose(shortcut, model(recipe, exact=True), rtol=1e-6)
+    assert shortcut[2] > shortcut[0]  # Evans blue ahead: a blue
+    greyer = model([0.05, 0.4, 0.02, 40.0])
+    assert np.all(greyer < shortcut)  # the fibre's own absorption darkens every channel
+
+    result = match_colour(linear_to_srgb(shortcut), model)
+    assert result.reached
+    assert result.config["fibres"]["absorption_per_mm"] == pytest.approx(result.recipe[-1])
+    assert "absorption_per_mm" not in result.config.get("host", {})
+    assert medium_from_dict(result.config, PRESET_DIR).dye.weight_percent == pytest.approx(result.recipe[:-1].sum())
+
+
+def test_random_fibres_whose_dye_changes_how_they_scatter_are_refused(cache):
+    from precompute.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="only absorbs"):  # before any render
+        ShadeModel(load_preset_config("pink_felt")[0], PRESET_DIR, cache_dir=cache)
+
+
+@pytest.mark.slow
+@pytest.mark.render
 def test_a_colour_lighter_than_the_undyed_cloth_is_not_reached(model):
     clear = model([1e-4, 1e-4, 1e-4, 0.0])
     assert np.all(clear < 0.9)

@@ -10,7 +10,8 @@ CIEDE2000.
 
 A recipe is K dye amounts w_k (% of fibre weight) and the fibre's own grey absorption a (1/mm, greige
 to bleached).  Both only absorb (:func:`precompute.optics.medium.dye_mixture_spectrum`: μa = μa,clear
-+ a + Σ_k ε_k w_k ρ_f / 10), so one transport of the clear yarn (no dye, no absorption of its own),
++ a + Σ_k ε_k w_k ρ_f / 10, the yarn's host's, or inside the fibres for fibres along the yarn axis:
+``MediumParameters.dye_only_absorbs``), so one transport of the clear yarn (no dye, no absorption of its own),
 its exits tallied at absorption steps up to every dye at :data:`MAX_DYE_PERCENT` and a at its most
 at once, reads any recipe's ρ (:mod:`precompute.transport.absorption`;
 :func:`.forward.absorption_series`), in milliseconds for the few cells of ρ the swatches read.  The
@@ -119,9 +120,15 @@ def parse_srgb(text: str, option: str = "--target") -> np.ndarray:
     return np.array(parts)
 
 
+def grey_absorption_table(config: dict) -> str:
+    """The table of a preset's TOML content ``config`` whose ``absorption_per_mm`` is the fibre's own
+    grey absorption: ``fibres`` in a yarn of fibres, else the ``host`` (the fibre material as one medium)."""
+    return "fibres" if "fibres" in config else "host"
+
+
 def recipe_config(base: dict, recipe: Sequence[float], dyes: Sequence[str] = RECIPE_DYES) -> dict:
     """``base`` (a preset's TOML content) with a recipe: ``recipe`` (K + 1,) the % of fibre weight of
-    each of the K ``dyes``, then the fibre's own absorption, 1/mm (``host.absorption_per_mm``).  The
+    each of the K ``dyes``, then the fibre's own absorption, 1/mm (:func:`grey_absorption_table`).  The
     dyes go into ``[dye]`` as the total and each one's share (precompute/optics/medium.py); a dye at
     no weight is left out."""
     recipe = np.asarray(recipe, float)
@@ -135,7 +142,8 @@ def recipe_config(base: dict, recipe: Sequence[float], dyes: Sequence[str] = REC
     total = float(percent[keep].sum())
     density = (base.get("dye") or {}).get("fiber_density_g_per_cm3", COTTON_DENSITY_G_PER_CM3)
     config = {key: value for key, value in base.items() if key != "dye"}
-    config["host"] = {**base.get("host", {}), "absorption_per_mm": float(recipe[-1])}
+    grey = grey_absorption_table(base)
+    config[grey] = {**base.get(grey, {}), "absorption_per_mm": float(recipe[-1])}
     config["dye"] = {"weight_percent": total, "fiber_density_g_per_cm3": density,
                      "spectrum_csv": [dyes[k] for k in keep],
                      "shares": [float(percent[k] / total) for k in keep]}
@@ -155,16 +163,20 @@ class ShadeModel:
                  cache_dir=None, seed: int = 0, threads: int | None = None,
                  progress: Callable[[str], None] | None = None, building: Callable[[int, int], None] | None = None,
                  while_building: Callable[[], contextlib.AbstractContextManager] = contextlib.nullcontext):
+        from precompute.transport.absorption import reweighted_absorption
+
         self.base = {key: value for key, value in base.items() if key != "dye"}
         self.base_dir = pathlib.Path(base_dir)
         self.dyes = tuple(dyes)
-        self.base_fibre_absorption = float((self.base.get("host") or {}).get("absorption_per_mm", 0.0))
+        self.base_fibre_absorption = float(
+            (self.base.get(grey_absorption_table(self.base)) or {}).get("absorption_per_mm", 0.0))
         self.max_fibre_absorption = max(MAX_FIBRE_ABSORPTION_PER_MM, self.base_fibre_absorption)
         clear = recipe_config(self.base, [1.0] * len(self.dyes) + [0.0], self.dyes)
         medium = medium_from_dict(clear, self.base_dir)
-        if medium.fibres is not None:  # their dye changes their index, hence how they scatter
-            raise ParameterError("preset", medium.name, "a medium without [fibres] (a fibre's dye changes how it "
-                                                        "scatters, so a recipe would need a simulation each)")
+        if not medium.dye_only_absorbs:  # randomly oriented fibres: their dye changes how they scatter
+            raise ParameterError("preset", medium.name, "a medium whose dye only absorbs: no [fibres], or fibres "
+                                                        "along the yarn axis (a dye in random fibres changes how "
+                                                        "they scatter, so a recipe would need a simulation each)")
         self.medium = medium.with_dye(0.0)  # the clear yarn: no dye, no absorption of its own
         self.cache_dir = pathlib.Path(cache_dir) if cache_dir is not None else default_cache_dir()
         self.seed = seed
@@ -177,12 +189,16 @@ class ShadeModel:
         # their μa added (per dye at 1 %, per 1/mm of the fibre's), so a candidate needs no Mie again
         self.clear = medium_optics(self.medium)
         wavelengths = self.clear.wavelengths_nm
-        fibre = dataclasses.replace(self.medium, host=dataclasses.replace(self.medium.host, absorption_per_mm=1.0))
+        if self.medium.fibres is None:
+            fibre = dataclasses.replace(self.medium, host=dataclasses.replace(self.medium.host, absorption_per_mm=1.0))
+        else:
+            fibre = dataclasses.replace(self.medium,
+                                        fibres=dataclasses.replace(self.medium.fibres, absorption_per_mm=1.0))
         self.mu_a_per_unit = np.stack([
             *(dye_absorption_coefficient(Dye(1.0, medium.dye.fiber_density_g_per_cm3,
                                              *dye_mixture_spectrum(name, None, self.base_dir)), wavelengths)
               for name in self.dyes),
-            medium_optics(fibre).mu_a - self.clear.mu_a])
+            reweighted_absorption(medium_optics(fibre)) - reweighted_absorption(self.clear)])
         say("absorption series of the clear yarn (simulated once per medium, then cached)")
         self.series = self._series(threads)
         self.evaluations = 0
@@ -199,9 +215,12 @@ class ShadeModel:
         folder = lookup(self.cache_dir, SERIES_NAMESPACE, key)
         if folder is None:
             def write(staging: pathlib.Path) -> None:
+                from precompute.transport.absorption import reweighted_absorption
+
+                most = reweighted_absorption(self.clear) + largest @ self.mu_a_per_unit
                 reference_mu_a, steps, rho_steps, _ = forward.absorption_series(
-                    self.base, self.medium, self.clear, self.clear.mu_a + largest @ self.mu_a_per_unit,
-                    relative_error=SERIES_RELATIVE_ERROR, seed=self.seed, threads=threads)
+                    self.base, self.medium, self.clear, most, relative_error=SERIES_RELATIVE_ERROR, seed=self.seed,
+                    threads=threads)
                 np.savez(staging / SERIES_FILE, reference_mu_a=reference_mu_a, steps=steps, rho_steps=rho_steps)
 
             folder, _ = store(self.cache_dir, SERIES_NAMESPACE, key, inputs, write)
@@ -219,22 +238,24 @@ class ShadeModel:
         (the mixed spectrum, Mie included), not from the clear yarn's cached optics (the same to
         rounding; a check of the shortcut)."""
         from precompute.transport import YarnGeometry
-        from precompute.transport.absorption import interpolate_absorption
+        from precompute.transport.absorption import (interpolate_absorption, reweighted_absorption,
+                                                     with_reweighted_absorption)
 
         config = recipe_config(self.base, recipe, self.dyes)
         if exact:
             optics = medium_optics(medium_from_dict(config, self.base_dir))
         else:
-            optics = dataclasses.replace(self.clear,
-                                         mu_a=self.clear.mu_a + np.asarray(recipe, float) @ self.mu_a_per_unit)
+            optics = with_reweighted_absorption(
+                self.clear, reweighted_absorption(self.clear) + np.asarray(recipe, float) @ self.mu_a_per_unit)
         reference_mu_a, steps, rho_steps = self.series
         if exact or self._cells_read is None:
-            rho = interpolate_absorption(rho_steps, reference_mu_a, steps, optics.mu_a, optics.wavelengths_nm)
+            rho = interpolate_absorption(rho_steps, reference_mu_a, steps, reweighted_absorption(optics),
+                                         optics.wavelengths_nm)
         else:  # the swatches read a few cells of ρ: reweight only those (the rest stay 0, unread)
             incidence, exit = self._cells_read
             rho = np.zeros(rho_steps.shape[:-1], rho_steps.dtype)
             rho[incidence, exit] = interpolate_absorption(rho_steps[incidence, exit], reference_mu_a, steps,
-                                                          optics.mu_a, optics.wavelengths_nm)
+                                                          reweighted_absorption(optics), optics.wavelengths_nm)
         geometry = YarnGeometry(self.medium.yarn.radius_mm, optics.boundary_index)
         atlas, attenuation, layout = forward._candidate_tables(config, optics, geometry, rho)
         if self._cells_read is None:

@@ -46,6 +46,15 @@ def reweighted_absorption(optics) -> np.ndarray:
     return np.asarray(optics.mu_a if fibres is None else fibres.absorption_per_mm, float)
 
 
+def with_reweighted_absorption(optics, mu_a: np.ndarray):
+    """``optics`` with ``mu_a`` (L,), 1/mm, as the absorption a series reweights
+    (:func:`reweighted_absorption`): the fibres' own for fibres along the yarn axis, else the medium's."""
+    fibres = optics.oriented_fibres
+    if fibres is None:
+        return dataclasses.replace(optics, mu_a=np.asarray(mu_a, float))
+    return dataclasses.replace(optics, oriented_fibres=dataclasses.replace(fibres, absorption_per_mm=mu_a))
+
+
 def reweighted_scattering(optics) -> np.ndarray:
     """What a transport's paths are drawn from besides that absorption, which a dye series takes to be
     the same at every step: the oriented fibres' kernel parameters, else the medium's μs (L,), 1/mm."""

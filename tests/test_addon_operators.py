@@ -704,7 +704,7 @@ def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come
     from clothlight.medium_settings import preset_config
     from precompute.optics.medium import preset_names
     scene.clothlight.medium.use_dye_series = True
-    for name in preset_names():  # every shipped medium, the yarns of fibres in air among them (pink_felt's random)
+    for name in preset_names():  # every shipped medium, the yarns of fibres in air among them
         scene.clothlight.medium.base = name
         labels = _draw_panels(context)  # raises where a panel cannot draw this medium
         in_fibres = "Dye Range: not for dye in random fibres (a dye change re-simulates)" in labels

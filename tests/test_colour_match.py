@@ -85,7 +85,8 @@ def test_random_fibres_whose_dye_changes_how_they_scatter_are_refused(cache):
     from precompute.errors import ParameterError
 
     with pytest.raises(ParameterError, match="only absorbs"):  # before any render
-        ShadeModel(load_preset_config("pink_felt")[0], PRESET_DIR, cache_dir=cache)
+        ShadeModel(load_preset_config(PRESET_DIR / "experimental" / "fibre_cotton.toml")[0], PRESET_DIR,
+                   cache_dir=cache)
 
 
 @pytest.mark.slow

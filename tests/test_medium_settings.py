@@ -12,6 +12,7 @@ from clothlight.medium_settings import (
     takes_dye_series,
     typed_number,
 )
+from precompute.optics.medium import PRESET_DIR
 
 
 def test_a_request_read_into_panel_values_asks_for_the_same_bake_again():
@@ -47,7 +48,8 @@ def test_the_exposed_keys_follow_what_the_preset_has():
 
 
 @pytest.mark.parametrize("name, takes", [("red_cotton", True), ("paper_2008", True), ("undyed_cotton", False),
-                                         ("blue_cotton", True), ("pink_felt", False)])
+                                         ("blue_cotton", True), ("pink_felt", True),
+                                         (str(PRESET_DIR / "experimental" / "fibre_cotton.toml"), False)])
 def test_the_dye_range_is_offered_where_the_bake_can_reweight_the_dye(name, takes):
     # the bake's dye series reweights absorption along paths it traced once: a dye in randomly oriented
     # fibres changes their index, hence their scattering, and the bake refuses it

@@ -22,7 +22,7 @@ from collections.abc import Iterable, Mapping
 
 from precompute.bounds import GRID_SETTINGS
 from precompute.bounds import TRANSPORT_DEFAULTS as _TRANSPORT_DEFAULTS
-from precompute.optics.medium import load_preset_config
+from precompute.optics.medium import RANDOM_ORIENTATION, load_preset_config
 
 
 def typed_number(value: float) -> float:
@@ -193,7 +193,7 @@ def takes_dye_series(config: dict) -> bool:
     scattering it changes (``precompute.bake.check_dye_series`` refuses those)."""
     fibres = config.get("fibres")
     return "dye_weight_percent" in medium_keys(config) and (
-        fibres is None or fibres.get("orientation", "random") != "random")
+        fibres is None or fibres.get("orientation", RANDOM_ORIENTATION) != RANDOM_ORIENTATION)
 
 
 def config_value(config: dict, key: str):

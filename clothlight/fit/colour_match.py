@@ -189,11 +189,8 @@ class ShadeModel:
         # their μa added (per dye at 1 %, per 1/mm of the fibre's), so a candidate needs no Mie again
         self.clear = medium_optics(self.medium)
         wavelengths = self.clear.wavelengths_nm
-        if self.medium.fibres is None:
-            fibre = dataclasses.replace(self.medium, host=dataclasses.replace(self.medium.host, absorption_per_mm=1.0))
-        else:
-            fibre = dataclasses.replace(self.medium,
-                                        fibres=dataclasses.replace(self.medium.fibres, absorption_per_mm=1.0))
+        fibre = medium_from_dict(recipe_config(self.base, [1.0] * len(self.dyes) + [1.0], self.dyes),
+                                 self.base_dir).with_dye(0.0)  # the clear yarn's fibre absorbing 1 /mm
         self.mu_a_per_unit = np.stack([
             *(dye_absorption_coefficient(Dye(1.0, medium.dye.fiber_density_g_per_cm3,
                                              *dye_mixture_spectrum(name, None, self.base_dir)), wavelengths)

@@ -31,7 +31,7 @@ import numpy as np
 
 from precompute.optics.dye import dye_absorption_coefficient
 from precompute.optics.fibre import fibre_absorption_per_mm, fibre_scattering, proxy_diameter_nm
-from precompute.optics.fibre_orientation import OrientedFibres
+from precompute.optics.fibre_orientation import RANDOM_ORIENTATION, OrientedFibres
 from precompute.optics.medium import AUTO_PHASE_SAMPLES, MediumParameters, ParticleSpecies, RefractiveIndex, load_preset
 from precompute.optics.mie import (
     MAX_AUTO_PHASE_SAMPLES,
@@ -176,7 +176,7 @@ def medium_optics(params: MediumParameters, *, icdf_size: int = DEFAULT_ICDF_SIZ
 def _oriented_fibres(params: MediumParameters, wavelengths: np.ndarray, host_index: np.ndarray):
     """The medium of fibres along the yarn axis that ``params`` describes, or None (random fibres, none)."""
     fibres = params.fibres
-    if fibres is None or fibres.orientation == "random":
+    if fibres is None or fibres.orientation == RANDOM_ORIENTATION:
         return None
     return OrientedFibres(
         extinction_per_mm=4.0 * fibres.volume_fraction / (math.pi * fibres.diameter_um * 1e-3),

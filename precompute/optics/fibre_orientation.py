@@ -33,7 +33,8 @@ from precompute.errors import ParameterError
 
 #: The orientations a ``[fibres]`` table may give: ``random`` (the Mie proxy of :mod:`.fibre`), or
 #: ``yarn_axis`` (this module).
-FIBRE_ORIENTATIONS = ("random", "yarn_axis")
+RANDOM_ORIENTATION = "random"
+FIBRE_ORIENTATIONS = (RANDOM_ORIENTATION, "yarn_axis")
 #: Points of the ⟨sin⟩ table over |cos| to the axis on [0, 1].
 SINE_TABLE_SIZE = 129
 #: Axes of D the table averages over (a fixed stream: the table is a deterministic function of D).

@@ -38,7 +38,7 @@ import numpy as np
 
 from precompute import bounds
 from precompute.errors import ParameterError
-from precompute.optics.fibre_orientation import FIBRE_ORIENTATIONS
+from precompute.optics.fibre_orientation import FIBRE_ORIENTATIONS, RANDOM_ORIENTATION
 
 PRESET_DIR = pathlib.Path(__file__).resolve().parents[1] / "presets"
 DATA_DIR = pathlib.Path(__file__).resolve().parents[1] / "data"
@@ -297,7 +297,7 @@ class Fibres:
     volume_fraction: float
     cross_section: str = "circle"
     absorption_per_mm: float = 0.0
-    orientation: str = "random"
+    orientation: str = RANDOM_ORIENTATION
     orientation_spread_deg: float = 0.0
     roughness_deg: float = 0.0
 
@@ -458,7 +458,7 @@ class MediumParameters:
             )
         if self.fibres is not None and not isinstance(self.fibres, Fibres):
             raise ParameterError("fibres", self.fibres, "a Fibres")
-        if self.fibres is not None and self.fibres.orientation != "random":
+        if self.fibres is not None and self.fibres.orientation != RANDOM_ORIENTATION:
             # the transport traces oriented fibres alone, in a host that neither absorbs nor scatters
             if self.particles:
                 raise ParameterError("particles", len(self.particles), "none beside fibres along the yarn axis")
@@ -483,7 +483,7 @@ class MediumParameters:
         a dye in the host, or in fibres along the yarn axis, whose transport takes their index real and
         follows their absorption alone along each chord (:mod:`precompute.transport._fibres`); not in
         randomly oriented fibres, whose scattering their absorption index enters (:mod:`.fibre`)."""
-        return self.fibres is None or self.fibres.orientation != "random"
+        return self.fibres is None or self.fibres.orientation != RANDOM_ORIENTATION
 
     def with_dye(self, weight_percent: float) -> MediumParameters:
         """The same medium with another dye amount, % of fibre weight (a dyed medium)."""
@@ -729,7 +729,7 @@ def medium_from_dict(config: dict, base_dir: pathlib.Path = PRESET_DIR) -> Mediu
             volume_fraction=spec["volume_fraction"],
             cross_section=spec.get("cross_section", "circle"),
             absorption_per_mm=spec.get("absorption_per_mm", 0.0),
-            orientation=spec.get("orientation", "random"),
+            orientation=spec.get("orientation", RANDOM_ORIENTATION),
             orientation_spread_deg=spec.get("orientation_spread_deg", 0.0),
             roughness_deg=spec.get("roughness_deg", 0.0),
         )

@@ -57,6 +57,8 @@ FREE_PARAMETERS = (
      "the Cook–Torrance sheen's Beckmann rms slope m (the shader's Slope; the paper's 0.8)"),
     ("fuzz_albedo", "Fuzz Albedo", "", 0.0, 0.5,
      "the white first reflections of the cloth's surface fibres (the shader's FuzzAlbedo)"),
+    ("fuzz_depth", "Fuzz Depth", "", 0.0, 2.0,
+     "the optical depth of the surface fibres, which shade the yarn beneath them (the shader's FuzzDepth; 0: none)"),
 )
 
 #: precompute's command-line names of a fit's inputs → the request's (messages name what the user set).

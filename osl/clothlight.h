@@ -153,27 +153,99 @@ closure color cl_cloth_specular_closure(vector Nc, normal N, float weight, float
     return lobe;
 }
 
-// The cloth's fuzz (precompute/optics/lommel_seeliger.py): the white first reflections of its
-// surface fibres, a Lommel-Seeliger law A / (4 pi (mu_i + mu_o)) about the cloth normal Nc, times
-// (n_c.l), cut on yarn faces turned away from the light as cl_cloth_specular is.
-float cl_cloth_fuzz(vector Nc, vector N_out, vector L, vector V, float albedo)
+// ---- The cloth's fuzz (precompute/optics/lommel_seeliger.py: its functions named below are the
+// NumPy twins).  The white first reflections of the cloth's surface fibres, a Lommel-Seeliger law
+// about the cloth normal Nc.  Fibres that reflect light also stand in its way: a fuzz of optical
+// depth `depth` > 0 along Nc lets through to the yarns beneath, and back out, only
+// T(mu_i, mu_o), and reflects by itself only the light it does not let through.  depth = 0 is the
+// fuzz of the presets before it had a depth (a veneer over an unshaded cloth): each function below
+// then answers exactly what the shader did before.
+
+// Gauss-Legendre nodes over mu_i in (0, 1) of the general mode's sums (FUZZ_ALBEDO_NODES): numpy's
+// leggauss(8) mapped by mu = (x + 1) / 2, weight w / 2 (tests/test_osl_twins.py holds them to it).
+// The directional albedo of a layer of finite depth has no closed form.
+#define CL_FUZZ_ALBEDO_NODES 8
+#define CL_FUZZ_NODE_COSINES {0.019855071751231912, 0.10166676129318664, 0.2372337950418355, 0.4082826787521751, \
+                              0.5917173212478248, 0.7627662049581645, 0.8983332387068134, 0.9801449282487681}
+#define CL_FUZZ_NODE_WEIGHTS {0.050614268145188344, 0.11119051722668717, 0.15685332293894352, 0.18134189168918088, \
+                              0.18134189168918088, 0.15685332293894352, 0.11119051722668717, 0.050614268145188344}
+
+// T(mu_i, mu_o) = exp(-depth (1/|mu_i| + 1/|mu_o|)) (fuzz_transmittance): Beer-Lambert along both
+// slant paths through the fuzz.  |mu|: light from behind the cloth crosses the fuzz on its back
+// face.  1 without a fuzz depth, 0 at a grazing cosine (an endless path).
+float cl_fuzz_transmittance(float mu_i, float mu_o, float depth)
+{
+    if (depth <= 0.0)
+        return 1.0;
+    float a = abs(mu_i);
+    float b = abs(mu_o);
+    if (a <= 0.0 || b <= 0.0)
+        return 0.0;
+    return exp(-depth * (1.0 / a + 1.0 / b));
+}
+
+// The share of a uniform sky's light that crosses the fuzz one way, int_0^1 2 mu exp(-depth/mu) dmu
+// = 2 E3(depth) (hemispherical_transmittance), by the nodes above; 1 without a fuzz depth.
+float cl_fuzz_hemispherical_transmittance(float depth)
+{
+    if (depth <= 0.0)
+        return 1.0;
+    float mu[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_COSINES;
+    float weight[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_WEIGHTS;
+    float sum = 0.0;
+    for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++)
+        sum += weight[k] * mu[k] * exp(-depth / mu[k]);
+    return 2.0 * sum;
+}
+
+// The general modes' share of the yarns' light under the fuzz at the view cosine mu_o: they have no
+// light direction to take T at, so the light's way in is the sky's, the hemispherical
+// transmittance, and its way out the view's own path, exp(-depth / mu_o).  1 without a fuzz depth.
+float cl_fuzz_yarn_share(float mu_o, float depth)
+{
+    if (depth <= 0.0)
+        return 1.0;
+    return exp(-depth / max(mu_o, 1e-6)) * cl_fuzz_hemispherical_transmittance(depth);
+}
+
+// The fuzz's directional albedo at the view cosine mu_o (> 0) (fuzz_albedo_at_view): without a
+// depth the semi-infinite law's closed form (A / 2)(1 - mu_o ln(1 + 1/mu_o)); with one,
+// (A / 2) int_0^1 mu_i (1 - T(mu_i, mu_o)) / (mu_i + mu_o) dmu_i by the nodes above.
+float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth)
+{
+    if (depth <= 0.0)
+        return 0.5 * albedo * (1.0 - mu_o * log(1.0 + 1.0 / mu_o));
+    float mu[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_COSINES;
+    float weight[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_WEIGHTS;
+    float view_path = exp(-depth / mu_o);
+    float sum = 0.0;
+    for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++)
+        sum += weight[k] * mu[k] * (1.0 - exp(-depth / mu[k]) * view_path) / (mu[k] + mu_o);
+    return 0.5 * albedo * sum;
+}
+
+// The fuzz's radiance per irradiance (1/sr): the Lommel-Seeliger law A / (4 pi (mu_i + mu_o)) about
+// Nc times (n_c.l), cut on yarn faces turned away from the light as cl_cloth_specular is; a fuzz of
+// depth reflects (1 - T) of it, the light it does not let through (fuzz_brdf).
+float cl_cloth_fuzz(vector Nc, vector N_out, vector L, vector V, float albedo, float depth)
 {
     float mu_i = dot(Nc, L);
     float mu_o = dot(Nc, V);
     if (dot(N_out, L) <= 0.0 || mu_i <= 0.0 || mu_o <= 0.0)
         return 0.0;
-    return albedo * mu_i / (4.0 * M_PI * (mu_i + mu_o));
+    float law = albedo * mu_i / (4.0 * M_PI * (mu_i + mu_o));
+    return depth > 0.0 ? law * (1.0 - cl_fuzz_transmittance(mu_i, mu_o, depth)) : law;
 }
 
 // The general modes' closure for the fuzz: a diffuse lobe about Nc of the weight that returns the
-// fuzz's directional albedo at this view, (A / 2)(1 - mu_o ln(1 + 1/mu_o)), the light spread over
-// the lights as a Lambertian's.  Faces turned below the cloth plane get none, as for the sheen.
-closure color cl_cloth_fuzz_closure(vector Nc, normal N, vector V, float albedo)
+// fuzz's directional albedo at this view (cl_fuzz_albedo_at_view), the light spread over the
+// lights as a Lambertian's.  Faces turned below the cloth plane get none, as for the sheen.
+closure color cl_cloth_fuzz_closure(vector Nc, normal N, vector V, float albedo, float depth)
 {
     float mu_o = max(dot(Nc, V), 1e-6);
     closure color lobe = 0;
     if (albedo > 0.0 && dot(N, Nc) > 0.0)
-        lobe = 0.5 * albedo * (1.0 - mu_o * log(1.0 + 1.0 / mu_o)) * diffuse(Nc);
+        lobe = cl_fuzz_albedo_at_view(mu_o, albedo, depth) * diffuse(Nc);
     return lobe;
 }
 

@@ -123,11 +123,12 @@ BAKE_DEFAULTS = {"illuminant": DEFAULT_ILLUMINANT, "observer": DEFAULT_OBSERVER}
 #: The ``[fit]`` keys and their defaults (the shader's: precompute.optics.cook_torrance), as the fit writes them.
 FIT_DEFAULTS = specular_from_config({})
 #: What the bake accepts of them (the shader's Cook–Torrance term is defined for any weight ≥ 0 and slope > 0;
-#: its fuzz term for an albedo in [0, 1]).
+#: its fuzz term for an albedo in [0, 1] and any depth ≥ 0).
 SPECULAR_BOUNDS = {"specular_weight": Bound(f"{FIT_TABLE}.specular_weight", 0.0, float("inf"), high_open=True),
                    "specular_slope": Bound(f"{FIT_TABLE}.specular_slope", 0.0, float("inf"), low_open=True,
                                            high_open=True),
-                   "fuzz_albedo": Bound(f"{FIT_TABLE}.fuzz_albedo", 0.0, 1.0)}
+                   "fuzz_albedo": Bound(f"{FIT_TABLE}.fuzz_albedo", 0.0, 1.0),
+                   "fuzz_depth": Bound(f"{FIT_TABLE}.fuzz_depth", 0.0, float("inf"), high_open=True)}
 #: Version of the spectral stage's file (spectral.npz); bump when its content changes meaning.
 SPECTRAL_FORMAT = "clothlight-spectral/2"
 #: Incidence samples per side of the sphere square that the closure fit uses in all (cells ×
@@ -300,8 +301,10 @@ def specular_settings(config: Mapping, medium: MediumParameters) -> dict:
     values = {key: SPECULAR_BOUNDS[key].check(value) for key, value in given.items()}
     defaulted = [key for key, value in FIT_DEFAULTS.items() if key not in table and value]  # fuzz: none
     source = SPECULAR_FROM_PRESET + (f"; {', '.join(defaulted)}: {default['source']}" if defaulted else "")
+    # the fuzz's depth only where it has one, so that the tables of every other preset keep their keys
+    depth = {"fuzz_depth": values["fuzz_depth"]} if values["fuzz_depth"] > 0.0 else {}
     return {"weight": values["specular_weight"], "slope": values["specular_slope"], "index": default["index"],
-            "fuzz_albedo": values["fuzz_albedo"], "source": source}
+            "fuzz_albedo": values["fuzz_albedo"], **depth, "source": source}
 
 
 def _integer(name: str, value, low: int, high: int | None = None) -> int:

@@ -34,9 +34,10 @@ def main() -> int:
 
     from clothlight.fit.forward import build_forward_model
     from precompute.fit.objective import Objective, load_measurement, split_views
-    from precompute.fit.optimise import cloth_terms, fit_profiled_specular
+    from precompute.fit.optimise import cloth_from_parts, fit_profiled_specular
     from precompute.fit.parameters import PARAMETERS
     from precompute.optics.measured_sample import SAMPLE_TABLE, SAMPLE_WEAVE_KEY, SAMPLE_WEAVES
+    from precompute.optics.cook_torrance import specular_from_config
     from precompute.optics.medium import load_preset_config
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -61,8 +62,9 @@ def main() -> int:
         model = build_forward_model(views.forward_views, {**config, SAMPLE_TABLE: {SAMPLE_WEAVE_KEY: weave}},
                                     base_dir, seed=0)
         medium, specular = model.parts(config, relative_error=args.relative_error, seed=1)
-        values = fit_profiled_specular(lambda rgb: objective(rgb[:count]), medium, specular, profiled, {})
-        rgb = (medium + cloth_terms(specular, {p.path: values[p.name] for p in profiled})[:, None])[:count]
+        depth = {"fuzz_depth": specular_from_config(config)["fuzz_depth"]}  # the preset's, not profiled
+        values = fit_profiled_specular(lambda rgb: objective(rgb[:count]), medium, specular, profiled, depth)
+        rgb = cloth_from_parts(medium, specular, {**depth, **{p.path: values[p.name] for p in profiled}})[:count]
         fit, held = objective.channel_errors(rgb), objective.channel_errors(rgb, "held_out")
         backscatter = []
         for theta_i, theta_v in BACKSCATTER_VIEWS:

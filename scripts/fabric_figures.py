@@ -41,7 +41,8 @@ def bake_folder_brdf(model, folder: pathlib.Path):
     attenuation = checked.tables[files["unscattered"]].pixels[..., :3]
     return model.cloth_brdf(atlas, attenuation, layout, specular_weight=float(specular["weight"]),
                             specular_slope=float(specular["slope"]), specular_index=float(specular["index"]),
-                            fuzz_albedo=float(specular["fuzz_albedo"]))
+                            fuzz_albedo=float(specular["fuzz_albedo"]),
+                            fuzz_depth=float(specular.get("fuzz_depth", 0.0)))
 
 
 def bake_folder_sample(config: dict, folder: pathlib.Path) -> dict:

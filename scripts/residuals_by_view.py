@@ -22,6 +22,7 @@ def main() -> int:
     from precompute.fit.baseline import baseline_brdf, fit_baseline
     from clothlight.fit.forward import build_forward_model
     from precompute.fit.objective import Objective, load_measurement, split_views
+    from precompute.fit.optimise import cloth_from_parts
     from precompute.optics.cook_torrance import specular_from_config
     from precompute.optics.medium import DEFAULT_PRESET, load_preset_config
 
@@ -39,8 +40,7 @@ def main() -> int:
     medium, specular = model.parts(config, relative_error=args.relative_error, seed=1)
     sheen = specular_from_config(config)
     count = len(views.forward_views)
-    terms = specular(sheen["specular_weight"], sheen["specular_slope"], sheen["fuzz_albedo"])
-    cloth = (medium + terms[:, None])[:count]
+    cloth = cloth_from_parts(medium, specular, sheen)[:count]
     baseline = fit_baseline(objective)
     fitted = baseline_brdf(views.angles_deg, baseline.albedo, baseline.weight, baseline.slope)
     measured = objective.measured

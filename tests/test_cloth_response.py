@@ -41,6 +41,13 @@ def test_the_linear_map_equals_the_twins_summed_over_the_samples(tmp_path):
     fuzzy = response.cloth_brdf(atlas, attenuation, layout, specular_weight=0.7, specular_slope=0.5, fuzz_albedo=0.2)
     fuzz = 0.2 / (4 * np.pi * (view.toward_sun[2] + view.toward_camera[2])) * view.toward_sun[2]
     np.testing.assert_allclose(fuzzy[0] - model[0], fuzz * lit_faces * view.calibration, rtol=1e-9)
+    # a fuzz of optical depth τ shades the yarn's light by exp(−τ (1/μi + 1/μo)) about the cloth normal
+    # and reflects as a layer that deep (1 − that of the law); the sheen it leaves as it is
+    deep = response.cloth_brdf(atlas, attenuation, layout, specular_weight=0.7, specular_slope=0.5, fuzz_albedo=0.2,
+                               fuzz_depth=0.4)
+    shade = np.exp(-0.4 * (1 / view.toward_sun[2] + 1 / view.toward_camera[2]))
+    np.testing.assert_allclose(deep[0], (lookup.sum(axis=0) * shade + (specular + fuzz * (1 - shade)) * lit_faces)
+                               * view.calibration, rtol=1e-9)
 
 
 def test_the_view_directions_follow_the_rig_conventions():

@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 
 from clothlight.fit.forward import SAMPLE_AZIMUTHS_DEG, rig_views, sample_azimuths
-from precompute.fit.figures import fabric_figures, off_specular_views, view_index
+from precompute.errors import ParameterError
+from precompute.fit.figures import (band_penalty, band_ratios, fabric_figures, main_channel, off_specular_views,
+                                    parse_band, view_index)
 from precompute.fit.objective import split_views
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
@@ -62,6 +64,40 @@ def test_the_figures_of_a_cloth_against_itself_and_against_a_changed_one():
     bluer = fabric_figures(RawCurves.rgb * np.array([1.0, 1.0, 0.5]), RawCurves.rgb, views)["plane_of_incidence"]
     assert bluer["B"] == pytest.approx(0.5) and bluer["per_channel"] == pytest.approx(0.5 / np.sqrt(3.0))
     assert bluer["pooled"] < 0.3 * bluer["per_channel"]
+
+
+def test_the_bands_read_the_backscatter_in_the_main_channel_and_the_off_specular_colour():
+    views = split_views(RawCurves)
+    assert main_channel(RawCurves.rgb) == 0  # a red cloth
+    same = band_ratios(RawCurves.rgb, RawCurves.rgb, views)
+    assert set(same) == {"backscatter 60/-60", "backscatter 60/-40", "backscatter 45/-60", "B/R", "G/R"}
+    assert all(v == pytest.approx(1.0) for v in same.values())
+    assert band_penalty(RawCurves.rgb, RawCurves.rgb, views, (0.85, 1.15)) == 0.0
+    # the backscatter views 1.6 times as bright in red, 3 times in green and blue: only red, the main channel, counts
+    other = RawCurves.rgb.copy()
+    for theta_i, theta_v in ((60.0, -60.0), (60.0, -40.0), (45.0, -60.0)):
+        other[view_index(views, theta_i, theta_v)] *= np.array([1.6, 3.0, 3.0])
+    ratios = band_ratios(other, RawCurves.rgb, views)
+    assert [ratios[f"backscatter {v}"] for v in ("60/-60", "60/-40", "45/-60")] == pytest.approx([1.6] * 3)
+    # 1.3 times the blue everywhere: B/R's median 1.3, G/R's 1; outside 0.85–1.15 by ln(1.3/1.15) in one of five
+    bluer = RawCurves.rgb * np.array([1.0, 1.0, 1.3])
+    assert band_ratios(bluer, RawCurves.rgb, views)["B/R"] == pytest.approx(1.3)
+    assert band_penalty(bluer, RawCurves.rgb, views, (0.85, 1.15)) == pytest.approx(
+        np.log(1.3 / 1.15) / np.sqrt(5.0))
+    assert band_penalty(bluer, RawCurves.rgb, views, (0.7, 1.35)) == 0.0
+    # below the band counts as above it does
+    assert band_penalty(RawCurves.rgb * np.array([1.0, 1.0, 0.7]), RawCurves.rgb, views, (0.85, 1.15)) == \
+        pytest.approx(np.log(0.85 / 0.7) / np.sqrt(5.0))
+
+
+@pytest.mark.parametrize("text", ["1.1,0.9", "0.9", "0,1.1", "0.9,1", "a,b", "0.9,inf", "0.8,1.1,1.2"])
+def test_a_band_is_low_below_one_below_high(text):
+    with pytest.raises(ParameterError, match="--hold-bands"):
+        parse_band(text)
+
+
+def test_a_band_reads_from_text_or_a_pair():
+    assert parse_band("0.85,1.15") == (0.85, 1.15) == parse_band([0.85, 1.15])
 
 
 def test_off_specular_views_keep_away_from_the_mirror_and_the_normal():

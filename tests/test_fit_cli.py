@@ -101,6 +101,7 @@ def test_unknown_parameter_is_bad_input(inputs, tmp_path, fake_forward, capsys):
     (["--preset", "paper_2008"], ["voids", "[[particles]]"]),  # no voids species in the paper's preset
     (["--target-ratios", "B/R=-1"], ["--target-ratios"]),
     (["--budget-evaluations", "4"], ["--budget-evaluations"]),
+    (["--hold-bands", "1.15,0.85"], ["--hold-bands", "0 < LOW < 1 < HIGH"]),
     (["--out", "{tmp}/synthetic.csv"], ["--out", "is a file"]),
 ])
 def test_bad_inputs_exit_with_2_before_any_work(inputs, tmp_path, fake_forward, capsys, args, words):

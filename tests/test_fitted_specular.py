@@ -51,7 +51,7 @@ def test_the_default_record_is_the_papers_from_the_cook_torrance_twin():
     assert default_specular() == {"weight": DEFAULT_WEIGHT, "slope": DEFAULT_SLOPE, "fuzz_albedo": 0.0,
                                   "source": f"default (paper §6: m = {DEFAULT_SLOPE:g})"}
     assert bake_module.FIT_DEFAULTS == {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE,
-                                        "fuzz_albedo": 0.0}
+                                        "fuzz_albedo": 0.0, "fuzz_depth": 0.0}
 
 
 def paper_medium():
@@ -69,6 +69,9 @@ def test_a_fit_table_is_recorded_as_such_and_checked():
                                                                           "source": SPECULAR_FROM_PRESET}
     with_fuzz = bake_module.specular_settings({FIT_TABLE: {**FITTED, "fuzz_albedo": 0.1}}, medium)
     assert with_fuzz["fuzz_albedo"] == 0.1 and with_fuzz["source"] == SPECULAR_FROM_PRESET
+    assert "fuzz_depth" not in with_fuzz  # a veneer: the record (and the tables' key) as before depths
+    deep = bake_module.specular_settings({FIT_TABLE: {**FITTED, "fuzz_albedo": 0.1, "fuzz_depth": 0.3}}, medium)
+    assert deep == {**with_fuzz, "fuzz_depth": 0.3}
     partial = bake_module.specular_settings({FIT_TABLE: {"specular_weight": 0.2}}, medium)
     assert (partial["weight"], partial["slope"]) == (0.2, DEFAULT_SLOPE)
     assert partial["source"].startswith(SPECULAR_FROM_PRESET) and "specular_slope: default" in partial["source"]
@@ -179,6 +182,7 @@ def rewrite_summary(path, **changes):
     ({**RECORDED, "slope": 0.0}, "specular .* is not an object"),
     ({**RECORDED, "index": 0.9}, "specular .* is not an object"),  # no Fresnel factor below 1
     ({**RECORDED, "fuzz_albedo": 1.5}, "specular .* is not an object"),  # more light than it receives
+    ({**RECORDED, "fuzz_depth": -0.1}, "specular .* is not an object"),
     ({"weight": 0.55, "slope": 0.35}, "specular .* is not an object"),
     ("fitted", "specular .* is not an object"),
 ])
@@ -206,6 +210,7 @@ def test_every_preset_loads_and_its_fit_is_what_its_bake_records(path):
     config, base_dir = load_preset_config(path)
     record = bake_module.specular_settings(config, medium_from_dict(config, base_dir))
     fit = config.get(FIT_TABLE, {})
-    for key, recorded in (("specular_weight", "weight"), ("specular_slope", "slope"), ("fuzz_albedo", "fuzz_albedo")):
+    for key, recorded in (("specular_weight", "weight"), ("specular_slope", "slope"), ("fuzz_albedo", "fuzz_albedo"),
+                          ("fuzz_depth", "fuzz_depth")):
         if key in fit:
             assert record[recorded] == fit[key], key

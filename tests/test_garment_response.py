@@ -128,6 +128,30 @@ def test_the_fuzz_joins_rho_on_the_lit_yarn_facing_the_sun_and_not_the_specular_
     assert np.any(fuzzy.rho["front"] > plain.rho["front"])
 
 
+def test_a_fuzz_of_depth_shades_the_yarns_rho_and_reflects_as_a_layer(response, yarn):
+    # the sun mode: T ρ_yarn + f_layer cos θ_i on the lit yarn facing the sun, the sheen unshaded
+    depth, albedo = 0.3, 0.2
+    deep = measurement_from_response(response, dataclasses.replace(yarn, fuzz_albedo=albedo, fuzz_depth=depth))
+    plain = measurement_from_response(response, yarn)
+    rho = response_rho(response, yarn)
+    toward_sun = AngularGrid("sphere", N_I).cell_centers()
+    toward_camera = AngularGrid("hemisphere", N_O).cell_centers()
+    for k, view in enumerate(response.views):
+        side, cell = SIDES[k // (N_O * N_O)], k % (N_O * N_O)
+        facing = np.bincount(view.patch, view.weight * (view.incidence[:, 2] > 0.0), N_I * N_I) / view.counted
+        mu_i, mu_o = toward_sun[:, 2], toward_camera[cell, 2]
+        shade = np.exp(-depth * (1.0 / np.abs(mu_i) + 1.0 / mu_o))  # lit from behind, through the back's fuzz
+        lit = np.maximum(mu_i, 0.0)
+        layer = np.where(lit > 0.0, albedo * (1.0 - shade) / (4 * np.pi * (lit + mu_o)) * lit, 0.0) * facing
+        specular = plain.rho[side][:, cell] - rho[side][:, cell]
+        np.testing.assert_allclose(deep.rho[side][:, cell],
+                                   rho[side][:, cell] * shade[:, None] + layer[:, None] + specular,
+                                   rtol=1e-9, atol=1e-15)
+    for side in SIDES:
+        np.testing.assert_array_equal(deep.specular[side], plain.specular[side])
+    assert np.any(deep.rho["front"] < plain.rho["front"])  # shaded, where the veneer only ever added
+
+
 def test_the_measurement_is_the_same_bit_for_bit_whatever_the_threads_and_after_a_save(response, yarn, tmp_path):
     one = response_rho(response, yarn, threads=1)
     again = GarmentResponse.load(response.save(tmp_path / "response.npz"))

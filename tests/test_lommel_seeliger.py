@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from precompute.optics.cook_torrance import direction
-from precompute.optics.lommel_seeliger import lommel_seeliger, lommel_seeliger_albedo
+from precompute.optics.lommel_seeliger import (fuzz_albedo_at_view, fuzz_brdf, fuzz_transmittance,
+                                              hemispherical_transmittance, lommel_seeliger, lommel_seeliger_albedo)
 
 
 @pytest.mark.parametrize("theta_o_deg", [0.0, 30.0, 60.0, 85.0])
@@ -34,3 +35,42 @@ def test_the_law_is_reciprocal_white_of_its_albedo_and_zero_below_the_plane():
     # grazing: half the albedo comes back; at normal view 1 − ln 2 of that
     assert lommel_seeliger_albedo(0.0, 0.2) == pytest.approx(0.1)
     assert lommel_seeliger_albedo(1.0, 0.2) == pytest.approx(0.1 * (1.0 - math.log(2.0)))
+
+
+@pytest.mark.parametrize("depth", [0.05, 0.3, 1.5])
+def test_a_fuzz_of_depth_is_the_single_scattering_of_a_layer_that_deep(depth):
+    # from its definition: light reaching optical depth t along the slant path t/μi, scattered
+    # isotropically with albedo A, leaving along t/μo; f = (A / (4π μi μo)) ∫₀^τ exp(−t (1/μi + 1/μo)) dt
+    rng = np.random.default_rng(5)
+    light, view = (direction(rng.uniform(0, 85, 40), rng.uniform(0, 360, 40)) for _ in range(2))
+    mu_i, mu_o = light[:, 2], view[:, 2]
+    t = (np.arange(20_000) + 0.5) / 20_000 * depth
+    integral = np.exp(-t[:, None] * (1.0 / mu_i + 1.0 / mu_o)).mean(axis=0) * depth
+    np.testing.assert_allclose(fuzz_brdf(light, view, 0.4, depth), 0.4 / (4 * math.pi * mu_i * mu_o) * integral,
+                               rtol=1e-6)
+    # what it lets through to the cloth beneath, in and out, whichever face the light is on
+    np.testing.assert_allclose(fuzz_transmittance(mu_i, mu_o, depth), np.exp(-depth * (1 / mu_i + 1 / mu_o)))
+    np.testing.assert_allclose(fuzz_transmittance(-mu_i, mu_o, depth), fuzz_transmittance(mu_i, mu_o, depth))
+    assert fuzz_transmittance(0.0, 0.5, depth) == 0.0
+
+
+def test_a_deep_fuzz_is_the_semi_infinite_law_and_a_depth_of_zero_the_veneer_before_it():
+    light, view = direction(np.array([10.0, 50.0, 80.0]), 0.0), direction(np.array([0.0, 40.0, 70.0]), 90.0)
+    np.testing.assert_allclose(fuzz_brdf(light, view, 0.3, 60.0), lommel_seeliger(light, view, 0.3))
+    np.testing.assert_array_equal(fuzz_brdf(light, view, 0.3, 0.0), lommel_seeliger(light, view, 0.3))
+    np.testing.assert_array_equal(fuzz_transmittance(light[:, 2], view[:, 2], 0.0), 1.0)
+    assert hemispherical_transmittance(0.0) == 1.0
+    np.testing.assert_array_equal(fuzz_albedo_at_view(view[:, 2], 0.3, 0.0), lommel_seeliger_albedo(view[:, 2], 0.3))
+
+
+@pytest.mark.parametrize("depth", [0.05, 0.3, 1.5])
+def test_the_general_modes_sums_are_the_integrals_they_stand_for(depth):
+    from scipy.integrate import quad
+    from scipy.special import expn
+
+    assert hemispherical_transmittance(depth) == pytest.approx(2.0 * expn(3, depth), rel=1e-4)
+    for mu_o in (0.05, 0.3, 0.7, 1.0):
+        view = np.array([math.sqrt(1.0 - mu_o**2), 0.0, mu_o])
+        exact = quad(lambda mu: 2 * math.pi * mu * float(fuzz_brdf(
+            np.array([math.sqrt(1.0 - mu**2), 0.0, mu]), view, 0.4, depth)), 0.0, 1.0, limit=200)[0]
+        assert fuzz_albedo_at_view(mu_o, 0.4, depth) == pytest.approx(exact, rel=2e-3)

@@ -5,10 +5,11 @@ import math
 import pathlib
 import re
 
+import numpy as np
 import pytest
 
 from clothlight.yarn_tables import GENERAL_MODE_MIN_WEIGHT
-from precompute.optics import ballistic
+from precompute.optics import ballistic, lommel_seeliger
 from precompute.tables.closure_fit import LOBES
 
 HEADER = pathlib.Path(__file__).resolve().parents[1] / "osl" / "clothlight.h"
@@ -27,3 +28,18 @@ def test_the_header_states_the_lobe_count_and_the_unscattered_paths_as_python():
     assert defines["CL_CONE_CUTOFF"] == ballistic.CONE_CUTOFF
     assert defines["CL_UNSCATTERED_MIN_FACTOR"] == GENERAL_MODE_MIN_WEIGHT
     assert defines["CL_QUARTER_PI"] == pytest.approx(math.pi / 4, rel=1e-15)
+
+
+def header_list(name: str) -> np.ndarray:
+    """The numbers of ``#define name {a, b, …}`` in the header (continued over lines)."""
+    body = re.search(r"^#define\s+" + name + r"\s+\{([^}]*)\}", HEADER.read_text(), re.MULTILINE).group(1)
+    return np.array([float(value) for value in body.replace("\\", " ").split(",")])
+
+
+def test_the_header_sums_the_fuzz_over_the_gauss_legendre_nodes_of_its_numpy_twin():
+    # cl_fuzz_albedo_at_view and cl_fuzz_hemispherical_transmittance sum over the nodes
+    # precompute.optics.lommel_seeliger takes: numpy's leggauss mapped onto (0, 1).
+    x, w = np.polynomial.legendre.leggauss(lommel_seeliger.FUZZ_ALBEDO_NODES)
+    assert header_defines()["CL_FUZZ_ALBEDO_NODES"] == lommel_seeliger.FUZZ_ALBEDO_NODES
+    np.testing.assert_allclose(header_list("CL_FUZZ_NODE_COSINES"), 0.5 * (x + 1.0), rtol=1e-15)
+    np.testing.assert_allclose(header_list("CL_FUZZ_NODE_WEIGHTS"), 0.5 * w, rtol=1e-15)

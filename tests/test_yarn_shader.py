@@ -16,7 +16,14 @@ import pytest
 from precompute.tables.closure_fit import LOBES, LobeShape, lobe_responses
 from precompute.tables.grids import AngularGrid
 from precompute.optics import ballistic
-from precompute.optics.lommel_seeliger import lommel_seeliger, lommel_seeliger_albedo
+from precompute.optics.lommel_seeliger import (
+    fuzz_albedo_at_view,
+    fuzz_brdf,
+    fuzz_transmittance,
+    hemispherical_transmittance,
+    lommel_seeliger,
+    lommel_seeliger_albedo,
+)
 from precompute.tables.layout import (
     brdf_atlas,
     interpolate_attenuation,
@@ -85,9 +92,10 @@ def spec_sun_rho(atlas, attenuation, wi, wo):
 
 
 def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, *, cloth_normal=(0.0, 0.0, 1.0),
-                specular_weight=0.0, specular_index=None, plain_nodes=None, fuzz_albedo=0.0):
+                specular_weight=0.0, specular_index=None, plain_nodes=None, fuzz_albedo=0.0, fuzz_depth=0.0):
     """A lit, viewed patch of yarn; the material in plain nodes renders under SVM, as a user's would.
-    The specular term's slope is 0.8, its index ``specular_index`` (None: the host's)."""
+    The specular term's slope is 0.8, its index ``specular_index`` (None: the host's); a fuzz of
+    ``fuzz_depth`` 0 is left out of the record, as bakes from before it have none."""
     scene = empty_render_scene(resolution=8, samples=1 if mode == SUN_MODE else 16, bounces=0)
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     plane = bpy.context.active_object
@@ -96,8 +104,9 @@ def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, 
         attribute = mesh.attributes.new(name, "FLOAT_VECTOR", "POINT")
         attribute.data.foreach_set("vector", np.tile(value, len(mesh.vertices)).astype(np.float32))
     index = {} if specular_index is None else {"index": specular_index}
+    depth = {"fuzz_depth": fuzz_depth} if fuzz_depth else {}
     tables = dataclasses.replace(tables, specular={"weight": specular_weight, "slope": 0.8, "fuzz_albedo": fuzz_albedo,
-                                                   **index})
+                                                   **index, **depth})
     material = build_yarn_material(tables, mode=mode, plain_nodes=plain_nodes)
     mesh.materials.append(material)
 
@@ -325,6 +334,97 @@ def test_the_fuzz_is_lommel_seeliger_in_sun_mode_and_its_albedo_in_the_general_m
         np.testing.assert_allclose(fuzz, expected, rtol=0.02)
 
 
+#: A fuzz of optical depth (the specular record's fuzz_depth) and its albedo, for the tests of its shading.
+FUZZ_DEPTH, FUZZ_ALBEDO = 0.3, 0.4
+
+
+def render_patch_mean(tmp_path, tables, mode, view, sun_direction, **scene_options):
+    """Mean radiance of the patch of :func:`patch_scene` seen from ``view`` (a unit vector)."""
+    zenith, azimuth = math.degrees(math.acos(view[2])), math.degrees(math.atan2(view[1], view[0]))
+    scene, _ = patch_scene(tables, mode, zenith, azimuth, sun_direction, **scene_options)
+    return render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3).mean(axis=0)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("view, sun_direction", [
+    (unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])),  # the sun in front: yarn, fuzz and sheen
+    (direction(30.0, 60.0), unit(ballistic.unscattered_paths(direction(30.0, 60.0), INDEX)[0][0])),  # behind
+], ids=["front", "behind-unscattered"])
+def test_a_fuzz_of_depth_lets_through_t_of_the_yarn_and_reflects_the_rest_in_sun_mode(tmp_path, synthetic_tables,
+                                                                                       view, sun_direction):
+    # The fuzz stands between the yarns and the sun, and between them and the viewer: the yarn's ρ and
+    # its unscattered light are T(μi, μo) of what they were, T = exp(−τ (1/|μi| + 1/μo)) (the sun from
+    # behind crosses the fuzz of the back face), the fuzz reflects (1 − T) of its Lommel–Seeliger law,
+    # and the sheen, the top fibres' own reflection, is not shaded.
+    tables, atlas, _, attenuation = synthetic_tables
+    measured = render_patch_mean(tmp_path, tables, SUN_MODE, view, sun_direction, specular_weight=1.0,
+                                 fuzz_albedo=FUZZ_ALBEDO, fuzz_depth=FUZZ_DEPTH) / SUN_IRRADIANCE
+    mu_i = sun_direction[2]
+    transmittance = fuzz_transmittance(mu_i, view[2], FUZZ_DEPTH)
+    assert 0.2 < transmittance < 0.7
+    yarn = spec_sun_rho(atlas, attenuation, sun_direction, view)
+    sheen = cook_torrance_between(sun_direction, view, 0.8, INDEX) * max(mu_i, 0.0)
+    expected = transmittance * yarn + fuzz_brdf(sun_direction, view, FUZZ_ALBEDO, FUZZ_DEPTH) * mu_i + sheen
+    np.testing.assert_allclose(measured, expected, rtol=1e-3, atol=1e-6)
+    if mu_i < 0.0:  # light through the yarn: its unscattered part, shaded too, is most of it
+        assert interpolate_unscattered_rho(attenuation, INDEX, sun_direction, view, SPREAD).max() > yarn.max() / 2
+    else:
+        assert sheen > 1e-2 and fuzz_brdf(sun_direction, view, FUZZ_ALBEDO, FUZZ_DEPTH) > 1e-3
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("plain_nodes", [False, True], ids=["osl", "plain-nodes"])
+def test_a_fuzz_of_depth_in_the_general_mode_is_its_albedo_at_the_view_over_the_shaded_yarn(
+        tmp_path, synthetic_tables, plain_nodes):
+    # No light direction: the yarn's lobes take exp(−τ/μo) times the hemispherical transmittance, the
+    # fuzz's diffuse lobe the directional albedo of a layer of depth τ at the view (Gauss–Legendre over
+    # μi), and the sheen is as without a fuzz.
+    tables = without_unscattered_light(synthetic_tables[0], tmp_path)
+    weights = synthetic_tables[2][0]  # every exit cell's lobe weights are the same
+    view, sun_direction = unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])
+    measured = render_patch_mean(tmp_path, tables, GENERAL_MODE, view, sun_direction, specular_weight=1.0,
+                                 fuzz_albedo=FUZZ_ALBEDO, fuzz_depth=FUZZ_DEPTH, plain_nodes=plain_nodes)
+    assert (shader_node(bpy.context.active_object.active_material) is None) == plain_nodes
+    mu_i, mu_o = sun_direction[2], view[2]
+    share = math.exp(-FUZZ_DEPTH / mu_o) * hemispherical_transmittance(FUZZ_DEPTH)
+    assert 0.2 < share < 0.7
+    yarn = lobe_responses(view, sun_direction) @ weights
+    fuzz = fuzz_albedo_at_view(mu_o, FUZZ_ALBEDO, FUZZ_DEPTH) / math.pi * mu_i
+    assert fuzz < 0.8 * lommel_seeliger_albedo(mu_o, FUZZ_ALBEDO) / math.pi * mu_i
+    sheen = cook_torrance_between(sun_direction, view, 0.8, INDEX) * mu_i
+    np.testing.assert_allclose(measured, SUN_IRRADIANCE * (share * yarn + fuzz + sheen), rtol=0.01, atol=1e-4)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("index, plain_nodes", [(INDEX, False), (1.0, True)],
+                         ids=["refracting-host-osl", "fibres-in-air-plain-nodes"])
+def test_a_fuzz_of_depth_shades_the_unscattered_lobes_in_the_general_mode(tmp_path, synthetic_tables, index,
+                                                                          plain_nodes):
+    # Under a uniform sky of radiance 1 the unscattered lobes give their weights times the yarn's share
+    # under a black fuzz (albedo 0) of depth τ, exp(−τ/μo) times the hemispherical transmittance.
+    tables = synthetic_tables[0]
+    write_exr(tmp_path / "rho.exr", np.zeros((N_I * N_O, N_I * N_O, 3)))
+    write_exr(tmp_path / "lobes.exr", np.zeros((N_O, len(LOBES) * N_O, 3)))
+    dark = YarnTableFiles(tmp_path / "rho.exr", tmp_path / "lobes.exr", tables.unscattered_path, N_I, N_O,
+                          LobeShape().to_dict(), index, ballistic.ATTENUATION_SAMPLES)
+    scene, wo = patch_scene(dark, GENERAL_MODE, 30.0, 60.0, unit([0.0, 0.0, 1.0]), plain_nodes=plain_nodes,
+                            fuzz_depth=FUZZ_DEPTH)
+    assert (shader_node(bpy.context.active_object.active_material) is None) == plain_nodes
+    scene.cycles.samples = 256
+    for obj in [o for o in scene.objects if o.type == "LIGHT"]:
+        bpy.data.objects.remove(obj)
+    scene.world = bpy.data.worlds.new("sky")
+    background = scene.world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    background.inputs["Strength"].default_value = 1.0
+    pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
+    unshaded = ballistic.unscattered_radiance_factor(
+        wo, index, lambda length: np.asarray(interpolate_attenuation(synthetic_tables[3], length)))
+    share = math.exp(-FUZZ_DEPTH / wo[2]) * hemispherical_transmittance(FUZZ_DEPTH)
+    assert unshaded.min() > 0.01 and share < 0.5
+    np.testing.assert_allclose(pixels.mean(axis=0), share * unshaded, rtol=0.02)
+
+
 @pytest.mark.blender
 def test_plain_nodes_carry_a_specular_weight_above_one(tmp_path, synthetic_tables):
     # A Mix Shader's factor stops at 1: a weight of 2.5 is three copies of the lobe at 5/6 each.
@@ -338,17 +438,19 @@ def test_plain_nodes_carry_a_specular_weight_above_one(tmp_path, synthetic_table
 
 
 @pytest.mark.blender
+@pytest.mark.parametrize("fuzz", [{}, {"fuzz_albedo": FUZZ_ALBEDO, "fuzz_depth": FUZZ_DEPTH}], ids=["no-fuzz", "fuzz"])
 @pytest.mark.parametrize("fibres_in_air", [False, True], ids=["opaque-yarn", "fibres-in-air"])
 @pytest.mark.parametrize("light_between_yarns", [False, True], ids=["sun", "sun-sky-bounces"])
 def test_plain_nodes_render_the_woven_sample_as_the_osl_general_mode(tmp_path, synthetic_tables, light_between_yarns,
-                                                                    fibres_in_air):
+                                                                    fibres_in_air, fuzz):
     # The same closures with the same weights on a woven sample.  Under the sun alone, direct light:
     # pixel for pixel the same image.  With a grey sky and four bounces (light between yarns and
     # through their far faces) the two pick closures to sample in another order, so their noise
     # differs, and their means agree.  The camera frames the inside of the sample: through a cut
     # yarn end it would see the yarn's far face, where the OSL shader turns its frame outward and a
     # Hair BSDF node cannot.  A yarn of fibres in air (host index 1) lets light through unscattered
-    # along a straight line, one more lobe in both.
+    # along a straight line, one more lobe in both.  A fuzz of depth: its diffuse lobe of the layer's
+    # albedo at the view, and the yarn's closures shaded under it, in both.
     from clothlight.blender.sample_object import build_sample_object
     from clothlight.weave import WeaveParameters
 
@@ -356,7 +458,7 @@ def test_plain_nodes_render_the_woven_sample_as_the_osl_general_mode(tmp_path, s
     weights = weights * np.random.default_rng(4).uniform(0.3, 1.0, weights.shape)
     write_exr(tmp_path / "lobes.exr", lobe_atlas(weights))
     tables = dataclasses.replace(tables if fibres_in_air else without_unscattered_light(tables, tmp_path),
-                                 lobe_path=tmp_path / "lobes.exr", specular={"weight": 0.5, "slope": 0.3},
+                                 lobe_path=tmp_path / "lobes.exr", specular={"weight": 0.5, "slope": 0.3, **fuzz},
                                  host_index=1.0 if fibres_in_air else tables.host_index)
     scene = empty_render_scene(resolution=48, samples=64 if light_between_yarns else 4,
                                bounces=4 if light_between_yarns else 0)

@@ -38,8 +38,10 @@ LOBE_SHAPE_SOCKETS = {
 }
 
 #: cloth_yarn.osl's inputs for the bake's specular record (``summary.json`` → ``specular``); its
-#: SpecularIOR is ``YarnTableFiles.specular_index``.
-SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope", "FuzzAlbedo": "fuzz_albedo"}
+#: SpecularIOR is ``YarnTableFiles.specular_index``.  A record without ``fuzz_depth`` (a bake from
+#: before it) has a fuzz of depth 0, the veneer it was rendered with.
+SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope", "FuzzAlbedo": "fuzz_albedo",
+                    "FuzzDepth": "fuzz_depth"}
 
 #: cloth_yarn.osl's inputs for the closure-mixture weights, keyed by lobe in the order of the tiles
 #: of ``lobes.exr`` (precompute.tables.closure_fit.LOBES).
@@ -161,8 +163,8 @@ def build_yarn_material(
     ----------
     tables
         A :class:`clothlight.yarn_tables.YarnTableFiles`: checked table paths and resolutions, and the
-        specular term the bake recorded (SpecularWeight, Slope and FuzzAlbedo; the shader's defaults
-        where it has none).
+        specular term the bake recorded (SpecularWeight, Slope, FuzzAlbedo and FuzzDepth; the shader's
+        defaults where it has none).
     mode
         :data:`SUN_MODE` (exact under the scene's sun, for validation) or
         :data:`GENERAL_MODE` (closure mixture, any lighting).
@@ -331,8 +333,8 @@ def _read_tables(material, shader, tables) -> None:
     shader.inputs["SpecularIOR"].default_value = tables.specular_index
     if tables.specular is not None:
         from precompute.tables.folder import default_specular
-        for socket, key in SPECULAR_SOCKETS.items():
-            shader.inputs[socket].default_value = tables.specular.get(key, default_specular()[key])
+        for socket, key in SPECULAR_SOCKETS.items():  # fuzz_depth: 0 where neither record has it
+            shader.inputs[socket].default_value = tables.specular.get(key, default_specular().get(key, 0.0))
 
 
 def sync_sun(material, sun_object) -> None:

@@ -5,8 +5,10 @@ The same closures as ``osl/cloth_yarn.osl``'s general mode: the five lobes of ``
 yarn frame (``cl_closure_mixture``; precompute.tables.closure_fit: Diffuse, Translucent, Hair reflection
 and transmission about the yarn axis, GGX Glossy about the view), weighted by the lobe atlas where
 the view falls in it, plus the cloth's Cook–Torrance sheen about the cloth normal
-(``cl_cloth_specular_closure``).  The view is placed in the atlas by the tables' concentric
-equal-area hemisphere map (``cl_hemisphere_to_square``, Shirley & Chiu 1997) built from math nodes.
+(``cl_cloth_specular_closure``) and its fuzz (``cl_cloth_fuzz_closure``); a fuzz of optical depth
+also shades the yarn's closures (``cl_fuzz_yarn_share``).  The view is placed in the atlas by the
+tables' concentric equal-area hemisphere map (``cl_hemisphere_to_square``, Shirley & Chiu 1997)
+built from math nodes.
 
 The sheen is Cycles' Metallic BSDF in its physical-conductor form with extinction 0, which is the
 exact Fresnel reflectance of a dielectric of the host's index for light from outside, on a
@@ -106,9 +108,18 @@ def general_mode_surface(tree, tables, tangent, cloth_normal, lobe_image, unscat
             nodes.node_inputs(closure, {"Roughness": math.sqrt(shape["retroreflection_alpha"]), "Anisotropy": 0.0,
                                         "Normal": toward_view})
         closures.append(closure.outputs[0])
-    closures += _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal)
-    if unscattered_image is not None:
-        closures.append(_straight_unscattered_light(nodes, tables, view, toward_view, unscattered_image))
+    sheen, yarn_share = _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal)
+    if yarn_share is None:  # no fuzz depth: the yarn's closures as they are
+        closures += sheen
+        if unscattered_image is not None:
+            closures.append(_straight_unscattered_light(nodes, tables, view, toward_view, unscattered_image))
+    else:  # a fuzz of depth shades the yarn's closures (lobes and unscattered light), not its own nor the sheen
+        if unscattered_image is not None:
+            closures.append(_straight_unscattered_light(nodes, tables, view, toward_view, unscattered_image))
+        if closures:
+            yarn = nodes.add_shaders(closures, x=420)
+            closures = [nodes.node("ShaderNodeMixShader", (480, 300), (yarn_share, None, yarn)).outputs[0]]
+        closures += sheen
     surface = nodes.add_shaders(closures, x=560) if closures else None
 
     # A far face (backfacing) passes every ray but the camera's: backfacing > is-camera-ray.
@@ -193,41 +204,87 @@ def _clamped(socket):
     return socket
 
 
-def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal) -> list:
+def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
     """The cloth's specular and fuzz closures (``cl_cloth_specular_closure``, ``cl_cloth_fuzz_closure``):
     about the cloth normal turned toward the viewer, on faces whose normal is on its side only, the
     sheen weighted by the specular weight, the fuzz a diffuse lobe weighted by its directional albedo
-    at the view (:func:`precompute.optics.lommel_seeliger.lommel_seeliger_albedo`)."""
+    at the view (:func:`precompute.optics.lommel_seeliger.fuzz_albedo_at_view`).  Returns the list of
+    their sockets and the socket of the share of the yarn's light that crosses a fuzz of optical
+    depth τ > 0 (the specular record's ``fuzz_depth``) both ways, exp(−τ/μo) times the hemispherical
+    transmittance (``cl_fuzz_yarn_share``), or None for τ = 0: no node for it."""
+    from precompute.optics.lommel_seeliger import hemispherical_transmittance
     from precompute.tables import folder as table_folder
     specular = tables.specular or table_folder.default_specular()
     weight, slope = float(specular["weight"]), float(specular["slope"])
     fuzz = float(specular.get("fuzz_albedo", 0.0))
-    if weight <= 0.0 and fuzz <= 0.0:
-        return []
+    depth = float(specular.get("fuzz_depth", 0.0))
+    if weight <= 0.0 and fuzz <= 0.0 and depth <= 0.0:
+        return [], None
     cosine = nodes.vector_math("DOT_PRODUCT", cloth_normal, toward_view, location=(-1400, -700)).outputs["Value"]
-    facing = nodes.math("SIGN", cosine, location=(-1250, -700))
-    toward = nodes.vector_math("SCALE", cloth_normal, location=(-1100, -700))  # unit: a closure normalises its normal
-    nodes.link(facing, toward.inputs["Scale"])
-    toward = toward.outputs[0]
-    face_on_side = nodes.math("GREATER_THAN", nodes.vector_math("DOT_PRODUCT", normal, toward, location=(-800, -800))
-                              .outputs["Value"], 0.0, location=(-650, -800))
     closures = []
+    if weight > 0.0 or fuzz > 0.0:
+        facing = nodes.math("SIGN", cosine, location=(-1250, -700))
+        toward = nodes.vector_math("SCALE", cloth_normal, location=(-1100, -700))  # unit: a closure normalises it
+        nodes.link(facing, toward.inputs["Scale"])
+        toward = toward.outputs[0]
+        face_on_side = nodes.math("GREATER_THAN", nodes.vector_math("DOT_PRODUCT", normal, toward,
+                                                                    location=(-800, -800)).outputs["Value"],
+                                  0.0, location=(-650, -800))
     if weight > 0.0:
         copies = math.ceil(weight)
         factor = nodes.math("MULTIPLY", face_on_side, weight / copies, location=(-500, -800))
         closures += cook_torrance_closures(nodes, factor, copies, tables.specular_index, slope, toward, (-200, -700))
-    if fuzz > 0.0:
-        # a(μo) = (A/2)(1 − μo ln(1 + 1/μo)), μo = |n_c·v| kept above 0
-        mu = nodes.math("MAXIMUM", nodes.math("ABSOLUTE", cosine, location=(-1250, -1300)), 1e-6,
-                        location=(-1100, -1300))
+    if fuzz <= 0.0 and depth <= 0.0:
+        return closures, None
+    # μo = |n_c·v| kept above 0
+    mu = nodes.math("MAXIMUM", nodes.math("ABSOLUTE", cosine, location=(-1250, -1300)), 1e-6, location=(-1100, -1300))
+    yarn_share = None
+    if depth > 0.0:
+        through = nodes.math("EXPONENT", nodes.math("DIVIDE", -depth, mu, location=(-950, -1450)),
+                             location=(-800, -1450))  # exp(−τ/μo), the view's path through the fuzz
+        yarn_share = nodes.math("MULTIPLY", through, hemispherical_transmittance(depth), location=(-650, -1450))
+        albedo = _fuzz_layer_albedo(nodes, mu, through, fuzz, depth) if fuzz > 0.0 else None
+    else:
+        # a(μo) = (A/2)(1 − μo ln(1 + 1/μo)), the semi-infinite layer's
         log = nodes.math("LOGARITHM", nodes.math("ADD", 1.0, nodes.math("DIVIDE", 1.0, mu, location=(-950, -1300)),
                                                  location=(-800, -1300)), math.e, location=(-650, -1300))
         albedo = nodes.math("MULTIPLY_ADD", nodes.math("MULTIPLY", mu, log, location=(-500, -1300)), -0.5 * fuzz,
                             0.5 * fuzz, location=(-350, -1300))
+    if fuzz > 0.0:
         colour = nodes.math("MULTIPLY", albedo, face_on_side, location=(-200, -1300))
         closures.append(nodes.node("ShaderNodeBsdfDiffuse", (100, -1300), {"Color": colour, "Normal": toward}
                                    ).outputs[0])
-    return closures
+    return closures, yarn_share
+
+
+def _fuzz_layer_albedo(nodes, mu, through, albedo: float, depth: float):
+    """The socket of the directional albedo at the view of a fuzz of albedo A and optical depth τ > 0
+    (``cl_fuzz_albedo_at_view``; :func:`precompute.optics.lommel_seeliger.fuzz_albedo_at_view`):
+    (A/2) Σ_k w_k μ_k (1 − e_k E) / (μ_k + μo) over the Gauss–Legendre nodes μ_k, w_k on (0, 1), where
+    e_k = exp(−τ/μ_k) are constants and E = exp(−τ/μo) is ``through``.  Each term is (c_k − d_k E) / (μ_k
+    + μo), c_k = (A/2) w_k μ_k and d_k = c_k e_k; Vector Math nodes take three terms at a time (a float
+    socket reaches a vector input as (x, x, x)), the last group padded with terms of zero."""
+    import numpy as np
+    from precompute.optics.lommel_seeliger import FUZZ_ALBEDO_NODES
+
+    x, w = np.polynomial.legendre.leggauss(FUZZ_ALBEDO_NODES)
+    cosines, weights = 0.5 * (x + 1.0), 0.5 * w
+    constant = 0.5 * albedo * weights * cosines
+    groups = -(-FUZZ_ALBEDO_NODES // 3)
+    padding = 3 * groups - FUZZ_ALBEDO_NODES
+    cosines = np.concatenate([cosines, np.ones(padding)])
+    shaded = np.concatenate([constant * np.exp(-depth / cosines[:FUZZ_ALBEDO_NODES]), np.zeros(padding)])
+    constant = np.concatenate([constant, np.zeros(padding)])
+    total = None
+    for group in range(groups):
+        part = slice(3 * group, 3 * group + 3)
+        y = -1600 - 150 * group
+        numerator = nodes.vector_math("MULTIPLY_ADD", through, tuple(-shaded[part]), tuple(constant[part]),
+                                      location=(-650, y)).outputs[0]
+        denominator = nodes.vector_math("ADD", mu, tuple(cosines[part]), location=(-650, y - 70)).outputs[0]
+        term = nodes.vector_math("DIVIDE", numerator, denominator, location=(-500, y)).outputs[0]
+        total = term if total is None else nodes.vector_math("ADD", total, term, location=(-350, y)).outputs[0]
+    return nodes.vector_math("DOT_PRODUCT", total, (1.0, 1.0, 1.0), location=(-350, -1300)).outputs["Value"]
 
 
 def cook_torrance_closures(nodes, factor, copies: int, index: float, slope: float, normal, location) -> list:

@@ -50,6 +50,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--max-back-front", type=float, metavar="RATIO",
                         help="the largest luminance ratio of the cloth lit from straight behind over lit from the "
                              "front, at normal view (real cloth is darker from behind: e.g. 0.5)")
+    parser.add_argument("--hold-bands", metavar="LOW,HIGH",
+                        help="hold the backscatter (θi 60° θv −60°, −40°; θi 45° θv −60°, the fabric's main channel) "
+                             "and the off-specular B/R and G/R medians, model / measured, within LOW–HIGH: their "
+                             "log distance outside it joins the objective (issue 43's band: 0.85,1.15)")
     parser.add_argument("--seed", type=bounds.SEED.argument("--seed"), default=0,
                         help="seed of the optimiser and of every forward evaluation (default 0)")
     parser.add_argument("--budget-evaluations", type=bounds.FIT_EVALUATIONS.argument("--budget-evaluations"),
@@ -89,6 +93,7 @@ def run(args) -> int:
     # every input checked before any work (clothlight.fit.run, shared with the add-on's fit worker)
     inputs = check_fit_inputs(args.measured, preset_argument(args), args.free, out=args.out,
                               target_ratios=args.target_ratios, max_back_front=args.max_back_front,
+                              hold_bands=args.hold_bands,
                               budget_evaluations=args.budget_evaluations, budget_seconds=args.budget_seconds,
                               dye_series=args.dye_series, cache_dir=args.cache_dir)
     scheduler = None if args.dye_series else check_scheduler(args.scheduler)

@@ -157,7 +157,8 @@ def cloth_response(measured_views, *, weave: WeaveParameters | None = None, seed
 
 
 class ForwardModel:
-    """``model(config, specular_weight=, specular_slope=, relative_error=, seed=, fuzz_albedo=0)`` → the cloth BRDF
+    """``model(config, specular_weight=, specular_slope=, relative_error=, seed=, fuzz_albedo=0, fuzz_depth=0)`` →
+    the cloth BRDF
     (n_views + 2, 3), 1/sr, linear Rec.709, at the measured views given to :func:`build_forward_model`
     and then at the :data:`SWATCH_VIEWS` (:attr:`swatch_count` rows: the BRDF lit from the front,
     and the BTDF lit from straight behind, both at normal view).  The specular term's Fresnel factor
@@ -187,31 +188,45 @@ class ForwardModel:
         return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), *per_view.shape[1:]).mean(axis=1)
 
     def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float,
-                   specular_index: float | None = None, fuzz_albedo: float = 0.0) -> np.ndarray:
+                   specular_index: float | None = None, fuzz_albedo: float = 0.0,
+                   fuzz_depth: float = 0.0) -> np.ndarray:
         """The cloth BRDF of given tables at the measured views, averaged over the sample azimuths."""
         return self._mean_over_azimuths(self.response.cloth_brdf(
             atlas, attenuation, layout, specular_weight=specular_weight, specular_slope=specular_slope,
-            specular_index=specular_index, fuzz_albedo=fuzz_albedo))
+            specular_index=specular_index, fuzz_albedo=fuzz_albedo, fuzz_depth=fuzz_depth))
 
     def parts(self, config: dict, *, relative_error: float, seed: int):
-        """The cloth BRDF split into what the medium gives and what the cloth-scale terms add: the
-        first (n_views, 3), 1/sr, with neither, and ``specular(weight, slope, fuzz_albedo=0)``
-        (n_views,), 1/sr, white: the sheen and the fuzz.  A fit optimises their parameters for each
-        medium in milliseconds."""
+        """The cloth BRDF split into what the medium gives and what the cloth-scale terms do: the
+        first (n_views, 3), 1/sr, with neither, and :class:`ClothTerms`, ``terms(weight, slope,
+        fuzz_albedo=0, fuzz_depth=0)`` (n_views,), 1/sr, white: the sheen and the fuzz, and
+        ``terms.transmittance(fuzz_depth)``, the fuzz's shade on the first.  A fit optimises their
+        parameters for each medium in milliseconds."""
         atlas, attenuation, layout = self.tables(config, relative_error=relative_error, seed=seed)
         yarn = self.cloth_brdf(atlas, attenuation, layout, specular_weight=0.0, specular_slope=1.0)
-
-        index = sheen_index(medium_from_dict(config, self.base_dir))
-
-        def specular(weight: float, slope: float, fuzz_albedo: float = 0.0) -> np.ndarray:
-            return self._mean_over_azimuths(self.response.specular_brdf(weight, slope, index, fuzz_albedo))
-
-        return yarn, specular
+        return yarn, ClothTerms(self, sheen_index(medium_from_dict(config, self.base_dir)))
 
     def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
-                 seed: int, fuzz_albedo: float = 0.0) -> np.ndarray:
-        yarn, specular = self.parts(config, relative_error=relative_error, seed=seed)
-        return yarn + specular(specular_weight, specular_slope, fuzz_albedo)[:, None]
+                 seed: int, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray:
+        yarn, terms = self.parts(config, relative_error=relative_error, seed=seed)
+        return (yarn * terms.transmittance(fuzz_depth)[:, None]
+                + terms(specular_weight, specular_slope, fuzz_albedo, fuzz_depth)[:, None])
+
+
+class ClothTerms:
+    """The cloth-scale terms of one candidate at a forward model's views (:meth:`ForwardModel.parts`):
+    ``terms(weight, slope, fuzz_albedo=0, fuzz_depth=0)`` what the sheen and the fuzz add (n_views,),
+    1/sr, white, and ``terms.transmittance(fuzz_depth)`` (n_views,) the share of the yarn's light that
+    crosses the fuzz (:mod:`precompute.optics.lommel_seeliger`)."""
+
+    def __init__(self, model: ForwardModel, index: float):
+        self.model, self.index = model, index
+
+    def __call__(self, weight: float, slope: float, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray:
+        return self.model._mean_over_azimuths(
+            self.model.response.specular_brdf(weight, slope, self.index, fuzz_albedo, fuzz_depth))
+
+    def transmittance(self, fuzz_depth: float) -> np.ndarray:
+        return self.model._mean_over_azimuths(self.model.response.fuzz_transmittance(fuzz_depth))
 
 
 def _yarn_and_grids(config: dict, medium, optics, seed: int, paths: int):

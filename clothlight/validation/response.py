@@ -131,17 +131,27 @@ class ClothResponse:
         rho_map, _ = self._maps_for(layout)
         return np.unique(rho_map.indices)
 
-    def specular_brdf(self, weight: float, slope: float, index: float, fuzz_albedo: float = 0.0) -> np.ndarray:
-        """The cloth-scale terms' share of each view's cloth BRDF (n_views,), 1/sr: (w f_CT + f_LS) (n_c·l) s,
-        the Cook–Torrance sheen and the fuzz (:mod:`precompute.optics.lommel_seeliger`) about the cloth
-        normal, on the lit yarn faces turned to the sun (the shader's sun mode cuts both alike)."""
+    def specular_brdf(self, weight: float, slope: float, index: float, fuzz_albedo: float = 0.0,
+                      fuzz_depth: float = 0.0) -> np.ndarray:
+        """The cloth-scale terms' share of each view's cloth BRDF (n_views,), 1/sr: (w f_CT + f_fuzz) (n_c·l) s,
+        the Cook–Torrance sheen and the fuzz of optical depth ``fuzz_depth``
+        (:func:`precompute.optics.lommel_seeliger.fuzz_brdf`) about the cloth normal, on the lit yarn
+        faces turned to the sun (the shader's sun mode cuts both alike)."""
         from precompute.optics.cook_torrance import cook_torrance
-        from precompute.optics.lommel_seeliger import lommel_seeliger
+        from precompute.optics.lommel_seeliger import fuzz_brdf
 
         terms = weight * cook_torrance(self._toward_sun, self._toward_camera, slope, index)
         if fuzz_albedo:
-            terms = terms + lommel_seeliger(self._toward_sun, self._toward_camera, fuzz_albedo)
+            terms = terms + fuzz_brdf(self._toward_sun, self._toward_camera, fuzz_albedo, fuzz_depth)
         return terms * self._toward_sun[:, 2] * self._specular_share
+
+    def fuzz_transmittance(self, fuzz_depth: float) -> np.ndarray:
+        """(n_views,) the share of each view's yarn light that crosses a fuzz of optical depth
+        ``fuzz_depth`` in and out (:func:`precompute.optics.lommel_seeliger.fuzz_transmittance` about
+        the cloth normal, as the shader shades the yarn's tables); 1 for ``fuzz_depth`` 0."""
+        from precompute.optics.lommel_seeliger import fuzz_transmittance
+
+        return fuzz_transmittance(self._toward_sun[:, 2], self._toward_camera[:, 2], fuzz_depth)
 
     @functools.cached_property
     def _toward_sun(self) -> np.ndarray:
@@ -158,14 +168,15 @@ class ClothResponse:
 
     def cloth_brdf(self, atlas: np.ndarray, attenuation: np.ndarray | None, layout: TableLayout, *,
                    specular_weight: float, specular_slope: float, specular_index: float | None = None,
-                   fuzz_albedo: float = 0.0) -> np.ndarray:
+                   fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray:
         """The cloth BRDF (n_views, C), 1/sr, that a sun-mode sweep of the yarn material measures.
 
         ``atlas``: the BRDF atlas image (N_i·N_o, N_i·N_o, C) (``brdf.exr``); ``attenuation``: the
         unscattered light's table (M, C) or (1, M, C) (``unscattered.exr``), or None for a material
         without it; ``layout`` must describe both.  ``specular_weight``, ``specular_slope``,
         ``specular_index``: the shader's ``SpecularWeight``, ``Slope`` (Beckmann rms slope m) and
-        ``SpecularIOR`` (None: the layout's host index); ``fuzz_albedo``: its ``FuzzAlbedo``.
+        ``SpecularIOR`` (None: the layout's host index); ``fuzz_albedo``, ``fuzz_depth``: its
+        ``FuzzAlbedo`` and ``FuzzDepth`` (the yarn's light shaded by :meth:`fuzz_transmittance`).
         """
         atlas = np.asarray(atlas, float)
         side = layout.incidence_resolution * layout.exit_resolution
@@ -180,7 +191,9 @@ class ClothResponse:
                                      f"({layout.unscattered_samples}, C): the layout's attenuation table")
             brdf = brdf + unscattered_map @ attenuation
         index = layout.index if specular_index is None else specular_index
-        return brdf + self.specular_brdf(specular_weight, specular_slope, index, fuzz_albedo)[:, None]
+        if fuzz_depth:
+            brdf = brdf * self.fuzz_transmittance(fuzz_depth)[:, None]
+        return brdf + self.specular_brdf(specular_weight, specular_slope, index, fuzz_albedo, fuzz_depth)[:, None]
 
     def save(self, path) -> pathlib.Path:
         """Write the response to ``path`` (``.npz``, compressed)."""

@@ -15,6 +15,11 @@ split by :func:`precompute.fit.objective.split_views`), :func:`fabric_figures` g
   :func:`off_specular_views`, and their ratio model / measured per view;
 * **lit from behind / from the front**: a forward model's swatches (luminance at normal view), when given.
 
+:func:`band_ratios` picks from these the ratios issue 43 holds within a band (0.85–1.15): the
+backscatter in the fabric's main channel and the off-specular B/R and G/R medians; and
+:func:`band_penalty` is how far a cloth lies outside a band, which a fit may add to its objective
+(``python -m clothlight.fit --hold-bands``).
+
 No rendering here: the caller brings both BRDFs (``scripts/fabric_figures.py`` with the fit's
 forward model).
 """
@@ -22,9 +27,11 @@ forward model).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
+from precompute.errors import ParameterError
 from precompute.fit.measured_data import relative_rms_error
 from precompute.fit.objective import CHANNELS, TOLERANCE_DEG, Views, channel_relative_rms, combined
 
@@ -76,6 +83,61 @@ def channel_ratios(rgb: np.ndarray) -> dict[str, np.ndarray]:
     rgb = np.asarray(rgb, float)
     red = np.where(rgb[:, 0] > 0, rgb[:, 0], np.nan)
     return {"B/R": rgb[:, 2] / red, "G/R": rgb[:, 1] / red}
+
+
+def main_channel(measured_rgb: np.ndarray) -> int:
+    """The index of the measurement's brightest channel over all its views (a red fabric's R)."""
+    return int(np.argmax(np.asarray(measured_rgb, float).sum(axis=0)))
+
+
+def band_ratios(model: np.ndarray, measured: np.ndarray, views: Views) -> dict[str, float]:
+    """The ratios model / measured that issue 43 holds within 0.85–1.15: the backscatter at each of
+    :data:`BACKSCATTER_VIEWS` the measurement has, in its main channel (:func:`main_channel`), keyed
+    ``"backscatter θi/θv"``; and the medians over the off-specular views of B/R and G/R, model over
+    measured, keyed ``"B/R"`` and ``"G/R"`` (left out where red is 0 at every such view)."""
+    model, measured = np.asarray(model, float), np.asarray(measured, float)
+    channel = main_channel(measured)
+    ratios = {}
+    for theta_i, theta_v in BACKSCATTER_VIEWS:
+        index = view_index(views, theta_i, theta_v)
+        if index is not None and measured[index, channel] > 0:
+            ratios[f"backscatter {theta_i:g}/{theta_v:g}"] = float(model[index, channel] / measured[index, channel])
+    off = off_specular_views(views)
+    if off.any():
+        ours, theirs = channel_ratios(model[off]), channel_ratios(measured[off])
+        for key in ("B/R", "G/R"):
+            ratio = ours[key] / theirs[key]
+            if np.isfinite(ratio).any():
+                ratios[key] = float(np.nanmedian(ratio))
+    return ratios
+
+
+def parse_band(text: str | Sequence[float]) -> tuple[float, float]:
+    """``"0.9,1.1"`` (or a pair) → (low, high), with 0 < low < 1 < high: the band a ratio model /
+    measured is held within (``--hold-bands``).  ParameterError otherwise."""
+    allowed = "LOW,HIGH with 0 < LOW < 1 < HIGH, e.g. 0.85,1.15 (issue 43's band)"
+    try:
+        values = [float(v) for v in (text.split(",") if isinstance(text, str) else text)]
+    except (TypeError, ValueError):
+        raise ParameterError("--hold-bands", text, allowed) from None
+    if len(values) != 2 or not all(math.isfinite(v) for v in values) or not 0.0 < values[0] < 1.0 < values[1]:
+        raise ParameterError("--hold-bands", text, allowed)
+    return values[0], values[1]
+
+
+def band_penalty(model: np.ndarray, measured: np.ndarray, views: Views, band: tuple[float, float]) -> float:
+    """How far ``model`` lies outside ``band`` = (low, high) on :func:`band_ratios`: the RMS over the
+    ratios r of max(0, ln(r / high), ln(low / r)), 0 when every ratio is within the band; a ratio
+    that is not positive counts as ln 10⁶ out.  Same scale as the fit's ratio penalty
+    (:meth:`precompute.fit.objective.Objective.ratio_penalty`)."""
+    low, high = band
+    excess = []
+    for ratio in band_ratios(model, measured, views).values():
+        if not ratio > 0:
+            excess.append(math.log(1e6))
+            continue
+        excess.append(max(0.0, math.log(ratio / high), math.log(low / ratio)))
+    return float(math.sqrt(np.mean(np.square(excess)))) if excess else 0.0
 
 
 def fabric_figures(model: np.ndarray, measured: np.ndarray, views: Views, *,
@@ -139,5 +201,5 @@ def figures_text(figures: dict, label: str) -> list[str]:
     return lines
 
 
-__all__ = ["BACKSCATTER_VIEWS", "fabric_figures", "figures_text", "in_plane", "off_specular_views", "relative_rms",
-           "view_index"]
+__all__ = ["BACKSCATTER_VIEWS", "band_penalty", "band_ratios", "fabric_figures", "figures_text", "in_plane",
+           "main_channel", "off_specular_views", "parse_band", "relative_rms", "view_index"]

@@ -59,6 +59,7 @@ from precompute.distributed import ClusterExecutor, open_executor
 from precompute.errors import InputError, ParameterError
 from precompute.optics.medium import MAX_VOLUME_FRACTION, medium_from_dict
 from precompute.fit.baseline import BaselineFit, fit_baseline
+from precompute.fit.figures import band_penalty, band_ratios
 from precompute.fit.objective import Objective, Views, load_measurement, parse_target_ratios, split_views
 from precompute.fit.parameters import FitParameter, apply, initial_values, parse_free, total_volume_fraction
 from precompute.optics.cook_torrance import FIT_TABLE, specular_from_config
@@ -76,7 +77,7 @@ class ForwardModel(Protocol):
     """A forward model: the cloth's (n_views, 3) BRDF, 1/sr, at the views it was built for."""
 
     def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
-                 seed: int, fuzz_albedo: float = 0.0) -> np.ndarray: ...
+                 seed: int, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray: ...
 
 
 class FitCancelled(KeyboardInterrupt):
@@ -187,6 +188,9 @@ class FitResult:
     #: The §6.1 swatches of the final evaluation, when the forward model gives them: ``front_rgb``,
     #: ``back_rgb`` (1/sr at normal view), ``back_front_luminance`` and the ``max_back_front`` asked for.
     swatches: dict | None = None
+    #: The bands held (``hold_bands``), when asked: ``band`` (low, high), the final evaluation's
+    #: ``ratios`` (:func:`precompute.fit.figures.band_ratios`) and its ``penalty``.
+    bands: dict | None = None
 
     @property
     def forward_evaluations(self) -> int:
@@ -216,6 +220,7 @@ class FitResult:
             "generations": self.generations,
             "seconds": round(self.seconds, 3),
             "swatches": self.swatches,
+            "bands": self.bands,
             "views": [{"theta_i": float(a[0]), "phi_i": float(a[1]), "theta_o": float(a[2]), "phi_o": float(a[3]),
                        "set": "fit" if fit else ("held_out" if held else "other"),
                        "measured": [float(v) for v in measured], "model": [float(v) for v in model],
@@ -407,6 +412,7 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
                progress: Callable[[FitProgress], None] | None = None, cancel: Callable[[], bool] | None = None,
                specular: Mapping[str, float] | None = None, schedule: AccuracySchedule | None = None,
                popsize: int | None = None, max_back_front: float | None = None,
+               hold_bands: tuple[float, float] | None = None,
                scheduler: str | ClusterExecutor | None = None) -> FitResult:
     """Fit the free parameters of a medium to a measurement (module docstring).
 
@@ -439,6 +445,10 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         (real cloth is darker lit from behind, the paper's Fig. 9): a forward model that gives the
         swatches (``swatch_count`` rows after the measured views) adds ``max(0, ln(ratio / max))``
         to the objective.  None: no constraint.
+    hold_bands
+        (low, high): adds :func:`precompute.fit.figures.band_penalty`, how far the candidate's
+        backscatter and off-specular colour, model over measured, lie outside that band (issue 43's is
+        0.85–1.15).  None: no constraint.
     scheduler
         Where each generation's evaluations run (:mod:`precompute.distributed`: ``"local"`` or a
         cluster's address, or a cluster already open with ``open_executor(..., code=FIT_CODE)``;
@@ -470,7 +480,7 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         raise ParameterError("max_back_front", max_back_front, "a forward model that gives the §6.1 swatches")
 
     evaluate = CandidateEvaluator(config, specular, base_dir, forward_model, objective, tuple(profiled), swatches,
-                                  max_back_front)
+                                  max_back_front, None if hold_bands is None else tuple(hold_bands))
     with contextlib.ExitStack() as stack:
         evaluate_many = evaluate_in_turn
         if scheduler is not None:
@@ -511,7 +521,10 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         swatches=None if swatch_rgb is None else {
             "front_rgb": swatch_rgb[0].tolist(), "back_rgb": swatch_rgb[1].tolist(),
             "back_front_luminance": float(LUMINANCE @ swatch_rgb[1]) / float(LUMINANCE @ swatch_rgb[0]),
-            "max_back_front": max_back_front})
+            "max_back_front": max_back_front},
+        bands=None if hold_bands is None else {
+            "band": list(hold_bands), "ratios": band_ratios(model_rgb, objective.measured, views),
+            "penalty": band_penalty(model_rgb, objective.measured, views, hold_bands)})
 
 
 @dataclass
@@ -529,13 +542,16 @@ class CandidateEvaluator:
     profiled: tuple
     swatches: int
     max_back_front: float | None
+    hold_bands: tuple[float, float] | None = None
 
     def score(self, rgb: np.ndarray) -> float:
         measured_views = rgb[:len(rgb) - self.swatches]
-        if self.max_back_front is None:
-            return self.objective(measured_views)
-        return self.objective(measured_views) + back_front_penalty(rgb[len(rgb) - self.swatches:],
-                                                                   self.max_back_front)
+        score = self.objective(measured_views)
+        if self.max_back_front is not None:
+            score += back_front_penalty(rgb[len(rgb) - self.swatches:], self.max_back_front)
+        if self.hold_bands is not None:
+            score += band_penalty(measured_views, self.objective.measured, self.objective.views, self.hold_bands)
+        return score
 
     def model_and_values(self, candidate: dict, keywords: dict, relative_error: float, forward_seed: int):
         if not self.profiled:
@@ -544,7 +560,7 @@ class CandidateEvaluator:
                                                               seed=forward_seed)
         values = fit_profiled_specular(self.score, medium_part, specular_part, self.profiled, keywords)
         keywords = {**keywords, **{p.path: values[p.name] for p in self.profiled}}
-        return medium_part + cloth_terms(specular_part, keywords)[:, None], values
+        return cloth_from_parts(medium_part, specular_part, keywords), values
 
     def __call__(self, parameters: dict, relative_error: float, forward_seed: int) -> float | tuple | Refused:
         candidate, keywords = apply(self.config, self.specular, parameters)
@@ -610,18 +626,24 @@ def back_front_penalty(swatch_rgb: np.ndarray, max_back_front: float) -> float:
     return max(0.0, math.log(max(back, 1e-300) / front / max_back_front))
 
 
-def cloth_terms(specular_part: Callable, keywords: Mapping[str, float]) -> np.ndarray:
-    """What the cloth-scale terms add (n,), 1/sr: ``specular_part`` (a forward model's, ``parts``) at the
-    sheen's weight and slope of ``keywords``, and at its fuzz albedo where ``keywords`` holds one."""
-    fuzz = {"fuzz_albedo": keywords["fuzz_albedo"]} if keywords.get("fuzz_albedo") else {}
-    return specular_part(keywords["specular_weight"], keywords["specular_slope"], **fuzz)
+def cloth_from_parts(medium_part: np.ndarray, specular_part: Callable, keywords: Mapping[str, float]) -> np.ndarray:
+    """The cloth BRDF (n, 3), 1/sr, of a forward model's ``parts``: the medium's part, shaded by a fuzz
+    of depth where ``keywords`` holds one (``specular_part.transmittance``), plus what the sheen and
+    the fuzz add, ``specular_part`` at the sheen's weight and slope of ``keywords`` and at its fuzz
+    albedo and depth where it holds them."""
+    fuzz = {key: keywords[key] for key in ("fuzz_albedo", "fuzz_depth") if keywords.get(key)}
+    terms = specular_part(keywords["specular_weight"], keywords["specular_slope"], **fuzz)[:, None]
+    if fuzz.get("fuzz_depth"):
+        medium_part = medium_part * specular_part.transmittance(fuzz["fuzz_depth"])[:, None]
+    return medium_part + terms
 
 
 def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part: np.ndarray, specular_part: Callable,
                           profiled: Sequence[FitParameter], keywords: Mapping[str, float]) -> dict[str, float]:
     """The values of the specular parameters ``profiled`` that minimise ``objective`` for one medium:
     its cloth BRDF without the specular term ``medium_part`` (n, 3) plus ``specular_part(weight,
-    slope, fuzz_albedo)`` (n,).  A grid of about :data:`PROFILE_GRID_SIZE` points over their [0, 1] box (log
+    slope, fuzz_albedo, fuzz_depth)`` (n,) (:func:`cloth_from_parts`).  A grid of about
+    :data:`PROFILE_GRID_SIZE` points over their [0, 1] box (log
     where they say), then bounded L-BFGS-B from its :data:`PROFILE_POLISHED` best points; no forward
     evaluation.  Variable projection: the optimiser outside searches only the medium, whose every
     candidate gets its best sheen."""
@@ -629,7 +651,7 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
 
     def misfit(u) -> float:
         values = {**keywords, **{p.path: p.from_unit(float(x)) for p, x in zip(profiled, u)}}
-        return objective(medium_part + cloth_terms(specular_part, values)[:, None])
+        return objective(cloth_from_parts(medium_part, specular_part, values))
 
     points = max(PROFILE_MIN_POINTS, round(PROFILE_GRID_SIZE ** (1.0 / len(profiled))))
     axes = [np.linspace(0.0, 1.0, points)] * len(profiled)

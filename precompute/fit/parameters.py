@@ -257,6 +257,11 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
                  note="the white Lommel–Seeliger term of the surface fibres' first reflections (the shader's "
                       "FuzzAlbedo, precompute.optics.lommel_seeliger): 0 is none; a fibre reflects 4–10 % "
                       "undyed, so half of all light is far more than any fuzz returns"),
+    FitParameter("fuzz_depth", "fuzz_depth", "", 0.0, 2.0, log=False,
+                 note="the optical depth of the surface fibres along the cloth normal (the shader's FuzzDepth, "
+                      "precompute.optics.lommel_seeliger): they reflect as a layer that deep and shade the yarn "
+                      "beneath by exp(−τ (1/μi + 1/μo)); 0 keeps the fuzz a veneer that shades nothing, 2 "
+                      "hides the yarn from a normal view but for 2 %"),
 )}
 
 

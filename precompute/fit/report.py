@@ -200,7 +200,8 @@ def report_markdown(result: FitResult, measured_name: str = "", figures: bool = 
              f"{int(result.views.fit.sum())} fit views (plane of incidence), {held_count} held-out views "
              "(every other azimuth, never seen by the optimiser).  Objective: per-channel relative RMS error on "
              "the fit views, combined as their RMS over R, G, B"
-             + (" plus the colour-ratio penalty" if result.target_ratios else "") + " (docs/fitting.md).", "",
+             + (" plus the colour-ratio penalty" if result.target_ratios else "")
+             + (" plus the band penalty" if result.bands else "") + " (docs/fitting.md).", "",
              f"- objective of the fitted medium (final evaluation at relative error {result.schedule.final:g}): "
              f"**{result.objective:.4g}** (estimate during the search: {result.estimate:.4g})",
              f"- {result.forward_evaluations} forward evaluations in {result.generations} generations, "
@@ -213,6 +214,11 @@ def report_markdown(result: FitResult, measured_name: str = "", figures: bool = 
         lines.append(f"- §6.1 swatches at normal view: lit from behind / from the front, luminance "
                      f"**{result.swatches['back_front_luminance']:.3g}**"
                      + (f" (asked: at most {limit:g})" if limit is not None else " (not constrained)"))
+    if result.bands:
+        low, high = result.bands["band"]
+        lines.append(f"- held within {low:g}–{high:g}, model / measured (`--hold-bands`): "
+                     + ", ".join(f"{key} **{ratio:.3g}**" for key, ratio in result.bands["ratios"].items())
+                     + f"; band penalty {result.bands['penalty']:.3g}")
     lines.append("")
     if result.bound_hits:
         lines += ["## Bounds", ""] + [f"- **{hit}**" for hit in result.bound_hits] + [""]

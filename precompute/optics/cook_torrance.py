@@ -34,13 +34,15 @@ DEFAULT_SLOPE = 0.8
 DEFAULT_IOR = 1.557
 #: The shader's default fuzz albedo (``FuzzAlbedo``, :mod:`precompute.optics.lommel_seeliger`): none.
 DEFAULT_FUZZ_ALBEDO = 0.0
+#: ... and fuzz depth (``FuzzDepth``): 0, the fuzz a veneer that shades nothing beneath it.
+DEFAULT_FUZZ_DEPTH = 0.0
 #: The preset table holding the fitted cloth-scale terms (``[fit]``, keys ``specular_weight``,
-#: ``specular_slope`` and ``fuzz_albedo``, the shader's SpecularWeight, Slope and FuzzAlbedo;
+#: ``specular_slope``, ``fuzz_albedo`` and ``fuzz_depth``, the shader's SpecularWeight, Slope, FuzzAlbedo and FuzzDepth;
 #: ``python -m clothlight.fit`` writes it); the medium's loader ignores it.
 FIT_TABLE = "fit"
 #: The ``[fit]`` table's keys and the shader's defaults for them.
 SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE,
-                     "fuzz_albedo": DEFAULT_FUZZ_ALBEDO}
+                     "fuzz_albedo": DEFAULT_FUZZ_ALBEDO, "fuzz_depth": DEFAULT_FUZZ_DEPTH}
 
 
 def cook_torrance_between(light, view, m=DEFAULT_SLOPE, n=DEFAULT_IOR) -> float:
@@ -143,6 +145,6 @@ def specular_from_config(config: Mapping) -> dict[str, float]:
     return {key: float(table.get(key, default)) for key, default in SPECULAR_DEFAULTS.items()}
 
 
-__all__ = ["DEFAULT_FUZZ_ALBEDO", "DEFAULT_IOR", "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "SPECULAR_DEFAULTS",
-           "cloth_specular", "cook_torrance", "cook_torrance_between", "dielectric_fresnel", "direction", "sheen_index",
-           "specular_from_config"]
+__all__ = ["DEFAULT_FUZZ_ALBEDO", "DEFAULT_FUZZ_DEPTH", "DEFAULT_IOR", "DEFAULT_SLOPE", "DEFAULT_WEIGHT",
+           "FIT_TABLE", "SPECULAR_DEFAULTS", "cloth_specular", "cook_torrance", "cook_torrance_between",
+           "dielectric_fresnel", "direction", "sheen_index", "specular_from_config"]

@@ -190,7 +190,8 @@ def summary_sample_weave(summary: dict, folder: str | pathlib.Path) -> str:
 
 def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
     """The specular record of a yarn bake's summary (:data:`SPECULAR_KEY`): ``weight`` (a finite number
-    ≥ 0), ``slope`` (finite, > 0), ``index`` (finite, ≥ 1), ``fuzz_albedo`` (in [0, 1]) and ``source``;
+    ≥ 0), ``slope`` (finite, > 0), ``index`` (finite, ≥ 1), ``fuzz_albedo`` (in [0, 1]), ``source``
+    and, where the fuzz has a depth, ``fuzz_depth`` (finite, > 0; none: 0, the fuzz a veneer);
     :func:`default_specular` where the summary has none (a folder baked before bakes recorded it), the
     summary's ``host_index`` where it has no ``index`` and no fuzz (0) where it has no ``fuzz_albedo``
     (baked before bakes recorded those).  :class:`TableError` naming the
@@ -207,10 +208,13 @@ def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
         if not (isinstance(value, dict) and number("weight", 0.0, True) and number("slope", 0.0, False)
                 and ("index" not in value or number("index", 1.0, True))
                 and ("fuzz_albedo" not in value or (number("fuzz_albedo", 0.0, True) and value["fuzz_albedo"] <= 1.0))
+                and ("fuzz_depth" not in value or number("fuzz_depth", 0.0, False))
                 and isinstance(value.get("source"), str)):
             raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SPECULAR_KEY} {value!r} is not an object of "
-                             "weight (≥ 0), slope (> 0), index (≥ 1), fuzz_albedo (in [0, 1]) and source")
-        record = {key: float(value[key]) for key in ("weight", "slope", "index", "fuzz_albedo") if key in value}
+                             "weight (≥ 0), slope (> 0), index (≥ 1), fuzz_albedo (in [0, 1]), source and "
+                             "perhaps fuzz_depth (> 0)")
+        record = {key: float(value[key]) for key in ("weight", "slope", "index", "fuzz_albedo", "fuzz_depth")
+                  if key in value}
         record.setdefault("fuzz_albedo", 0.0)
         record["source"] = value["source"]
     if "index" not in record and "host_index" in summary:

@@ -77,8 +77,8 @@ def yarn_inputs(yarn_tables) -> dict:
     """What the sun-mode yarn material reads of a yarn bake: ρ and the unscattered light's
     attenuation (the pixels' hashes, not the bake's cache key, which also changes with the closure
     fit), the host index, the weight, slope and index of the specular term (a fitted preset's,
-    ``YarnTableFiles.specular``; None: the shader's defaults) and the fuzz albedo where there is one
-    (the key only then: the cloth bakes of yarns without fuzz keep theirs)."""
+    ``YarnTableFiles.specular``; None: the shader's defaults) and the fuzz albedo and depth where there
+    are (the keys only then: the cloth bakes of yarns without fuzz keep theirs)."""
     rho = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").pixels
     attenuation = precompute_tables.read_table(yarn_tables.unscattered_path, "unscattered").pixels
     specular = yarn_tables.specular
@@ -87,9 +87,10 @@ def yarn_inputs(yarn_tables) -> dict:
               "host_index": yarn_tables.host_index,
               "specular": None if specular is None else {key: float(specular[key]) for key in ("weight", "slope")},
               "specular_index": yarn_tables.specular_index}
-    fuzz = float((specular or {}).get("fuzz_albedo", 0.0))
-    if fuzz:
-        inputs["fuzz_albedo"] = fuzz
+    for key in ("fuzz_albedo", "fuzz_depth"):
+        value = float((specular or {}).get(key, 0.0))
+        if value:
+            inputs[key] = value
     return inputs
 
 

@@ -38,8 +38,9 @@ def header_list(name: str) -> np.ndarray:
 
 def test_the_header_sums_the_fuzz_over_the_gauss_legendre_nodes_of_its_numpy_twin():
     # cl_fuzz_albedo_at_view and cl_fuzz_hemispherical_transmittance sum over the nodes
-    # precompute.optics.lommel_seeliger takes: numpy's leggauss mapped onto (0, 1).
-    x, w = np.polynomial.legendre.leggauss(lommel_seeliger.FUZZ_ALBEDO_NODES)
-    assert header_defines()["CL_FUZZ_ALBEDO_NODES"] == lommel_seeliger.FUZZ_ALBEDO_NODES
-    np.testing.assert_allclose(header_list("CL_FUZZ_NODE_COSINES"), 0.5 * (x + 1.0), rtol=1e-15)
-    np.testing.assert_allclose(header_list("CL_FUZZ_NODE_WEIGHTS"), 0.5 * w, rtol=1e-15)
+    # precompute.optics.lommel_seeliger takes (fuzz_quadrature): numpy's leggauss mapped onto (0, 1).
+    cosines, weights = lommel_seeliger.fuzz_quadrature()
+    assert header_defines()["CL_FUZZ_ALBEDO_NODES"] == lommel_seeliger.FUZZ_ALBEDO_NODES == len(cosines)
+    np.testing.assert_allclose(header_list("CL_FUZZ_NODE_COSINES"), cosines, rtol=1e-15)
+    np.testing.assert_allclose(header_list("CL_FUZZ_NODE_WEIGHTS"), weights, rtol=1e-15)
+    assert abs(np.sum(weights) - 1.0) < 1e-14  # a rule on (0, 1)

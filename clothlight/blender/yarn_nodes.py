@@ -265,10 +265,9 @@ def _fuzz_layer_albedo(nodes, mu, through, albedo: float, depth: float):
     + μo), c_k = (A/2) w_k μ_k and d_k = c_k e_k; Vector Math nodes take three terms at a time (a float
     socket reaches a vector input as (x, x, x)), the last group padded with terms of zero."""
     import numpy as np
-    from precompute.optics.lommel_seeliger import FUZZ_ALBEDO_NODES
+    from precompute.optics.lommel_seeliger import FUZZ_ALBEDO_NODES, fuzz_quadrature
 
-    x, w = np.polynomial.legendre.leggauss(FUZZ_ALBEDO_NODES)
-    cosines, weights = 0.5 * (x + 1.0), 0.5 * w
+    cosines, weights = fuzz_quadrature()
     constant = 0.5 * albedo * weights * cosines
     groups = -(-FUZZ_ALBEDO_NODES // 3)
     padding = 3 * groups - FUZZ_ALBEDO_NODES

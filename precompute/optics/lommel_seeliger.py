@@ -67,6 +67,14 @@ def lommel_seeliger_albedo(mu, albedo: float = 1.0) -> np.ndarray:
 FUZZ_ALBEDO_NODES = 8
 
 
+def fuzz_quadrature(nodes: int = FUZZ_ALBEDO_NODES) -> tuple[np.ndarray, np.ndarray]:
+    """The Gauss–Legendre cosines μ_k and weights w_k on (0, 1) (``nodes`` of each) of the general
+    mode's sums over μ: NumPy's ``leggauss`` mapped by μ = (x + 1)/2, w/2 (``CL_FUZZ_NODE_COSINES``,
+    ``CL_FUZZ_NODE_WEIGHTS`` in ``osl/clothlight.h``)."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    return 0.5 * (x + 1.0), 0.5 * w
+
+
 def fuzz_transmittance(mu_i, mu_o, depth: float) -> np.ndarray:
     """T(μi, μo) (…) of the module docstring: exp(−``depth`` (1/|μi| + 1/|μo|)), the share of the
     light that crosses a fuzz of optical depth ``depth`` to the cloth beneath and back; 1 where
@@ -99,8 +107,7 @@ def fuzz_albedo_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0,
     if depth <= 0.0:
         return lommel_seeliger_albedo(mu_o, albedo)
     mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    mu_i, weight = 0.5 * (x + 1.0), 0.5 * w
+    mu_i, weight = fuzz_quadrature(nodes)
     layer = (1.0 - fuzz_transmittance(mu_i, mu_o[..., None], depth)) * mu_i / (mu_i + mu_o[..., None])
     return 0.5 * albedo * np.sum(weight * layer, axis=-1)
 
@@ -112,10 +119,9 @@ def hemispherical_transmittance(depth: float, nodes: int = FUZZ_ALBEDO_NODES) ->
     exp(−depth/μo), the view's own path."""
     if depth <= 0.0:
         return 1.0
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    mu = 0.5 * (x + 1.0)
-    return float(np.sum(w * mu * np.exp(-depth / mu)))
+    mu, weight = fuzz_quadrature(nodes)
+    return float(np.sum(2.0 * weight * mu * np.exp(-depth / mu)))
 
 
-__all__ = ["FUZZ_ALBEDO_NODES", "fuzz_albedo_at_view", "fuzz_brdf", "fuzz_transmittance", "hemispherical_transmittance",
-           "lommel_seeliger", "lommel_seeliger_albedo"]
+__all__ = ["FUZZ_ALBEDO_NODES", "fuzz_albedo_at_view", "fuzz_brdf", "fuzz_quadrature", "fuzz_transmittance",
+           "hemispherical_transmittance", "lommel_seeliger", "lommel_seeliger_albedo"]

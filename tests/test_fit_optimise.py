@@ -214,7 +214,8 @@ def test_the_specular_term_is_profiled_when_the_model_splits_it_off(measured):
     for name, value in TRUTH.items():
         assert result.parameters[name] == pytest.approx(value, rel=0.1), name
     assert result.specular == pytest.approx({"specular_weight": result.parameters["specular_weight"],
-                                             "specular_slope": result.parameters["specular_slope"], "fuzz_albedo": 0.0})
+                                             "specular_slope": result.parameters["specular_slope"], "fuzz_albedo": 0.0,
+                                             "fuzz_depth": 0.0})
     candidates = [e for e in result.history if e.kind == "candidate"]
     assert len({e.parameters["specular_slope"] for e in candidates}) > 1  # fitted per candidate
     assert len(model.calls) <= 150

@@ -161,6 +161,26 @@ def test_sun_mode_adds_the_unscattered_light_as_its_numpy_twin(tmp_path, synthet
     np.testing.assert_allclose(measured_rho, spec_sun_rho(atlas, attenuation, sun, wo), rtol=1e-3, atol=1e-6)
 
 
+def unscattered_only(folder, tables, index) -> YarnTableFiles:
+    """``tables`` with ρ and the lobe weights zero: only the unscattered light, through a host of ``index``."""
+    write_exr(folder / "rho.exr", np.zeros((N_I * N_O, N_I * N_O, 3)))
+    write_exr(folder / "lobes.exr", np.zeros((N_O, len(LOBES) * N_O, 3)))
+    return YarnTableFiles(folder / "rho.exr", folder / "lobes.exr", tables.unscattered_path, N_I, N_O,
+                          LobeShape().to_dict(), index, ballistic.ATTENUATION_SAMPLES)
+
+
+def render_under_a_white_sky(scene, folder) -> np.ndarray:
+    """The patch's pixels (M, 3) with the scene's lights replaced by a uniform sky of radiance 1."""
+    scene.cycles.samples = 256
+    for obj in [o for o in scene.objects if o.type == "LIGHT"]:
+        bpy.data.objects.remove(obj)
+    scene.world = bpy.data.worlds.new("sky")
+    background = scene.world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    background.inputs["Strength"].default_value = 1.0
+    return render_to_array(scene, folder / "patch.exr")[..., :3].reshape(-1, 3)
+
+
 @pytest.mark.blender
 @pytest.mark.parametrize("index, plain_nodes", [(INDEX, False), (1.0, False), (1.0, True)],
                          ids=["refracting-host", "fibres-in-air-osl", "fibres-in-air-plain-nodes"])
@@ -172,22 +192,10 @@ def test_general_mode_renders_each_unscattered_path_as_a_lobe_of_its_weight(
     # ∫ρ_u dω_i, and the lit-from-behind lobes (GGX refraction) are not lost.  A host of index 1
     # (fibres in air) has one straight path, which the plain nodes render too.
     tables = synthetic_tables[0]
-    folder = tmp_path
-    write_exr(folder / "rho.exr", np.zeros((N_I * N_O, N_I * N_O, 3)))
-    write_exr(folder / "lobes.exr", np.zeros((N_O, len(LOBES) * N_O, 3)))
-    dark = YarnTableFiles(folder / "rho.exr", folder / "lobes.exr", tables.unscattered_path, N_I, N_O,
-                          LobeShape().to_dict(), index, ballistic.ATTENUATION_SAMPLES)
-    scene, wo = patch_scene(dark, GENERAL_MODE, view_zenith, view_azimuth, unit([0.0, 0.0, 1.0]),
-                            plain_nodes=plain_nodes)
+    scene, wo = patch_scene(unscattered_only(tmp_path, tables, index), GENERAL_MODE, view_zenith, view_azimuth,
+                            unit([0.0, 0.0, 1.0]), plain_nodes=plain_nodes)
     assert (shader_node(bpy.context.active_object.active_material) is None) == plain_nodes
-    scene.cycles.samples = 256
-    for obj in [o for o in scene.objects if o.type == "LIGHT"]:
-        bpy.data.objects.remove(obj)
-    scene.world = bpy.data.worlds.new("sky")
-    background = scene.world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    background.inputs["Strength"].default_value = 1.0
-    pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
+    pixels = render_under_a_white_sky(scene, tmp_path)
     attenuation = synthetic_tables[3]
     expected = ballistic.unscattered_radiance_factor(
         wo, index, lambda length: np.asarray(interpolate_attenuation(attenuation, length)))
@@ -402,22 +410,10 @@ def test_a_fuzz_of_depth_shades_the_unscattered_lobes_in_the_general_mode(tmp_pa
                                                                           plain_nodes):
     # Under a uniform sky of radiance 1 the unscattered lobes give their weights times the yarn's share
     # under a black fuzz (albedo 0) of depth τ, exp(−τ/μo) times the hemispherical transmittance.
-    tables = synthetic_tables[0]
-    write_exr(tmp_path / "rho.exr", np.zeros((N_I * N_O, N_I * N_O, 3)))
-    write_exr(tmp_path / "lobes.exr", np.zeros((N_O, len(LOBES) * N_O, 3)))
-    dark = YarnTableFiles(tmp_path / "rho.exr", tmp_path / "lobes.exr", tables.unscattered_path, N_I, N_O,
-                          LobeShape().to_dict(), index, ballistic.ATTENUATION_SAMPLES)
-    scene, wo = patch_scene(dark, GENERAL_MODE, 30.0, 60.0, unit([0.0, 0.0, 1.0]), plain_nodes=plain_nodes,
-                            fuzz_depth=FUZZ_DEPTH)
+    scene, wo = patch_scene(unscattered_only(tmp_path, synthetic_tables[0], index), GENERAL_MODE, 30.0, 60.0,
+                            unit([0.0, 0.0, 1.0]), plain_nodes=plain_nodes, fuzz_depth=FUZZ_DEPTH)
     assert (shader_node(bpy.context.active_object.active_material) is None) == plain_nodes
-    scene.cycles.samples = 256
-    for obj in [o for o in scene.objects if o.type == "LIGHT"]:
-        bpy.data.objects.remove(obj)
-    scene.world = bpy.data.worlds.new("sky")
-    background = scene.world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    background.inputs["Strength"].default_value = 1.0
-    pixels = render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3)
+    pixels = render_under_a_white_sky(scene, tmp_path)
     unshaded = ballistic.unscattered_radiance_factor(
         wo, index, lambda length: np.asarray(interpolate_attenuation(synthetic_tables[3], length)))
     share = math.exp(-FUZZ_DEPTH / wo[2]) * hemispherical_transmittance(FUZZ_DEPTH)

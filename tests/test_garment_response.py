@@ -110,16 +110,23 @@ def test_the_measurement_adds_the_specular_term_to_rho_and_keeps_the_response_sh
     assert (measured.patch_mm, measured.sample_size_mm, measured.render_seconds) == (1.0, (30.0, 30.0), 5.0)
 
 
+def lit_cells(response):
+    """Per exit cell of each side: the side, the cell, the share of each incidence patch that is lit
+    yarn facing the sun (N_i²), and the cosines with the cloth normal toward the sun (N_i²) and the camera."""
+    toward_sun = AngularGrid("sphere", N_I).cell_centers()
+    toward_camera = AngularGrid("hemisphere", N_O).cell_centers()
+    for k, view in enumerate(response.views):
+        cell = k % (N_O * N_O)
+        facing = np.bincount(view.patch, view.weight * (view.incidence[:, 2] > 0.0), N_I * N_I) / view.counted
+        yield SIDES[k // (N_O * N_O)], cell, facing, toward_sun[:, 2], toward_camera[cell, 2]
+
+
 def test_the_fuzz_joins_rho_on_the_lit_yarn_facing_the_sun_and_not_the_specular_part(response, yarn):
     # the sun mode emits the fuzz with ρ, not as the marked specular term (cl_cloth_fuzz)
     fuzzy = measurement_from_response(response, dataclasses.replace(yarn, fuzz_albedo=0.2))
     plain = measurement_from_response(response, yarn)
-    toward_sun = AngularGrid("sphere", N_I).cell_centers()
-    toward_camera = AngularGrid("hemisphere", N_O).cell_centers()
-    for k, view in enumerate(response.views):
-        side, cell = SIDES[k // (N_O * N_O)], k % (N_O * N_O)
-        facing = np.bincount(view.patch, view.weight * (view.incidence[:, 2] > 0.0), N_I * N_I) / view.counted
-        mu_i, mu_o = np.maximum(toward_sun[:, 2], 0.0), toward_camera[cell, 2]
+    for side, cell, facing, mu_i, mu_o in lit_cells(response):
+        mu_i = np.maximum(mu_i, 0.0)
         expected = np.where(mu_i > 0.0, 0.2 / (4 * np.pi * (mu_i + mu_o)) * mu_i, 0.0) * facing
         np.testing.assert_allclose(fuzzy.rho[side][:, cell] - plain.rho[side][:, cell], expected[:, None] * np.ones(3),
                                    rtol=1e-9, atol=1e-15)
@@ -134,12 +141,7 @@ def test_a_fuzz_of_depth_shades_the_yarns_rho_and_reflects_as_a_layer(response, 
     deep = measurement_from_response(response, dataclasses.replace(yarn, fuzz_albedo=albedo, fuzz_depth=depth))
     plain = measurement_from_response(response, yarn)
     rho = response_rho(response, yarn)
-    toward_sun = AngularGrid("sphere", N_I).cell_centers()
-    toward_camera = AngularGrid("hemisphere", N_O).cell_centers()
-    for k, view in enumerate(response.views):
-        side, cell = SIDES[k // (N_O * N_O)], k % (N_O * N_O)
-        facing = np.bincount(view.patch, view.weight * (view.incidence[:, 2] > 0.0), N_I * N_I) / view.counted
-        mu_i, mu_o = toward_sun[:, 2], toward_camera[cell, 2]
+    for side, cell, facing, mu_i, mu_o in lit_cells(response):
         shade = np.exp(-depth * (1.0 / np.abs(mu_i) + 1.0 / mu_o))  # lit from behind, through the back's fuzz
         lit = np.maximum(mu_i, 0.0)
         layer = np.where(lit > 0.0, albedo * (1.0 - shade) / (4 * np.pi * (lit + mu_o)) * lit, 0.0) * facing

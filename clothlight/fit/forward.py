@@ -29,6 +29,7 @@ from precompute.bake import BAKE_DEFAULTS, transport_settings
 from precompute.cache.entries import cache_key, canonical_json, default_cache_dir, lookup, store
 from precompute.tables.color import clip_to_gamut, spectral_to_rgb
 from precompute.errors import ParameterError
+from precompute.fit.optimise import cloth_from_parts
 from precompute.optics.medium import medium_from_dict
 from precompute.optics.measured_sample import sample_weave_name
 from precompute.optics.coefficients import medium_optics
@@ -208,8 +209,8 @@ class ForwardModel:
     def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
                  seed: int, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray:
         yarn, terms = self.parts(config, relative_error=relative_error, seed=seed)
-        return (yarn * terms.transmittance(fuzz_depth)[:, None]
-                + terms(specular_weight, specular_slope, fuzz_albedo, fuzz_depth)[:, None])
+        return cloth_from_parts(yarn, terms, {"specular_weight": specular_weight, "specular_slope": specular_slope,
+                                              "fuzz_albedo": fuzz_albedo, "fuzz_depth": fuzz_depth})
 
 
 class ClothTerms:

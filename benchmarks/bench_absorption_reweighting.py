@@ -62,7 +62,7 @@ def main() -> None:
     dyes = [float(d) for d in args.dyes.split(",")]
     run_budget = {"paths_per_cell": args.paths} if args.paths else {"target_rel_stderr": args.target}
 
-    config, base_dir = load_preset_config("red_cotton")
+    config, base_dir = load_preset_config("voided_red_cotton")
 
     def optics_at(dye: float):
         config["dye"]["weight_percent"] = dye
@@ -74,7 +74,7 @@ def main() -> None:
     grids = TransportGrids(settings["n_around"], settings["n_along"], settings["angular_resolution"])
     steps = absorption_steps(reference.mu_a, largest.mu_a)
     budget_text = f"{args.paths} paths per incidence cell" if args.paths else f"error target {args.target:g}"
-    print(f"{os.cpu_count()} CPU cores; red_cotton, Congo red {dyes[0]:g}–{max(dyes):g} %, {budget_text}, "
+    print(f"{os.cpu_count()} CPU cores; voided_red_cotton, Congo red {dyes[0]:g}–{max(dyes):g} %, {budget_text}, "
           f"{len(steps)} absorption steps; eq. (5) on {FIT_INCIDENCE_RESOLUTION}² incidence cells")
     simulate_yarn(reference, geometry, TransportGrids(4, 1, 2), paths_per_cell=64, seed=0,
                   extra_absorption_per_mm=steps[:3])  # compile outside the timings

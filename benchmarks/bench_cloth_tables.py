@@ -9,7 +9,7 @@ beside the render-based measurement; a new weave's, response and all.
    weave and gonioreflectometer settings (traced, or rendered where Embree is missing), or found in
    the cache (``--cache-dir``, default the user cache): how long it took, lit camera samples and size.
 2. Each yarn (a yarn bake folder, or a preset's name baked with ``python -m precompute bake``'s
-   defaults, cached; default: the ``red_cotton`` preset and the shipped ``paper_2008`` tables): its
+   defaults, cached; default: the ``voided_red_cotton`` preset and the shipped ``paper_2008`` tables): its
    cloth tables by ``python -m clothlight.garment bake`` in a new process, timed end to end (start,
    Blender, the response's samples read, the measurement, the closure fit, the tables, the weave
    detail render), twice, each into a cache of its own holding only the response, and the two
@@ -53,7 +53,7 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-DEFAULT_YARNS = ("red_cotton", str(ROOT / "example_blends" / "tables" / "paper_2008"))
+DEFAULT_YARNS = ("voided_red_cotton", str(ROOT / "example_blends" / "tables" / "paper_2008"))
 
 
 def _yarn_folder(yarn: str, cache_dir) -> pathlib.Path:

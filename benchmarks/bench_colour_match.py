@@ -3,12 +3,12 @@
 The targets are the colours of the raw-data MERL fabrics (../shared/data/real_fabrics/neural): each
 one's reflectance factor π f at normal light and views 15–30° off the normal (the mirror's glint
 left out, as the match leaves it out), linear RGB → sRGB.  Each is matched on ``--preset``'s yarn
-(default red_cotton) with the shipped red, blue and yellow dyes (clothlight/fit/colour_match.py).
+(default voided_red_cotton) with the shipped red, blue and yellow dyes (clothlight/fit/colour_match.py).
 Printed per fabric: the recipe, CIEDE2000 of the cloth to the target, evaluations and wall seconds
 of the solve; and once, the time to get the model ready (the response and the series from the cache,
 or made: minutes the first time).
 
-    python benchmarks/bench_colour_match.py [--preset red_cotton] [--fabrics red-fabric2,blue-fabric] [--plot PNG]
+    python benchmarks/bench_colour_match.py [--preset voided_red_cotton] [--fabrics red-fabric2,blue-fabric] [--plot PNG]
 
 ``--plot`` draws each fabric's colour beside its recipe's (sRGB patches, ΔE2000 under them).
 ``--check-grid`` also evaluates a dense grid of recipes (:data:`CHECK_LEVELS_PERCENT` per dye ×
@@ -48,7 +48,7 @@ def fabric_srgb(path: pathlib.Path) -> np.ndarray:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--preset", default="red_cotton")
+    parser.add_argument("--preset", default="voided_red_cotton")
     parser.add_argument("--fabrics", help="comma-separated fabric names (default: every CSV in the folder)")
     parser.add_argument("--plot", type=pathlib.Path, help="PNG of each target beside its recipe's colour")
     parser.add_argument("--check-grid", action="store_true", help="also the nearest recipe of a dense grid")

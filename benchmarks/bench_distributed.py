@@ -9,7 +9,7 @@ submitted as the bake submits its own (a task and its two getters, ``map(..., ke
 the workers; the bytes are the NumPy arrays sent in tasks' arguments and shared values, and
 received as results (:class:`precompute.distributed.ClusterExecutor`).
 
-    python benchmarks/bench_distributed.py [--workers 1 2] [--job bake cloth idle] [--preset red_cotton]
+    python benchmarks/bench_distributed.py [--workers 1 2] [--job bake cloth idle] [--preset voided_red_cotton]
         [--set KEY=VALUE ...] [--paths N] [--single-process]
 
 ``--paths N``: N paths per incidence cell instead of the error target (one round);

@@ -9,8 +9,8 @@ its coloured lobes fitted at the sweep's own views as the bake fits them
 term tabulated at the cells' centres.  Prints the RMS over the configurations of (mixture − ρ) / ρ
 per channel and pooled, and per incidence the mixture / ρ in red.  No Blender; seconds.
 
-    python -m precompute bake --preset red_cotton --out out/red_cotton
-    python -m clothlight.garment bake --tables out/red_cotton --out out/red_cotton_cloth
+    python -m precompute bake --preset voided_red_cotton --out out/voided_red_cotton
+    python -m clothlight.garment bake --tables out/voided_red_cotton --out out/red_cotton_cloth
     python benchmarks/bench_garment_lobes.py --cloth-tables out/red_cotton_cloth
 """
 

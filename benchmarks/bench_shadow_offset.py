@@ -23,7 +23,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--yarn", default="red_cotton", help="a preset's name or a yarn bake folder")
+    parser.add_argument("--yarn", default="voided_red_cotton", help="a preset's name or a yarn bake folder")
     parser.add_argument("--views", type=int, default=12, help="front exit cells rendered (default 12)")
     args = parser.parse_args()
 

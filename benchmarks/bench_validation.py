@@ -28,7 +28,7 @@ def cached_red_cotton_bake() -> pathlib.Path | None:
 
     root = pathlib.Path(default_cache_dir())
     bakes = [p.parent for p in root.glob("tables/*/summary.json")
-             if json.loads(p.read_text()).get("medium", {}).get("name") == "red_cotton"]
+             if json.loads(p.read_text()).get("medium", {}).get("name") == "voided_red_cotton"]
     return max(bakes, key=lambda p: p.stat().st_mtime) if bakes else None
 
 

@@ -22,7 +22,7 @@ from collections.abc import Iterable, Mapping
 
 from precompute.bounds import GRID_SETTINGS
 from precompute.bounds import TRANSPORT_DEFAULTS as _TRANSPORT_DEFAULTS
-from precompute.optics.medium import RANDOM_ORIENTATION, load_preset_config
+from precompute.optics.medium import DEFAULT_PRESET, RANDOM_ORIENTATION, load_preset_config
 
 
 def typed_number(value: float) -> float:
@@ -60,7 +60,7 @@ class BakeRequest:
         simulation per medium.
     """
 
-    preset: str = "red_cotton"
+    preset: str = DEFAULT_PRESET
     overrides: tuple[tuple[str, float], ...] = ()
     seed: int = _TRANSPORT_DEFAULTS["seed"]
     paths_per_cell: int | None = _TRANSPORT_DEFAULTS["paths_per_cell"]

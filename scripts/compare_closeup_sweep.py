@@ -238,7 +238,7 @@ def print_table(analysis: dict) -> None:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="tiny settings: checks that it runs, in about a minute")
-    parser.add_argument("--preset", default="red_cotton")
+    parser.add_argument("--preset", default="voided_red_cotton")
     parser.add_argument("--tables", type=pathlib.Path, help="bake folder (default: bake the preset under --out)")
     parser.add_argument("--measured", type=pathlib.Path, default=MEASURED_FABRIC)
     parser.add_argument("--out", type=pathlib.Path, default=REPO_ROOT / "out" / "closeup_sweep")

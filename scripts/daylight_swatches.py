@@ -58,7 +58,7 @@ def main() -> int:
     views = [(float(t), 180.0, 0.0, 0.0) for t in theta] + [(180.0 - float(t), 180.0, 0.0, 0.0) for t in theta]
     luminance = np.array(LUMINANCE)
     for folder in args.tables:
-        config, base_dir = load_preset_config("red_cotton")
+        config, base_dir = load_preset_config("voided_red_cotton")
         model = build_forward_model(views, bake_folder_sample(config, folder), base_dir, seed=0)
         rgb = bake_folder_brdf(model, folder)
         front, back = (weights @ rgb[k * len(theta):(k + 1) * len(theta)] for k in (0, 1))

@@ -11,7 +11,7 @@ backscatter model / measured at θi 60°, θv −60° and −40° (and θi 45°,
 G/R against the measurement (``precompute/fit/figures.py``), and lit from behind / from the front.
 
     python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --tables bake
-    python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --preset red_cotton
+    python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --preset voided_red_cotton
     python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --fit out/fit
 """
 
@@ -97,7 +97,7 @@ def main() -> int:
     if args.fit is not None:
         cloth, label = fit_folder_brdf(args.fit, objective.measured)
     else:
-        config, base_dir = load_preset_config(args.preset or "red_cotton")
+        config, base_dir = load_preset_config(args.preset or "voided_red_cotton")
         if args.tables is not None:
             config = bake_folder_sample(config, args.tables)
         model = build_forward_model(views.forward_views, config, base_dir, seed=0)

@@ -28,7 +28,7 @@ MEASURED = REPO / "clothlight" / "validation" / "data" / "synthetic_red_cotton.c
 COMMANDS = {
     "bake": ["precompute", "bake", "--preset", "paper_2008", "--paths", "4000", "--scheduler", "none",
              "--cache-dir", "{cache}", "--out", "{out}"],
-    "optics": ["precompute", "optics", "--preset", "red_cotton", "--plot", "{out}.png"],
+    "optics": ["precompute", "optics", "--preset", "voided_red_cotton", "--plot", "{out}.png"],
     "slab": ["precompute", "slab", "--albedo", "0.9", "--g", "0.5", "--tau", "4", "--paths", "20000000",
              "--threads", "1"],
     "plot": ["precompute", "plot", "--out", "{out}", str(TABLES)],
@@ -39,7 +39,7 @@ COMMANDS = {
                 "--scheduler", "none"],
     "fit": ["clothlight.fit", "--measured", str(MEASURED), "--preset", "paper_2008", "--free", "dye_weight_percent",
             "--budget-evaluations", "8", "--scheduler", "none", "--cache-dir", "{cache}", "--out", "{out}"],
-    "match_colour": ["clothlight.fit.match_colour", "--target", "#8c1c24", "--preset", "red_cotton",
+    "match_colour": ["clothlight.fit.match_colour", "--target", "#8c1c24", "--preset", "voided_red_cotton",
                      "--cache-dir", "{cache}", "--out", "{out}.toml"],
 }
 

@@ -8,13 +8,13 @@
   evaluated exactly, §5), and the virtual gonioreflectometer of §4 in the scene "ClothLight
   Gonioreflectometer": a copy of the sample, a sun at θi = 30° and an orthographic camera at
   θv = 0°, framed and set up for measurement (Cycles OSL on the CPU, no denoising, linear EXR).
-* ``twill_closeup_general.blend`` — the default ``red_cotton`` close-up woven as a 2/2 twill (12 × 12
+* ``twill_closeup_general.blend`` — the ``voided_red_cotton`` close-up woven as a 2/2 twill (12 × 12
   yarns, plies, twist, irregularity and flyaway fibres as in ``closeup_red_cotton.blend``) in its
   general-mode yarn material (lobe table packed) under a physical sky: sun and sky light from every
   direction, as an HDRI would give, with a macro lens's shallow focus band.
-* ``closeup_red_cotton.blend`` — the default close-up (``sheeting_weave("red_cotton")``: 2-ply
+* ``closeup_red_cotton.blend`` — the close-up (``sheeting_weave("voided_red_cotton")``: 2-ply
   yarns twisted at the preset's 24°, seeded irregularity, sheeting density, flyaway fibres in the
-  hair BSDF of the preset's dye) in the fitted ``red_cotton`` yarn material, general mode (plain
+  hair BSDF of the preset's dye) in the fitted ``voided_red_cotton`` yarn material, general mode (plain
   nodes, its lobe table packed), beside a Principled BSDF with sheen on the same geometry; scene
   "Front-Lit" (sun and sky from the front) and scene "Back-Lit" (a window-sized area light behind
   the cloth), sharing the cloth's collection.  8 × 8 yarns, so that the file stays small.
@@ -30,7 +30,7 @@
 from ``example_blends/tables/paper_2008/`` through ``//``-relative paths, so the folder can be moved as
 a whole; the OSL shaders are embedded with their compiled bytecode.  The tables are the untouched
 preset's bake (``python -m precompute bake --preset paper_2008``; cached, so a re-run bakes nothing
-new).  The others use the fitted presets (``red_cotton``, ``blue_cotton``, ``white_cotton``), their
+new).  The others use the fitted presets (``voided_red_cotton``, ``blue_cotton``, ``white_cotton``), their
 lobe tables packed in the file.  The garment example, the fitted presets draped, is
 ``scripts/make_garment_example.py``'s.  Scenes are in millimetres
 (``unit_settings.scale_length = 0.001``): one Blender unit is one millimetre of cloth.
@@ -166,7 +166,7 @@ def paper_sample_validation(out_dir: pathlib.Path, tables_dir: pathlib.Path) -> 
     return path
 
 
-CLOSEUP_PRESET = "red_cotton"
+CLOSEUP_PRESET = "voided_red_cotton"
 #: Yarns each way in the close-up examples: half the default's 16, so the .blend stays small.
 CLOSEUP_YARNS = 8
 #: Yarns each way in the twill close-up: the most whose file stays a few MB, seen at an angle through a

@@ -2,7 +2,7 @@
 
     python scripts/make_garment_example.py                                   # example_blends/garment_red_cotton.blend
     python scripts/make_garment_example.py --render docs/images/garment      # and its two pictures
-    python scripts/make_garment_example.py --preset red_cotton blue_cotton   # one blend per preset
+    python scripts/make_garment_example.py --preset voided_red_cotton blue_cotton   # one blend per preset
 
 For each preset: its yarn tables (``python -m precompute bake``'s defaults, cached), its cloth
 tables (``python -m clothlight.garment bake``'s defaults, read off the weave's cloth response:
@@ -187,7 +187,7 @@ def render_pictures(preset: str, folder: pathlib.Path) -> list[pathlib.Path]:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--preset", nargs="+", default=["red_cotton"], help="medium presets (default: %(default)s)")
+    parser.add_argument("--preset", nargs="+", default=["voided_red_cotton"], help="medium presets (default: %(default)s)")
     parser.add_argument("--out", type=pathlib.Path, default=REPO_ROOT / "example_blends")
     parser.add_argument("--render", type=pathlib.Path, metavar="DIR", help="also render the pictures into DIR")
     args = parser.parse_args(argv)

@@ -3,7 +3,7 @@
 The paper gives its real red cotton's colour as channel ratios at normal light and view (Table 1:
 B/R 0.08, G/R 0.011) and shows it darker and redder lit from behind (Fig. 9).  One dye does not
 make that colour (a dye series of Congo red clips B/R to 0 before G/R reaches 0.011; the band-model
-red clips G/R first, docs/garment.md), a shade recipe does: the default yarn (`red_cotton`, a real
+red clips G/R first, docs/garment.md), a shade recipe does: the particle yarn (`voided_red_cotton`, a real
 red cotton's fibres and voids, fitted to MERL's red-fabric2) dyed with the paper-style band-model
 red, Congo red and Evans blue, the lightest recipe with Table 1's ratios on its §6.1 front swatch
 (clothlight.fit.colour_match.recipe_for_ratios; specular excluded).  Prints the swatches, front
@@ -36,7 +36,7 @@ def main() -> None:
     from precompute.fit.report import to_toml
     from precompute.optics.medium import load_preset_config
 
-    base, base_dir = load_preset_config("red_cotton")
+    base, base_dir = load_preset_config("voided_red_cotton")
     model = ShadeModel(base, base_dir, DYES, progress=lambda text: print(f"… {text}", flush=True))
     recipe = recipe_for_ratios(TABLE_1["B/R"], TABLE_1["G/R"], model)
     front, back = model.swatches(recipe, exact=True)
@@ -47,11 +47,11 @@ def main() -> None:
     recipe_text = ", ".join(f"{name.removesuffix('.csv')} {percent:.3g} %" for name, percent in zip(DYES, recipe))
     config = recipe_config(base, recipe, DYES)
     config["name"] = "paper_red_cotton"
-    config["description"] = ("The paper's red cotton (Table 1, Fig. 9): red_cotton's fibres and voids dyed with the "
+    config["description"] = ("The paper's red cotton (Table 1, Fig. 9): voided_red_cotton's fibres and voids dyed with the "
                              "band-model red, Congo red and Evans blue to Table 1's B/R and G/R")
     header = ["# The paper's own measured red cotton (§6.1, Table 1: B/R 0.08, G/R 0.011 at normal light and view;",
               "# Fig. 9: darker and redder lit from behind), written by `python scripts/make_paper_red_cotton.py`:",
-              "# red_cotton's yarn (fitted to MERL's red-fabric2) with the lightest shade recipe that gives its §6.1",
+              "# voided_red_cotton's yarn (fitted to MERL's red-fabric2) with the lightest shade recipe that gives its §6.1",
               f"# front swatch (specular excluded) Table 1's ratios: {recipe_text}, fibre {recipe[-1]:.3g} /mm.",
               f"# {figures}.",
               "# The paper's literal medium is paper_2008."]

@@ -1,7 +1,7 @@
 """Renders of the woven close-up sample at the preset's twist and untwisted, side by side, under the
 same grazing light (issue 43, twist; docs/twist.md).
 
-The sample is the default close-up (``sheeting_weave``, the ``red_cotton`` preset's two plies and
+The sample is the close-up (``sheeting_weave``, the ``voided_red_cotton`` preset's two plies and
 irregularity; its section that of the crossings all along, ``TWIST_SAMPLE``), 8 × 8 yarns, seen from
 straight above through an orthographic camera (2.4 mm across), lit by a sun 15° above the cloth
 from −y, across the warps (which run left to right): the lighting ``"light 15° from −y, view from
@@ -41,7 +41,7 @@ from clothlight.weave.twist_highlight import (
 )
 from precompute.optics.medium import load_preset
 
-PRESET = "red_cotton"
+PRESET = "voided_red_cotton"
 ELEVATION_DEG = 15.0
 LIGHT, VIEW = LIGHTINGS["light 15° from −y, view from above"]     # the sun's and the camera's below
 

@@ -39,7 +39,7 @@ def main() -> int:
     args = parser.parse_args()
 
     views = split_views(load_measurement(args.measured))
-    config, base_dir = load_preset_config("red_cotton")  # the response depends on no medium
+    config, base_dir = load_preset_config("voided_red_cotton")  # the response depends on no medium
     model = build_forward_model(views.forward_views, config, base_dir, seed=0)
     luminance = np.array(LUMINANCE)
     for folder in args.folders:

@@ -180,7 +180,7 @@ def add_sun_and_camera(scene, toward_sun, toward_camera, irradiance: float):
 
 #: The preset the test build pre-bakes, and with what: one preset, tiny grids and budget, are enough to
 #: test the mechanism (`make extension` pre-bakes every preset's own bake).
-PREBAKED_PRESET = "red_cotton"
+PREBAKED_PRESET = "voided_red_cotton"
 PREBAKED_TRANSPORT = {"paths_per_cell": 64, "n_around": 4, "n_along": 2, "angular_resolution": 4,
                       "incidence_resolution": 5}
 #: The goniometer settings of its cloth pre-bake: small, to test the mechanism.

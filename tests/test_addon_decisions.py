@@ -11,8 +11,8 @@ from clothlight.medium_settings import BakeRequest
 
 
 def test_a_baked_folder_wins_and_is_flagged_when_baked_from_other_settings(tmp_path):
-    panel = BakeRequest(preset="red_cotton")
-    other = BakeRequest(preset="red_cotton", overrides=(("dye.weight_percent", 1.0),))
+    panel = BakeRequest(preset="voided_red_cotton")
+    other = BakeRequest(preset="voided_red_cotton", overrides=(("dye.weight_percent", 1.0),))
     folder, warning = prebaked.tables_for_request(panel, tables_dir=tmp_path, tables_request=panel.to_json(),
                                                   cache_dir=tmp_path / "cache")
     assert folder == tmp_path and warning is None
@@ -26,9 +26,9 @@ def test_a_baked_folder_wins_and_is_flagged_when_baked_from_other_settings(tmp_p
 
 def test_an_unchanged_shipped_preset_reads_its_copy_of_the_prebaked_tables(tmp_path, monkeypatch):
     shipped = tmp_path / "prebaked"
-    request = BakeRequest(preset="red_cotton")
-    (shipped / "red_cotton").mkdir(parents=True)
-    (shipped / "red_cotton" / prebaked.REQUEST_FILE).write_text(request.to_json())
+    request = BakeRequest(preset="voided_red_cotton")
+    (shipped / "voided_red_cotton").mkdir(parents=True)
+    (shipped / "voided_red_cotton" / prebaked.REQUEST_FILE).write_text(request.to_json())
     copies = []
     monkeypatch.setattr(prebaked, "PREBAKED_DIR", shipped)
 
@@ -39,8 +39,8 @@ def test_an_unchanged_shipped_preset_reads_its_copy_of_the_prebaked_tables(tmp_p
     monkeypatch.setattr(prebaked, "user_copy", user_copy)
     folder, warning = prebaked.tables_for_request(request, tables_dir=None, tables_request="", cache_dir=tmp_path)
     assert (folder, warning) == (tmp_path / "copy", None)
-    assert copies == [(shipped / "red_cotton", tmp_path)]
-    changed = BakeRequest(preset="red_cotton", overrides=(("dye.weight_percent", 1.0),))
+    assert copies == [(shipped / "voided_red_cotton", tmp_path)]
+    changed = BakeRequest(preset="voided_red_cotton", overrides=(("dye.weight_percent", 1.0),))
     with pytest.raises(LookupError, match="press Bake Tables"):
         prebaked.tables_for_request(changed, tables_dir=None, tables_request="", cache_dir=tmp_path)
     reason = jobs.bake_unavailable_reason(["numba"])
@@ -58,7 +58,7 @@ def test_a_bake_is_unavailable_only_when_a_dependency_is_missing(monkeypatch):
 
 
 def test_a_bake_job_sends_the_preferences_scheduler_to_its_child(tmp_path):
-    request = BakeRequest(preset="red_cotton")
+    request = BakeRequest(preset="voided_red_cotton")
     on_cluster = jobs.BakeJob(request, cache_dir=tmp_path, threads=4, scheduler="tcp://farm:8786").command()
     assert on_cluster[on_cluster.index("--scheduler") + 1] == "tcp://farm:8786"
     assert "--threads" not in on_cluster  # the cluster's workers have their own threads
@@ -81,7 +81,7 @@ def test_an_unchanged_shipped_preset_finds_its_shipped_cloth_tables_copied_whole
     monkeypatch.setattr(prebaked, "PREBAKED_CLOTH_DIR", shipped)
     assert prebaked.prebaked_cloth_tables(request) == shipped / "paper_2008"
     assert prebaked.prebaked_cloth_tables(BakeRequest(preset="paper_2008", seed=1)) is None
-    assert prebaked.prebaked_cloth_tables(BakeRequest(preset="red_cotton")) is None
+    assert prebaked.prebaked_cloth_tables(BakeRequest(preset="voided_red_cotton")) is None
 
     cache = tmp_path / "cache"
     copy = prebaked.user_copy(shipped / "paper_2008", cache, cloth=True)

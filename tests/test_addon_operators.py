@@ -113,7 +113,8 @@ def test_bake_request_defaults_are_the_bakes_own():
 def test_medium_settings_load_the_preset_and_send_only_changed_values(addon, scene):
     medium = scene.clothlight.medium
     medium_settings = addon["medium_settings"]
-    assert medium.request() == medium_settings.preset_request("red_cotton")
+    assert medium.request() == medium_settings.preset_request("red_cotton")  # the default
+    medium.base = "voided_red_cotton"
     medium.dye_weight_percent = 2.5
     medium.particle_volume_fraction = 0.14  # the preset's own value, stored in single precision
     assert medium.request().overrides == (("dye.weight_percent", 2.5),)
@@ -713,7 +714,7 @@ def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come
         assert in_fibres == (random and "dye" in preset_config(name))
         assert (scene.clothlight.medium.request().dye_series is None) == (in_fibres or "dye" not in preset_config(name))
     scene.clothlight.medium.use_dye_series = False
-    scene.clothlight.medium.base = "red_cotton"
+    scene.clothlight.medium.base = "voided_red_cotton"
     tiny(scene.clothlight.medium)
     weave = scene.clothlight.weave
     weave.pattern, weave.cross_section, weave.auto_crimp = "plain", "ELLIPTICAL", False  # the default sample

@@ -35,7 +35,7 @@ def cache(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def series_bake(cache):
-    return bake("red_cotton", at_dye(1.0), paths_per_cell=PATHS, seed=3, cache_dir=cache, dye_series=RANGE)
+    return bake("voided_red_cotton", at_dye(1.0), paths_per_cell=PATHS, seed=3, cache_dir=cache, dye_series=RANGE)
 
 
 def total_rgb(folder):
@@ -48,7 +48,7 @@ def total_rgb(folder):
 def test_first_bake_of_a_range_simulates_then_any_amount_in_it_does_not(series_bake, cache):
     assert series_bake.simulated
     assert series_bake.summary["dye_series"]["dye_range_percent"] == list(RANGE)
-    again = bake("red_cotton", at_dye(3.2), paths_per_cell=PATHS, seed=3, cache_dir=cache, dye_series=RANGE)
+    again = bake("voided_red_cotton", at_dye(3.2), paths_per_cell=PATHS, seed=3, cache_dir=cache, dye_series=RANGE)
     assert not again.simulated and not again.cache_hit
     assert "reweighting" in again.summary["seconds"]
     assert again.summary["dye_series"] == series_bake.summary["dye_series"]
@@ -62,8 +62,8 @@ def test_first_bake_of_a_range_simulates_then_any_amount_in_it_does_not(series_b
 def test_tables_read_from_the_series_agree_with_a_simulation_at_that_dye(cache, series_bake, percent):
     """ρ summed over the incidence and exit cells (RGB) and the albedo per incidence cell and
     wavelength, against transport run in the medium of that dye amount: within their errors."""
-    read = bake("red_cotton", at_dye(percent), paths_per_cell=PATHS, seed=3, cache_dir=cache, dye_series=RANGE)
-    fresh = bake("red_cotton", at_dye(percent), paths_per_cell=PATHS, seed=8, cache_dir=cache)
+    read = bake("voided_red_cotton", at_dye(percent), paths_per_cell=PATHS, seed=3, cache_dir=cache, dye_series=RANGE)
+    fresh = bake("voided_red_cotton", at_dye(percent), paths_per_cell=PATHS, seed=8, cache_dir=cache)
     assert_read_agrees_with_fresh(read, fresh)
 
 
@@ -101,9 +101,9 @@ def assert_read_agrees_with_fresh(read, fresh):
 
 def test_a_dye_outside_the_range_or_an_undyed_medium_is_refused(cache):
     with pytest.raises(ParameterError, match="dye.weight_percent"):
-        bake("red_cotton", at_dye(6.0), paths_per_cell=PATHS, cache_dir=cache, dye_series=RANGE)
+        bake("voided_red_cotton", at_dye(6.0), paths_per_cell=PATHS, cache_dir=cache, dye_series=RANGE)
     with pytest.raises(ParameterError, match="dye_series"):
-        bake("red_cotton", at_dye(1.0), paths_per_cell=PATHS, cache_dir=cache, dye_series=(3.0, 1.0))
+        bake("voided_red_cotton", at_dye(1.0), paths_per_cell=PATHS, cache_dir=cache, dye_series=(3.0, 1.0))
     with pytest.raises(ParameterError, match="dye_series"):
         bake("undyed_cotton", SMALL, paths_per_cell=PATHS, cache_dir=cache, dye_series=RANGE)
 

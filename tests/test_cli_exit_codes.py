@@ -101,7 +101,7 @@ def files(tmp_path_factory):
     made["empty_json"].write_text("{}")
     made["folder"].mkdir()
     made["low_index"] = root / "low_index.toml"
-    preset = (REPO / "precompute" / "presets" / "red_cotton.toml").read_text()
+    preset = (REPO / "precompute" / "presets" / "voided_red_cotton.toml").read_text()
     made["low_index"].write_text(preset.replace("refractive_index = 1.557", "refractive_index = 0.5", 1))
     return made
 
@@ -189,12 +189,12 @@ BAD_INPUTS = [
     ("precompute", ["bake", "--set", "transport.paths_per_cell=1000000000000000"], ["transport.paths_per_cell"]),
     ("precompute", ["bake", "--set", "transport.angular_resolution=64", "--set", "transport.n_around=256"],
      ["transport.angular_resolution", "transport.n_around", "GiB", "half this machine's memory"]),
-    ("precompute", ["bake", "--set", "particles.0.diameter_nm=1e9"], ["diameter_nm", "[1, 100000] nm"]),
+    ("precompute", ["bake", "--preset", "voided_red_cotton", "--set", "particles.0.diameter_nm=1e9"], ["diameter_nm", "[1, 100000] nm"]),
     ("precompute", ["bake", "--set", "yarn.radius_mm=1e6"], ["yarn.radius_mm", "[0.001, 10] mm"]),
     ("precompute", ["bake", "--set", "wavelengths.step_nm=1e-9"], ["wavelengths.step_nm", "1001"]),
-    ("precompute", ["bake", "--preset", ""], ["--preset = ''", "red_cotton"]),
-    ("precompute", ["optics", "--preset", ""], ["--preset = ''", "red_cotton"]),
-    ("precompute", ["bake", "--preset", "no_such_yarn"], ["--preset = 'no_such_yarn'", "red_cotton"]),
+    ("precompute", ["bake", "--preset", ""], ["--preset = ''", "voided_red_cotton"]),
+    ("precompute", ["optics", "--preset", ""], ["--preset = ''", "voided_red_cotton"]),
+    ("precompute", ["bake", "--preset", "no_such_yarn"], ["--preset = 'no_such_yarn'", "voided_red_cotton"]),
     ("precompute", ["bake", "--config", "{binary}"], ["--config", "binary.toml", "UTF-8"]),
     ("precompute", ["optics", "--config", "{folder}"], ["--config", "folder"]),
     ("precompute", ["optics", "--config", "{low_index}"], ["host.refractive_index.n = 0.5", "[1, 10]"]),

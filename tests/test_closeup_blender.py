@@ -66,8 +66,8 @@ def test_flyaways_are_hair_curves_of_the_core_fibres_on_the_sample(empty_scene):
     params = sheeting_weave(warp_count=4, weft_count=4)
     settings = CloseupSettings()
     sample = build_sample_object(params)
-    fibres_obj = build_flyaway_object(sample, params, settings, "red_cotton")
-    core = flyaway_fibres(params, settings, fibre_radius_mm(load_preset("red_cotton")))
+    fibres_obj = build_flyaway_object(sample, params, settings, "voided_red_cotton")
+    core = flyaway_fibres(params, settings, fibre_radius_mm(load_preset("voided_red_cotton")))
     curves = fibres_obj.data
     assert fibres_obj.type == "CURVES" and fibres_obj.parent == sample and fibres_obj.name == flyaway_name(sample)
     assert len(curves.curves) == len(core.counts) > 0
@@ -79,17 +79,17 @@ def test_flyaways_are_hair_curves_of_the_core_fibres_on_the_sample(empty_scene):
     hair = next(node for node in curves.materials[0].node_tree.nodes if node.type == "BSDF_HAIR_PRINCIPLED")
     assert hair.parametrization == "ABSORPTION"
     np.testing.assert_allclose(hair.inputs["Absorption Coefficient"].default_value,
-                               hair_absorption_coefficient(load_preset("red_cotton")), rtol=1e-6)
+                               hair_absorption_coefficient(load_preset("voided_red_cotton")), rtol=1e-6)
 
 
 def test_flyaways_rebuild_in_place_and_leak_nothing(empty_scene):
     params = sheeting_weave(warp_count=3, weft_count=3)
     sample = build_sample_object(params)
-    first = len(build_flyaway_object(sample, params, CloseupSettings(), "red_cotton").data.curves)
-    denser = build_flyaway_object(sample, params, CloseupSettings(flyaway_density_per_mm=20.0), "red_cotton")
+    first = len(build_flyaway_object(sample, params, CloseupSettings(), "voided_red_cotton").data.curves)
+    denser = build_flyaway_object(sample, params, CloseupSettings(flyaway_density_per_mm=20.0), "voided_red_cotton")
     assert len(denser.data.curves) > first
     assert len(bpy.data.hair_curves) == 1 and len([o for o in bpy.data.objects if o.type == "CURVES"]) == 1
-    none = build_flyaway_object(sample, params, CloseupSettings(flyaway_density_per_mm=0.0), "red_cotton")
+    none = build_flyaway_object(sample, params, CloseupSettings(flyaway_density_per_mm=0.0), "voided_red_cotton")
     assert none is None and not bpy.data.hair_curves
 
 
@@ -105,7 +105,7 @@ def test_the_panel_builds_the_base_mediums_plies_and_the_operator_grows_fibres(s
     assert (params.ply_count, params.twist_angle_deg) == (yarn.ply_count, yarn.twist_angle_deg) == (2, 24.0)
     scene.clothlight.medium.base = "delustred_polyester"
     assert weave.parameters().ply_count == 1 and weave.parameters().twist_angle_deg == 5.0
-    scene.clothlight.medium.base = "red_cotton"
+    scene.clothlight.medium.base = "voided_red_cotton"
     sample = build_sample_object(weave.parameters())
     bpy.context.view_layer.objects.active = sample
     assert bpy.ops.clothlight.add_flyaways() == {"FINISHED"}
@@ -117,7 +117,7 @@ def test_the_panel_builds_the_base_mediums_plies_and_the_operator_grows_fibres(s
     bpy.data.objects.remove(fibres)
     assert bpy.ops.clothlight.add_flyaways() == {"FINISHED"}
     assert flyaway_name(sample) in bpy.data.objects
-    scene.clothlight.medium.base = "red_cotton"
+    scene.clothlight.medium.base = "voided_red_cotton"
     weave.height_jitter = 0.99                         # crossings pushed through each other: refused by name
     with pytest.raises(Exception, match="height_jitter"):
         weave.parameters()
@@ -130,7 +130,7 @@ def test_the_sheeting_preset_is_the_close_up_default():
     text = (PRESET_ROOT / "presets" / WEAVE_SUBDIR / "Cotton_Sheeting_Close-Up.py").read_text()
     values = dict(line.removeprefix("weave.").split(" = ") for line in text.splitlines() if line.startswith("weave."))
     params = sheeting_weave()
-    settings = closeup_settings(load_preset_config("red_cotton")[0])
+    settings = closeup_settings(load_preset_config("voided_red_cotton")[0])
     assert float(values["spacing_mm"]) == pytest.approx(params.spacing_mm)
     section = (float(values["half_width_mm"]), float(values["half_thickness_mm"]))
     assert section == pytest.approx(params.cross_section_mm)
@@ -152,7 +152,7 @@ def test_fibres_lit_from_behind_pass_their_dyes_colour(tmp_path):
     from tests.helpers import add_camera, add_sun, empty_render_scene
 
     transmitted = {}
-    for preset in ("red_cotton", "blue_cotton"):
+    for preset in ("voided_red_cotton", "blue_cotton"):
         scene = empty_render_scene(resolution=48, samples=16)
         scene.cycles.shading_system = False
         params = sheeting_weave(warp_count=4, weft_count=4)
@@ -162,7 +162,7 @@ def test_fibres_lit_from_behind_pass_their_dyes_colour(tmp_path):
         add_sun(scene, (0.0, 0.0, -1.0), 3.0)
         add_camera(scene, (0.0, 0.0, 1.0), ortho_scale=1.6, distance=10.0)
         transmitted[preset] = render_to_array(scene, tmp_path / f"{preset}.exr")[..., :3].reshape(-1, 3).sum(axis=0)
-    red, blue = transmitted["red_cotton"], transmitted["blue_cotton"]
+    red, blue = transmitted["voided_red_cotton"], transmitted["blue_cotton"]
     assert red.sum() > 0 and blue.sum() > 0
     assert red[0] > red[2] and blue[2] > blue[0]
 

@@ -138,7 +138,7 @@ def test_the_clothlight_materials_read_blue_cotton_and_white_cotton_packed(blend
     paler; nothing in either names a folder of this machine."""
     yarn, weft = blend.materials[YARN_MATERIAL], blend.materials[WEFT_MATERIAL]
     lobes, diffuse = _packed_lobes(yarn)
-    assert diffuse[2] > 2 * diffuse[1] > 2 * diffuse[0] >= 0, diffuse  # a blue yarn (red_cotton's is red)
+    assert diffuse[2] > 2 * diffuse[1] > 2 * diffuse[0] >= 0, diffuse  # a blue yarn (voided_red_cotton's is red)
     weft_lobes, weft_diffuse = _packed_lobes(weft)
     assert weft_lobes != lobes and weft_lobes.packed_file.data != lobes.packed_file.data
     # ecru: red and green far above the indigo's, red the strongest (the fabric's warm white)

@@ -65,7 +65,7 @@ def test_the_default_close_up_covers_the_cloth_as_sheeting_does():
     """Peirce: round yarns of diameter d at K = 14 cover 14/28 of the cloth per system, 0.75 both
     together; the flattened default covers more, the validation's open sample less."""
     params = sheeting_weave()
-    d = 2 * load_preset("red_cotton").yarn.radius_mm
+    d = 2 * load_preset("voided_red_cotton").yarn.radius_mm
     peirce = d / params.spacing_mm
     assert peirce == pytest.approx(SHEETING_COVER_FACTOR / 28)
     assert params.cover_factor > 1 - (1 - peirce) ** 2 == pytest.approx(0.75)
@@ -163,7 +163,7 @@ def test_fibres_leave_along_the_twist_helix():
 # -- the fibres' colour ---------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["red_cotton", "blue_cotton", "paper_2008", "undyed_cotton",
+@pytest.mark.parametrize("name", ["voided_red_cotton", "blue_cotton", "paper_2008", "undyed_cotton",
                                   str(PRESET_DIR / "experimental" / "fibre_cotton.toml")])   # a medium of fibres
 def test_hair_absorption_passes_the_dyed_fibres_colour(name):
     """Cycles attenuates by exp(−σ·chord) with the chord in fibre radii: straight through a fibre
@@ -186,7 +186,7 @@ def test_hair_absorption_passes_the_dyed_fibres_colour(name):
 
 
 def test_a_red_dye_absorbs_green_and_blue_more_than_red():
-    sigma = hair_absorption_coefficient(load_preset("red_cotton"))
+    sigma = hair_absorption_coefficient(load_preset("voided_red_cotton"))
     assert sigma[0] < sigma[1] and sigma[0] < sigma[2]
     blue = hair_absorption_coefficient(load_preset("blue_cotton"))
     assert blue[2] < blue[0]

@@ -62,7 +62,7 @@ def sweep(sample, out, tables, specular_weight=None):
 
 def test_the_close_up_measures_a_positive_brdf_of_the_tables_colour_bounded_by_its_coverage(tmp_path, constant_bake):
     fresh_file()
-    closeup = sweep(sheeting_weave("red_cotton"), tmp_path / "closeup", constant_bake, specular_weight=0.0)
+    closeup = sweep(sheeting_weave("voided_red_cotton"), tmp_path / "closeup", constant_bake, specular_weight=0.0)
     plain = sweep(None, tmp_path / "plain", constant_bake, specular_weight=0.0)
     for view in closeup:
         brdf = np.array(view["brdf_rgb"])
@@ -82,9 +82,9 @@ def test_the_close_up_measures_a_positive_brdf_of_the_tables_colour_bounded_by_i
 
 def test_the_rig_measures_a_close_up_objects_yarns_not_its_flyaway_fibres(tmp_path, constant_bake):
     fresh_file()
-    weave = sheeting_weave("red_cotton")
+    weave = sheeting_weave("voided_red_cotton")
     sample = build_sample_object(weave)
-    fibres = build_flyaway_object(sample, weave, CloseupSettings(), "red_cotton")
+    fibres = build_flyaway_object(sample, weave, CloseupSettings(), "voided_red_cotton")
     assert fibres is not None and fibres.parent == sample
     from_object = sweep(sample, tmp_path / "object", constant_bake)
     fresh_file()
@@ -94,6 +94,6 @@ def test_the_rig_measures_a_close_up_objects_yarns_not_its_flyaway_fibres(tmp_pa
 
 def test_the_close_up_in_a_baked_yarn_material_gives_a_finite_positive_brdf_in_every_view(tmp_path):
     fresh_file()
-    for view in sweep(sheeting_weave("red_cotton"), tmp_path, SHIPPED_TABLES):
+    for view in sweep(sheeting_weave("voided_red_cotton"), tmp_path, SHIPPED_TABLES):
         brdf = np.array(view["brdf_rgb"])
         assert np.all(np.isfinite(brdf)) and np.all(brdf > 0) and view["coverage"] > 0.5, view

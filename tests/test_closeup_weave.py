@@ -243,7 +243,7 @@ def test_bad_close_up_settings_are_refused_by_name(kwargs, name, allowed):
 
 def test_the_presets_plies_and_twist_build():
     """The medium's own [yarn] values are what the close-up takes (one twist parameter per preset)."""
-    yarn = load_preset("red_cotton").yarn
+    yarn = load_preset("voided_red_cotton").yarn
     params = WeaveParameters(warp_count=3, weft_count=3, ply_count=yarn.ply_count, twist_angle_deg=yarn.twist_angle_deg)
     assert params.ply_count == 2 and params.twist_angle_deg == pytest.approx(24.0)
     assert len(build_woven_mesh(params).tube_faces) == 12

@@ -22,7 +22,7 @@ SMALL = {"n_around": 8, "n_along": 4, "angular_resolution": 4}
 
 
 def small_red_cotton() -> dict:
-    config = copy.deepcopy(load_preset_config("red_cotton")[0])
+    config = copy.deepcopy(load_preset_config("voided_red_cotton")[0])
     config["transport"] = dict(SMALL)
     return config
 
@@ -151,8 +151,8 @@ def paper_red_cotton_recipe() -> tuple[dict, tuple[str, ...], np.ndarray]:
 
 def test_paper_red_cotton_is_red_cottons_yarn_with_a_shade_recipe():
     config, dyes, recipe = paper_red_cotton_recipe()
-    red_cotton = load_preset_config("red_cotton")[0]
-    assert config["particles"] == red_cotton["particles"] and config["yarn"] == red_cotton["yarn"]
+    voided_red_cotton = load_preset_config("voided_red_cotton")[0]
+    assert config["particles"] == voided_red_cotton["particles"] and config["yarn"] == voided_red_cotton["yarn"]
     assert len(dyes) == 3 and np.all(recipe > 0)
     medium = medium_from_dict(config, PRESET_DIR)
     assert medium.dye.weight_percent == pytest.approx(recipe[:-1].sum())

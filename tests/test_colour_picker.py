@@ -36,25 +36,25 @@ def srgb(hex_colour: str) -> tuple[float, float, float]:
 
 
 def test_a_request_round_trips_names_its_file_and_dyes_the_panels_yarn(tmp_path):
-    yarn = BakeRequest(preset="red_cotton", overrides=(("dye.weight_percent", 2.0), ("yarn.radius_mm", 0.2)),
+    yarn = BakeRequest(preset="voided_red_cotton", overrides=(("dye.weight_percent", 2.0), ("yarn.radius_mm", 0.2)),
                        **TINY_GRIDS)
     request = ColourMatchRequest(target=srgb(RED_FABRIC2), medium=yarn, out=str(tmp_path / "x.toml"))
     assert ColourMatchRequest.from_json(request.to_json()) == request and request.hex == RED_FABRIC2
     # the file: the yarn, the colour, a hash of the yarn's changes (the dye's is the recipe's, not kept)
     name = recipe_file_name(yarn, request.target)
-    assert name.startswith("red_cotton_6a2717_") and name.endswith(".toml")
-    assert recipe_file_name(BakeRequest(preset="red_cotton"), request.target) == "red_cotton_6a2717.toml"
-    assert recipe_file_name(BakeRequest(preset="red_cotton", overrides=(("dye.weight_percent", 2.0),)),
-                            request.target) == "red_cotton_6a2717.toml"
+    assert name.startswith("voided_red_cotton_6a2717_") and name.endswith(".toml")
+    assert recipe_file_name(BakeRequest(preset="voided_red_cotton"), request.target) == "voided_red_cotton_6a2717.toml"
+    assert recipe_file_name(BakeRequest(preset="voided_red_cotton", overrides=(("dye.weight_percent", 2.0),)),
+                            request.target) == "voided_red_cotton_6a2717.toml"
     # a recipe solved again for another colour keeps the yarn's name, not the old colour's
     assert recipe_file_name(BakeRequest(preset="/x/colours/red_cotton_6a2717.toml"), srgb("#2b2d45")) \
         == "red_cotton_2b2d45.toml"
     # the yarn to dye: the panel's changes but the dye's, and the changed grids
     config, _ = request.base_config()
     assert config["yarn"]["radius_mm"] == 0.2 and config["transport"]["n_around"] == 4
-    assert config["dye"]["weight_percent"] == medium_config("red_cotton")["dye"]["weight_percent"]
-    untouched = ColourMatchRequest(medium=preset_request("red_cotton"), out=str(tmp_path / "y.toml"))
-    assert untouched.base_config()[0] == medium_config("red_cotton")  # shares the command line's shade model
+    assert config["dye"]["weight_percent"] == medium_config("voided_red_cotton")["dye"]["weight_percent"]
+    untouched = ColourMatchRequest(medium=preset_request("voided_red_cotton"), out=str(tmp_path / "y.toml"))
+    assert untouched.base_config()[0] == medium_config("voided_red_cotton")  # shares the command line's shade model
 
 
 @pytest.mark.parametrize("changes, field", [
@@ -71,9 +71,9 @@ def test_a_bad_request_is_refused_before_a_child_starts_naming_the_field(tmp_pat
 
 def test_a_preset_file_is_read_again_when_it_changes(tmp_path):
     path = tmp_path / "mine.toml"
-    text = (pathlib.Path(__file__).parents[1] / "precompute" / "presets" / "red_cotton.toml").read_text()
+    text = (pathlib.Path(__file__).parents[1] / "precompute" / "presets" / "voided_red_cotton.toml").read_text()
     write_preset(text, path)
-    assert medium_config(str(path))["dye"]["weight_percent"] == medium_config("red_cotton")["dye"]["weight_percent"]
+    assert medium_config(str(path))["dye"]["weight_percent"] == medium_config("voided_red_cotton")["dye"]["weight_percent"]
     write_preset(re.sub(r"(?m)^weight_percent = [0-9.]+", "weight_percent = 3.25", text, count=1), path)
     assert medium_config(str(path))["dye"]["weight_percent"] == 3.25
     assert not list(tmp_path.glob(".*partial"))
@@ -102,6 +102,7 @@ def addon(bpy, shade_cache, tmp_path, monkeypatch):
     try:
         bpy.ops.wm.read_homefile(use_empty=True)
         medium = bpy.context.scene.clothlight.medium
+        medium.base = "voided_red_cotton"  # Congo red in a host, the medium these matches were measured on
         for key, value in TINY_GRIDS.items():
             setattr(medium, key, value)
         yield SimpleNamespace(scene=bpy.context.scene, cache=cache, colours=tmp_path / "colours")
@@ -139,12 +140,12 @@ def test_match_colour_writes_a_recipe_of_the_colour_and_makes_it_the_baked_mediu
     from precompute.bake import bake_configuration
 
     scene, medium = addon.scene, addon.scene.clothlight.medium
-    assert medium.base == "red_cotton" and medium.last_colour_match() is None
+    assert medium.base == "voided_red_cotton" and medium.last_colour_match() is None
     medium.target_colour = srgb(RED_FABRIC2)
     # In background mode INVOKE_DEFAULT runs execute(): the solve in its child, to the end.
     assert bpy.ops.clothlight.match_colour("INVOKE_DEFAULT") == {"FINISHED"}
     outcome = medium.last_colour_match()
-    preset = addon.colours / "red_cotton_6a2717.toml"
+    preset = addon.colours / "voided_red_cotton_6a2717.toml"
     assert outcome.reached and outcome.written and outcome.preset == preset and preset.is_file()
     assert [p.name for p in addon.colours.iterdir()] == [preset.name]  # nothing else, no partial file
     assert preset.read_text(encoding="utf-8") == outcome.text and "Match Colour in Blender" in outcome.text
@@ -172,8 +173,8 @@ def test_match_colour_writes_a_recipe_of_the_colour_and_makes_it_the_baked_mediu
     assert any(label.startswith("Fibre absorption: ") for label in labels)
     assert not bpy.ops.clothlight.apply_colour_match.poll()
     # shipped presets are as they were
-    medium.base = "red_cotton"
-    assert medium.request() == preset_request("red_cotton")
+    medium.base = "voided_red_cotton"
+    assert medium.request() == preset_request("voided_red_cotton")
 
 
 @pytest.mark.render
@@ -186,7 +187,7 @@ def test_an_unreachable_colour_is_reported_and_written_only_when_applied_anyway(
     outcome = medium.last_colour_match()
     assert not outcome.reached and not outcome.written and outcome.delta_e > 2.0
     assert not addon.colours.exists() or not list(addon.colours.iterdir())  # nothing written
-    assert medium.base == "red_cotton" and medium.request() == before  # the medium is unchanged
+    assert medium.base == "voided_red_cotton" and medium.request() == before  # the medium is unchanged
     labels = panel_labels(bpy, scene)
     assert f"#ffffff out of reach: nearest ΔE2000 {outcome.delta_e:.2f}" in labels
     assert bpy.ops.clothlight.apply_colour_match.poll()
@@ -220,7 +221,7 @@ def test_esc_cancels_a_match_and_nothing_is_written(addon, bpy, tmp_path):
     assert isinstance(job.error, ColourMatchCancelled) and job.returncode == 130, job.log[-3000:]
     assert operator.reports[-1][0] == "WARNING" and "nothing was written" in operator.reports[-1][1]
     assert running_jobs.running_colour_match() is None and medium.last_colour_match() is None
-    assert medium.base == "red_cotton" and not addon.colours.exists()
+    assert medium.base == "voided_red_cotton" and not addon.colours.exists()
 
 
 def test_register_and_unregister_add_and_take_back_the_colour_picker(bpy):

@@ -85,7 +85,7 @@ def test_twin_matches_cycles(bpy, tmp_path, kind, view_angles, light_angles, wha
     kinds = {"hair_reflection": 0, "hair_transmission": 1, "ggx_retro": 2, "beckmann": 3, "uniform": 4, "conductor": 5}
     if kind == "beckmann":  # the paper's rms slope
         alpha = 0.8
-    elif kind == "conductor":  # the garment's specular lobe at red_cotton's fitted slope
+    elif kind == "conductor":  # the garment's specular lobe at voided_red_cotton's fitted slope
         alpha = 0.094
     rendered = render_closure(tmp_path, kinds[kind], view, light, r1, r2, alpha)
     if kind == "hair_reflection":

@@ -14,12 +14,12 @@ from precompute.optics.medium import DATA_DIR, load_preset_config, medium_from_d
 from precompute.tables.color import delta_e_2000, linear_rgb_to_lab, linear_to_srgb, srgb_to_linear_rgb
 
 
-def red_cotton() -> dict:
-    return copy.deepcopy(load_preset_config("red_cotton")[0])
+def voided_red_cotton() -> dict:
+    return copy.deepcopy(load_preset_config("voided_red_cotton")[0])
 
 
 def with_dye(**dye) -> dict:
-    config = red_cotton()
+    config = voided_red_cotton()
     config["dye"] = {"weight_percent": 1.0, "fiber_density_g_per_cm3": 1.52, **dye}
     return config
 
@@ -27,7 +27,7 @@ def with_dye(**dye) -> dict:
 def test_a_mixture_absorbs_as_the_sum_of_its_dyes():
     recipe = with_dye(spectrum_csv=["congo_red.csv", "evans_blue.csv", "curcumin.csv"], shares=[0.6, 0.1, 0.3])
     mixed = medium_optics(medium_from_dict(recipe)).mu_a
-    undyed = medium_optics(medium_from_dict(red_cotton()).with_dye(0.0)).mu_a
+    undyed = medium_optics(medium_from_dict(voided_red_cotton()).with_dye(0.0)).mu_a
     alone = [medium_optics(medium_from_dict(with_dye(spectrum_csv=name, weight_percent=share))).mu_a - undyed
              for name, share in (("congo_red.csv", 0.6), ("evans_blue.csv", 0.1), ("curcumin.csv", 0.3))]
     np.testing.assert_allclose(mixed - undyed, sum(alone), rtol=1e-9)
@@ -36,7 +36,7 @@ def test_a_mixture_absorbs_as_the_sum_of_its_dyes():
 
 
 def test_a_single_dye_reads_as_before_and_a_one_dye_list_equals_it():
-    one = medium_from_dict(red_cotton()).dye
+    one = medium_from_dict(voided_red_cotton()).dye
     wavelengths, epsilon = read_spectrum_csv(DATA_DIR / "congo_red.csv", "x")
     assert one.mass_absorption_cm2_per_g == epsilon and one.source == "congo_red.csv"
     listed = medium_from_dict(with_dye(spectrum_csv=["congo_red.csv"], shares=[1.0])).dye
@@ -58,15 +58,15 @@ def test_a_bad_mixture_is_refused_naming_the_key(dye, expected):
 
 
 def test_recipe_config_writes_a_preset_that_reads_back_as_the_recipe():
-    config = recipe_config(red_cotton(), [0.2, 0.0, 0.05, 0.3])
+    config = recipe_config(voided_red_cotton(), [0.2, 0.0, 0.05, 0.3])
     assert config["dye"]["spectrum_csv"] == [RECIPE_DYES[0], RECIPE_DYES[2]]  # a dye at 0 % is left out
     assert config["dye"]["shares"] == pytest.approx([0.8, 0.2])
     medium = medium_from_dict(config)
     assert medium.dye.weight_percent == pytest.approx(0.25) and medium.host.absorption_per_mm == 0.3
     with pytest.raises(ParameterError, match="some dye"):
-        recipe_config(red_cotton(), [0.0, 0.0, 0.0, 0.3])
+        recipe_config(voided_red_cotton(), [0.0, 0.0, 0.0, 0.3])
     with pytest.raises(ParameterError, match="recipe"):
-        recipe_config(red_cotton(), [0.2, 0.1, 0.0])
+        recipe_config(voided_red_cotton(), [0.2, 0.1, 0.0])
 
 
 def test_srgb_colours_parse_and_convert_both_ways():

@@ -33,7 +33,7 @@ def _wheel_name_version(filename: str) -> tuple[str, str]:
 def test_zip_holds_the_add_on_shaders_presets_and_prebaked_tables_but_no_dev_files_or_numpy(extension_zip):
     names = zipfile.ZipFile(extension_zip).namelist()
     assert "blender_manifest.toml" in names and "__init__.py" in names
-    assert {"clothlight/__init__.py", "osl/clothlight.h", "precompute/presets/red_cotton.toml"} <= set(names)
+    assert {"clothlight/__init__.py", "osl/clothlight.h", "precompute/presets/voided_red_cotton.toml"} <= set(names)
     assert any(n.startswith("clothlight/blender/presets/clothlight_weave/") for n in names)
     assert not [n for n in names if n.startswith(("tests/", "benchmarks/", "scripts/", "example_blends/", ".git"))]
     assert not [n for n in names if "numpy" in n.lower() or n.endswith((".oso", ".nbi", ".nbc")) or "__pycache__" in n]

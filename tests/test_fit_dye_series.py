@@ -23,8 +23,8 @@ def preset_at_dye(name: str, dye: float) -> dict:
     return config
 
 
-def red_cotton(dye: float) -> dict:
-    return preset_at_dye("red_cotton", dye)
+def voided_red_cotton(dye: float) -> dict:
+    return preset_at_dye("voided_red_cotton", dye)
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,7 @@ def series_model():
 
 
 @pytest.mark.parametrize("name, dye_range, dyes, error", [
-    ("red_cotton", (0.1, 3.0), (0.1, 0.8, 3.0), 0.015),
+    ("voided_red_cotton", (0.1, 3.0), (0.1, 0.8, 3.0), 0.015),
     # dye in fibres along the yarn axis, their absorption reweighted: at 0.015 two fresh transports of
     # these small grids differ by up to 6 % in red, at 0.007 by 3 %
     ("blue_cotton", (0.5, 8.0), (0.5, 2.0, 8.0), 0.007),
@@ -63,11 +63,11 @@ def test_candidates_read_from_one_series_agree_with_their_own_transport(name, dy
 
 
 def test_another_medium_starts_a_new_series_and_a_dye_outside_is_refused(series_model):
-    series_model.tables(red_cotton(1.0), relative_error=0.08, seed=0)
+    series_model.tables(voided_red_cotton(1.0), relative_error=0.08, seed=0)
     first = series_model._series
-    thinner = red_cotton(1.0)
+    thinner = voided_red_cotton(1.0)
     thinner["yarn"]["radius_mm"] = 0.08
     series_model.tables(thinner, relative_error=0.08, seed=0)
     assert series_model._series is not first
     with pytest.raises(ParameterError, match="dye.weight_percent"):
-        series_model.tables(red_cotton(4.0), relative_error=0.08, seed=0)
+        series_model.tables(voided_red_cotton(4.0), relative_error=0.08, seed=0)

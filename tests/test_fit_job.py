@@ -28,7 +28,7 @@ from precompute.fit.parameters import PARAMETERS
 from tests.test_fit_optimise import TRUTH, synthetic_brdf
 
 #: Red cotton on the smallest grids (the transport of a candidate or a dye series in well under a second).
-TINY_MEDIUM = BakeRequest(preset="red_cotton", n_around=4, n_along=2, angular_resolution=4)
+TINY_MEDIUM = BakeRequest(preset="voided_red_cotton", n_around=4, n_along=2, angular_resolution=4)
 #: Ten views: θi 0 and 30°, in the plane of incidence on both sides and the normal, one held out (90°).
 VIEWS = [(theta_i, 180, theta_o, phi_o) for theta_i in (0, 30)
          for theta_o, phi_o in ((20, 180), (0, 0), (20, 0), (40, 0), (30, 90))]
@@ -75,7 +75,7 @@ def test_the_panels_free_parameters_are_the_fits_own():
 
 def test_a_fit_request_round_trips_through_json(tmp_path):
     request = FitRequest(measured="/data/red.csv", out=str(tmp_path / "fit"), free=["void_fraction", "specular_slope"],
-                         medium=BakeRequest(preset="red_cotton", overrides=(("dye.weight_percent", 0.5),
+                         medium=BakeRequest(preset="voided_red_cotton", overrides=(("dye.weight_percent", 0.5),
                                                                             ("fit.specular_weight", 0.02)),
                                             n_around=8, dye_series=(0.1, 3.0)),
                          target_ratios=" B/R=0.08,G/R=0.011 ", max_back_front=0.5, budget=40, budget_seconds=600,
@@ -85,10 +85,10 @@ def test_a_fit_request_round_trips_through_json(tmp_path):
     assert again == request and again.to_json() == text
     assert again.free == ("void_fraction", "specular_slope") and again.target_ratios == "B/R=0.08,G/R=0.011"
     assert isinstance(again.medium, BakeRequest) and again.medium.overrides == request.medium.overrides
-    assert json.loads(text)["medium"]["preset"] == "red_cotton"
+    assert json.loads(text)["medium"]["preset"] == "voided_red_cotton"
     # what the fit gets: the medium as the bake describes it, its grids as the [transport] table
     arguments = request.fit_arguments()
-    assert arguments["preset"] == "red_cotton" and arguments["free"] == "void_fraction,specular_slope"
+    assert arguments["preset"] == "voided_red_cotton" and arguments["free"] == "void_fraction,specular_slope"
     assert arguments["overrides"]["dye.weight_percent"] == 0.5 and arguments["overrides"]["transport.n_around"] == 8
     assert arguments["budget_evaluations"] == 40 and arguments["target_ratios"] == "B/R=0.08,G/R=0.011"
     assert FitRequest.from_json(FitRequest().to_json()) == FitRequest()
@@ -252,7 +252,7 @@ def test_the_childs_fit_is_the_command_lines(fitted, measured, response_cache, t
     from precompute.optics.medium import load_preset_config
 
     job, _ = fitted
-    config, _ = load_preset_config("red_cotton")
+    config, _ = load_preset_config("voided_red_cotton")
     config = apply_overrides(config, job.request.medium.bake_arguments()["overrides"])
     preset = tmp_path / "start.toml"  # its dye spectrum resolves in precompute/data
     preset.write_text(to_toml(config))
@@ -321,6 +321,7 @@ def addon(bpy, response_cache, tmp_path, monkeypatch):
 
 def set_up_small_fit(scene, measured) -> None:
     medium, fit = scene.clothlight.medium, scene.clothlight.fit
+    medium.base = "voided_red_cotton"  # Congo red in a host: the dye series of one simulation
     medium.n_around, medium.n_along, medium.angular_resolution = 4, 2, 4
     fit.measured_path = str(measured)
     fit.free = {"dye_weight_percent", "specular_weight"}
@@ -365,7 +366,7 @@ def test_the_fit_operator_fits_in_background_mode_and_loads_the_fitted_values(ad
     medium.base = "paper_2008"
     assert medium.fitted_overrides == "" and medium.request() != start
     assert bpy.ops.clothlight.load_fit() == {"FINISHED"}
-    assert medium.base == "red_cotton" and dict(medium.request().overrides) == overrides
+    assert medium.base == "voided_red_cotton" and dict(medium.request().overrides) == overrides
     assert bpy.ops.clothlight.clear_fitted_values() == {"FINISHED"}
     assert "fit.specular_weight" not in dict(medium.request().overrides)
     # the panel draws existing properties and operators, and the last fit
@@ -411,7 +412,7 @@ def test_the_response_renders_with_the_example_tables_or_in_the_extension_a_preb
     assert lookup_tables_folder() == PROJECT_ROOT / "example_blends" / "tables" / "paper_2008"
     with pytest.raises(FileNotFoundError, match="no yarn tables"):
         lookup_tables_folder(tmp_path)
-    for name in ("red_cotton", "paper_2008"):
+    for name in ("voided_red_cotton", "paper_2008"):
         (tmp_path / "prebaked" / name).mkdir(parents=True)
         (tmp_path / "prebaked" / name / "summary.json").write_text("{}")
     assert lookup_tables_folder(tmp_path) == tmp_path / "prebaked" / "paper_2008"

@@ -88,7 +88,7 @@ def write_measurement(path, truth=TRUTH):
 
 
 def preset_with_voids(specular_weight: float | None = None):
-    """red_cotton's content with a voids species (0.02 of 1 µm air) and, if given, a [fit] table."""
+    """voided_red_cotton's content with a voids species (0.02 of 1 µm air) and, if given, a [fit] table."""
     config, base_dir = load_preset_config("paper_2008")
     config["particles"].append({"name": "voids", "refractive_index": 1.0, "diameter_nm": 1000.0,
                                 "volume_fraction": 0.02})

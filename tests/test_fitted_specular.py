@@ -36,7 +36,7 @@ SMALL = ["transport.angular_resolution=4", "transport.incidence_resolution=5",
 FITTED = {"specular_weight": 0.55, "specular_slope": 0.35}
 N_I, N_O, LOBES, SAMPLES = 5, 4, 5, 9
 
-#: A shipped preset without a [fit] table: the paper's medium (the default, red_cotton, is fitted).
+#: A shipped preset without a [fit] table: the paper's medium (the others are fitted).
 PLAIN_PRESET = "paper_2008"
 #: A yarn of fibres in air (not shipped).
 FIBRE_PRESET = PRESET_DIR / "experimental" / "fibre_cotton.toml"

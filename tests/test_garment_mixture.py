@@ -84,7 +84,7 @@ def test_the_mixture_error_is_the_fits_own_measure(red_cloth):
                                rtol=1e-9)
 
 
-@pytest.mark.parametrize("slope", [0.094, 0.3])  # red_cotton's narrow peak, between cells 16–20° apart
+@pytest.mark.parametrize("slope", [0.094, 0.3])  # voided_red_cotton's narrow peak, between cells 16–20° apart
 def test_the_gloss_lobe_gives_the_specular_term_about_its_peak(red_cloth, slope):
     """The gloss lobe (Cycles' Metallic BSDF, the yarns' index) times its weight against w_s f_CT
     cos θ_i V, V as the sun mode reads it (bilinear in the table), at lights within a fraction of the

@@ -16,7 +16,7 @@ from precompute.optics.medium import PRESET_DIR
 
 
 def test_a_request_read_into_panel_values_asks_for_the_same_bake_again():
-    config = preset_config("red_cotton")
+    config = preset_config("voided_red_cotton")
     overrides = (("dye.weight_percent", 2.5), ("particles.1.volume_fraction", 0.1), ("fit.specular_slope", 0.4))
     values, fitted = exposed_values(config, overrides)
     # the panel shows the dye and the first species; the voids' fraction and the sheen stay fitted values
@@ -28,7 +28,7 @@ def test_a_request_read_into_panel_values_asks_for_the_same_bake_again():
 
 
 def test_a_value_as_the_panel_stores_it_is_no_override():
-    config = preset_config("red_cotton")
+    config = preset_config("voided_red_cotton")
     values, fitted = exposed_values(config, ())
     single_precision = {prop: float(f"{value:.9g}") + 1e-10 for prop, value in values.items()}
     assert request_overrides(config, single_precision) == ()
@@ -38,16 +38,16 @@ def test_a_value_as_the_panel_stores_it_is_no_override():
 
 
 def test_the_exposed_keys_follow_what_the_preset_has():
-    red = medium_keys(preset_config("red_cotton"))
+    red = medium_keys(preset_config("voided_red_cotton"))
     assert red == {"yarn_radius_mm": "yarn.radius_mm", "dye_weight_percent": "dye.weight_percent",
                    "particle_diameter_nm": "particles.0.diameter_nm",
                    "particle_volume_fraction": "particles.0.volume_fraction"}
     assert "dye_weight_percent" not in medium_keys(preset_config("delustred_polyester"))
-    assert shown_key("particles.1.volume_fraction", preset_config("red_cotton")) == "voids.volume_fraction"
-    assert shown_key("dye.weight_percent", preset_config("red_cotton")) == "dye.weight_percent"
+    assert shown_key("particles.1.volume_fraction", preset_config("voided_red_cotton")) == "voids.volume_fraction"
+    assert shown_key("dye.weight_percent", preset_config("voided_red_cotton")) == "dye.weight_percent"
 
 
-@pytest.mark.parametrize("name, takes", [("red_cotton", True), ("paper_2008", True), ("undyed_cotton", False),
+@pytest.mark.parametrize("name, takes", [("voided_red_cotton", True), ("paper_2008", True), ("undyed_cotton", False),
                                          ("blue_cotton", True), ("pink_felt", True),
                                          (str(PRESET_DIR / "experimental" / "fibre_cotton.toml"), False)])
 def test_the_dye_range_is_offered_where_the_bake_can_reweight_the_dye(name, takes):

@@ -35,7 +35,7 @@ def test_a_preset_names_its_sample_weave_or_gets_the_open_one():
 
 
 def test_the_medium_reads_a_preset_with_a_sample_table():
-    config, base = load_preset_config("red_cotton")
+    config, base = load_preset_config("voided_red_cotton")
     assert medium_from_dict({**config, "sample": {"weave": "sheeting"}}, base) == medium_from_dict(config, base)
 
 
@@ -67,7 +67,7 @@ def test_the_pressed_sample_is_the_sheeting_yarn_pressed_flat_with_no_gap(radius
 
 
 def test_the_bake_records_a_named_sample_weave_and_keys_its_tables_by_it():
-    config, _ = load_preset_config("red_cotton")
+    config, _ = load_preset_config("voided_red_cotton")
     plain = bake_module.bake_configuration(config)
     sheeting = bake_module.bake_configuration({**config, "sample": {"weave": "sheeting"}})
     assert plain.sample_weave is None and sheeting.sample_weave == "sheeting"
@@ -126,7 +126,7 @@ def test_the_forward_model_renders_the_weave_its_preset_names(monkeypatch):
         raise _Rendered
 
     monkeypatch.setattr(forward, "cloth_response", cloth_response)
-    config, base = load_preset_config("red_cotton")
+    config, base = load_preset_config("voided_red_cotton")
     for table in ({}, {"sample": {"weave": "sheeting"}}):
         with pytest.raises(_Rendered):
             forward.build_forward_model(WIDE_VIEWS, {**config, **table}, base)

@@ -35,10 +35,10 @@ pytestmark = pytest.mark.filterwarnings("error")
 
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
-PRESET_TWIST = load_preset("red_cotton").yarn.twist_angle_deg      # 24°, two plies
+PRESET_TWIST = load_preset("voided_red_cotton").yarn.twist_angle_deg      # 24°, two plies
 
 
-def sample(twist_angle_deg, preset="red_cotton"):
+def sample(twist_angle_deg, preset="voided_red_cotton"):
     """The close-up sample of a preset (its plies, its irregularity), 6 × 6 yarns at a given twist,
     swept finely enough along the yarn (12.5 µm) for the lines' direction to be measured; its section
     that of the crossings all along, as the prediction's helix has (:data:`TWIST_SAMPLE`)."""
@@ -148,7 +148,7 @@ def test_an_untwisted_sample_streaks_along_its_yarns(lighting):
     """At 0° the plies run straight: the highlight streaks lie along their yarns, but for the ply's
     radius jittered at the crossings, which leans a line by a degree or two; the paper's one-ply
     preset likewise."""
-    for preset in ("red_cotton", "paper_2008"):
+    for preset in ("voided_red_cotton", "paper_2008"):
         params, mesh = sample(0.0, preset)
         found = measure_highlights(mesh, params, *LIGHTINGS[lighting])
         assert len(found["tilt_deg"]) > 100

@@ -5,7 +5,7 @@
 the same inputs in the same order with the same messages, build the same forward model and write
 the same folder (:func:`precompute.fit.report.write_fit_folder`)::
 
-    inputs = check_fit_inputs("red-fabric2.csv", "red_cotton", "dye_weight_percent,specular_slope",
+    inputs = check_fit_inputs("red-fabric2.csv", "voided_red_cotton", "dye_weight_percent,specular_slope",
                               out="out/fit", budget_evaluations=40)
     result = run_fit(inputs, seed=0)
     write_fit_folder(result, inputs.out, measured_name=inputs.measured_name)

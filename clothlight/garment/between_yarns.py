@@ -39,7 +39,7 @@ from precompute.tables.grids import AngularGrid
 from .goniometry import SIDES
 
 #: q: the share of the light that yarns send away that meets another yarn, on the validation weave
-#: (plain, 0.1 mm yarns at 20 threads/cm).  Measured with the path-traced sample of ``red_cotton``
+#: (plain, 0.1 mm yarns at 20 threads/cm).  Measured with the path-traced sample of ``voided_red_cotton``
 #: at normal incidence, where its red gains G = 1.143 from light between yarns over the same
 #: material without it: q = (G − 1) / (G a), a = 0.597 (``python benchmarks/bench_cloth_energy.py``
 #: prints the q each run implies; the round-yarn white cotton of docs/garment.md, a = 0.49, is the

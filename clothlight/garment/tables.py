@@ -59,7 +59,7 @@ SUMMARY_SCHEMA = "clothlight-cloth/3"
 #: The garment material's closure mixture (names of precompute.tables.closure_fit lobes, in tile order).
 #: Per view, a cloth's ρ falls more slowly with the incidence than a Lambertian lobe's cos θ_i (light
 #: meets the yarns' sides) and rises toward the light (shadow hiding): with diffuse, translucent and
-#: fibre transmission alone the mixture was 1.12–1.19 of red_cotton's ρ at normal incidence and
+#: fibre transmission alone the mixture was 1.12–1.19 of voided_red_cotton's ρ at normal incidence and
 #: 0.61–0.87 at 60°.  A uniform lobe (the same ρ at every incidence) and the yarn mixture's GGX
 #: retro-reflection lobe follow both: against the cloth BSDF over the validation sweep, 16.2 % →
 #: 6.0 % RGB (benchmarks/bench_garment_lobes.py).  The gloss lobe is the yarns' Cook–Torrance term
@@ -71,7 +71,7 @@ FIT_WEIGHTING = "absolute"
 #: The lobe that carries the specular term (the yarns' Cook–Torrance, whose Beckmann distribution it
 #: shares), weighted from that term alone (:func:`gloss_weights`), and the other lobes fitted to ρ
 #: without it: fitted among them to all of ρ, the white, narrow peak bent the coloured lobes
-#: (red_cotton's general mode vs the yarn sample over the validation sweep: 37.1 % → 21.2 % RGB, blue
+#: (voided_red_cotton's general mode vs the yarn sample over the validation sweep: 37.1 % → 21.2 % RGB, blue
 #: 79.8 % → 41.6 %; docs/garment.md).
 SPECULAR_LOBE = "gloss"
 SUMMARY_FILE = "summary.json"
@@ -256,7 +256,7 @@ def gloss_weights(visibility: np.ndarray, specular_parameters: dict, incidence_r
     index n; ``visibility`` V (n_in, n_out)).  The lobe is f_CT cos θ_i itself, Fresnel included
     (:func:`garment_lobe_responses`); V is close to its value at the mirror direction where the lobe
     is, so the weight is w_s V(mirror of ω_o, ω_o).  A least-squares fit to the tabulated term cannot
-    do this: cell centres 16–20° apart sample a peak a few degrees wide (red_cotton's m = 0.094)
+    do this: cell centres 16–20° apart sample a peak a few degrees wide (voided_red_cotton's m = 0.094)
     anywhere from its top to nothing, view by view."""
     views = np.asarray(views, float)
     mirror = views * np.array([-1.0, -1.0, 1.0])

@@ -2,7 +2,7 @@
 
 Default: a plain weave like the paper's measured red cotton (§3.1, Figure 1) with round yarns
 (§3.2: "a cylinder with a circle in its base") of radius 0.1 mm, the red-cotton preset's radius
-(Peirce's diameter for an Ne 20 cotton yarn, see precompute/presets/red_cotton.toml).  The paper
+(Peirce's diameter for an Ne 20 cotton yarn, see precompute/presets/voided_red_cotton.toml).  The paper
 gives no thread spacing; 0.5 mm (20 threads/cm, a medium-weight cotton sheeting) is assumed.
 
 Yarns keep their cross-section everywhere (the paper's rigid cylinders) unless it relaxes

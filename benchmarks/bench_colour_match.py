@@ -8,7 +8,8 @@ Printed per fabric: the recipe, CIEDE2000 of the cloth to the target, evaluation
 of the solve; and once, the time to get the model ready (the response and the series from the cache,
 or made: minutes the first time).
 
-    python benchmarks/bench_colour_match.py [--preset voided_red_cotton] [--fabrics red-fabric2,blue-fabric] [--plot PNG]
+    python benchmarks/bench_colour_match.py [--preset voided_red_cotton] [--fabrics red-fabric2,blue-fabric] \
+        [--plot PNG]
 
 ``--plot`` draws each fabric's colour beside its recipe's (sRGB patches, ΔE2000 under them).
 ``--check-grid`` also evaluates a dense grid of recipes (:data:`CHECK_LEVELS_PERCENT` per dye ×

@@ -11,7 +11,8 @@ backscatter model / measured at θi 60°, θv −60° and −40° (and θi 45°,
 G/R against the measurement (``precompute/fit/figures.py``), and lit from behind / from the front.
 
     python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --tables bake
-    python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --preset voided_red_cotton
+    python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv \
+        --preset voided_red_cotton
     python scripts/fabric_figures.py --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --fit out/fit
 """
 

@@ -187,7 +187,8 @@ def render_pictures(preset: str, folder: pathlib.Path) -> list[pathlib.Path]:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--preset", nargs="+", default=["voided_red_cotton"], help="medium presets (default: %(default)s)")
+    parser.add_argument("--preset", nargs="+", default=["voided_red_cotton"],
+                        help="medium presets (default: %(default)s)")
     parser.add_argument("--out", type=pathlib.Path, default=REPO_ROOT / "example_blends")
     parser.add_argument("--render", type=pathlib.Path, metavar="DIR", help="also render the pictures into DIR")
     args = parser.parse_args(argv)

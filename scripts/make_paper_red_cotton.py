@@ -47,12 +47,12 @@ def main() -> None:
     recipe_text = ", ".join(f"{name.removesuffix('.csv')} {percent:.3g} %" for name, percent in zip(DYES, recipe))
     config = recipe_config(base, recipe, DYES)
     config["name"] = "paper_red_cotton"
-    config["description"] = ("The paper's red cotton (Table 1, Fig. 9): voided_red_cotton's fibres and voids dyed with the "
-                             "band-model red, Congo red and Evans blue to Table 1's B/R and G/R")
+    config["description"] = ("The paper's red cotton (Table 1, Fig. 9): voided_red_cotton's fibres and voids dyed "
+                             "with the band-model red, Congo red and Evans blue to Table 1's B/R and G/R")
     header = ["# The paper's own measured red cotton (§6.1, Table 1: B/R 0.08, G/R 0.011 at normal light and view;",
               "# Fig. 9: darker and redder lit from behind), written by `python scripts/make_paper_red_cotton.py`:",
-              "# voided_red_cotton's yarn (fitted to MERL's red-fabric2) with the lightest shade recipe that gives its §6.1",
-              f"# front swatch (specular excluded) Table 1's ratios: {recipe_text}, fibre {recipe[-1]:.3g} /mm.",
+              "# voided_red_cotton's yarn (fitted to MERL's red-fabric2) with the lightest shade recipe that gives",
+              f"# its §6.1 front swatch (specular excluded) Table 1's ratios: {recipe_text}, fibre {recipe[-1]:.3g} /mm.",
               f"# {figures}.",
               "# The paper's literal medium is paper_2008."]
     OUT.write_text("\n".join(header) + "\n\n" + to_toml(config), encoding="utf-8")

@@ -6,7 +6,8 @@ fitted to the same views beside it (docs/fitting.md).  One row per measured view
 angle (negative on the light's side), the azimuth from the light's plane, the measured RGB (1/sr) and
 the two ratios per channel, then the relative RMS errors.
 
-    python scripts/residuals_by_view.py --measured ../shared/data/real_fabrics/red-fabric2.csv [--preset voided_red_cotton]
+    python scripts/residuals_by_view.py --measured ../shared/data/real_fabrics/red-fabric2.csv \
+        [--preset voided_red_cotton]
 """
 
 from __future__ import annotations

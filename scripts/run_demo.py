@@ -42,7 +42,7 @@ def step(title: str, command: list[str]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=pathlib.Path, default=REPO_ROOT / "out")
-    parser.add_argument("--preset", help="a shipped preset or TOML file (default: the commands' own, the default medium)")
+    parser.add_argument("--preset", help="a shipped preset or TOML file (default: the commands' own default)")
     args = parser.parse_args()
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -50,7 +50,8 @@ def main() -> None:
 
     preset = ["--preset", args.preset] if args.preset else []
     step("1. medium optics", [python, "-m", "precompute", "optics", *preset, "--plot", str(out / "optics.png")])
-    bake = json.loads(step("2. bake", [python, "-m", "precompute", "bake", *preset, "--out", str(out / "bake"), "--json"]))
+    bake = json.loads(step("2. bake", [python, "-m", "precompute", "bake", *preset, "--out", str(out / "bake"),
+                                       "--json"]))
     step("3. table plots", [python, "-m", "precompute", "plot", bake["brdf_table"], "--out", str(out / "plots")])
     step("4. validation sweep", [python, "-m", "clothlight.validate", "--tables", str(out / "bake"),
                                  "--measured", str(MEASURED_FABRIC), "--out", str(out / "validation")])

@@ -64,7 +64,7 @@ def mie_sums(m: complex, x: float) -> tuple[float, float]:
 
 
 @pytest.fixture(scope="module")
-def voided_red_cotton() -> MediumOptics:
+def red_cotton() -> MediumOptics:
     return medium_optics(load_preset("paper_2008"))
 
 
@@ -86,15 +86,15 @@ def test_default_preset_is_the_papers_medium():
 
 
 @pytest.mark.parametrize("wavelength", PAPER_WAVELENGTHS)
-def test_paper_medium_scattering_matches_a_hand_calculation(voided_red_cotton, wavelength):
+def test_paper_medium_scattering_matches_a_hand_calculation(red_cotton, wavelength):
     # μs = N · Q_sca · π d²/4 with N = f / (π d³/6); Q_sca from the Mie coefficients in the host.
-    row = int(np.flatnonzero(voided_red_cotton.wavelengths_nm == wavelength)[0])
+    row = int(np.flatnonzero(red_cotton.wavelengths_nm == wavelength)[0])
     n_host, diameter, fraction = 1.557, 150.0, 0.14
     x = math.pi * diameter * n_host / wavelength
     _, q_sca = mie_sums(complex(1.61 / n_host), x)
     number_density = fraction / (math.pi * diameter**3 / 6.0)  # 1/nm³
     mu_s = number_density * q_sca * math.pi * diameter**2 / 4.0 * 1e6  # 1/mm
-    assert voided_red_cotton.mu_s[row] == pytest.approx(mu_s, rel=1e-9)
+    assert red_cotton.mu_s[row] == pytest.approx(mu_s, rel=1e-9)
 
     # Rayleigh–Gans–Debye, independent of any Mie series: within a few % for |m − 1| x ≪ 1.
     k, a, m = 2 * math.pi * n_host / wavelength, diameter / 2, 1.61 / n_host
@@ -103,23 +103,23 @@ def test_paper_medium_scattering_matches_a_hand_calculation(voided_red_cotton, w
     form = 3 * (np.sin(u) - u * np.cos(u)) / u**3
     dsigma = k**4 * a**6 * (2 * (m - 1) / 3) ** 2 * form**2 * (1 + np.cos(theta) ** 2) / 2
     sigma = 2 * math.pi * np.trapz(dsigma * np.sin(theta), theta)
-    assert voided_red_cotton.mu_s[row] == pytest.approx(number_density * sigma * 1e6, rel=0.03)
+    assert red_cotton.mu_s[row] == pytest.approx(number_density * sigma * 1e6, rel=0.03)
 
 
 @pytest.mark.parametrize("wavelength", PAPER_WAVELENGTHS)
-def test_paper_medium_absorption_is_the_dye_by_hand(voided_red_cotton, wavelength):
+def test_paper_medium_absorption_is_the_dye_by_hand(red_cotton, wavelength):
     # μa = ε(λ) · w · ρ_f (1/cm → /10 for 1/mm), ε read straight from the shipped CSV.
     with (DATA_DIR / "red_dye_band_model.csv").open() as handle:
         rows = [r for r in csv.reader(line for line in handle if not line.startswith("#"))][1:]
     epsilon = {float(w): float(v) for w, v in rows}[wavelength]
-    row = int(np.flatnonzero(voided_red_cotton.wavelengths_nm == wavelength)[0])
-    assert voided_red_cotton.mu_a[row] == pytest.approx(epsilon * 0.03 * 1.52 / 10.0, rel=1e-12)
-    assert voided_red_cotton.albedo[row] == pytest.approx(voided_red_cotton.mu_s[row] / (voided_red_cotton.mu_s[row] + voided_red_cotton.mu_a[row]))
+    row = int(np.flatnonzero(red_cotton.wavelengths_nm == wavelength)[0])
+    assert red_cotton.mu_a[row] == pytest.approx(epsilon * 0.03 * 1.52 / 10.0, rel=1e-12)
+    assert red_cotton.albedo[row] == pytest.approx(red_cotton.mu_s[row] / (red_cotton.mu_s[row] + red_cotton.mu_a[row]))
 
 
-def test_red_cotton_is_red(voided_red_cotton):
+def test_red_cotton_is_red(red_cotton):
     # The dye absorbs the green and leaves the red: the albedo at 700 nm dwarfs the one at 550 nm.
-    albedo = dict(zip(voided_red_cotton.wavelengths_nm, voided_red_cotton.albedo))
+    albedo = dict(zip(red_cotton.wavelengths_nm, red_cotton.albedo))
     assert albedo[700.0] > 0.9 and albedo[550.0] < 0.05 and albedo[450.0] > albedo[550.0]
 
 
@@ -151,10 +151,10 @@ def test_every_preset_has_normalised_phase_tables(name):
     assert np.all(np.diff(optics.phase_icdf, axis=1) >= 0)
 
 
-def test_table_g_matches_mie_g(voided_red_cotton):
-    for row, wavelength in enumerate(voided_red_cotton.wavelengths_nm):
+def test_table_g_matches_mie_g(red_cotton):
+    for row, wavelength in enumerate(red_cotton.wavelengths_nm):
         _, _, _, g = miepython.efficiencies(complex(1.61), 150.0, wavelength, n_env=1.557)
-        assert voided_red_cotton.g[row] == pytest.approx(g, abs=1e-5)
+        assert red_cotton.g[row] == pytest.approx(g, abs=1e-5)
 
 
 @pytest.mark.parametrize(
@@ -179,18 +179,18 @@ def test_size_parameter_and_index_are_taken_in_the_host():
     np.testing.assert_allclose(a.phase, b.phase, rtol=1e-9)
 
 
-def test_inverse_cdf_sampling_reproduces_the_table(voided_red_cotton):
+def test_inverse_cdf_sampling_reproduces_the_table(red_cotton):
     rng = np.random.default_rng(7)
     edges = np.linspace(-1.0, 1.0, 41)
     fine = np.linspace(-1.0, 1.0, 40001)
     for row in (1, 16, 31):
-        mu = sample_inverse_cdf(voided_red_cotton.phase_icdf[row], rng.random(200_000))
+        mu = sample_inverse_cdf(red_cotton.phase_icdf[row], rng.random(200_000))
         observed, _ = np.histogram(mu, edges)
-        density = 2 * math.pi * np.interp(fine, voided_red_cotton.cos_theta, voided_red_cotton.phase[row])
+        density = 2 * math.pi * np.interp(fine, red_cotton.cos_theta, red_cotton.phase[row])
         cdf = np.concatenate([[0.0], np.cumsum(0.5 * (density[1:] + density[:-1]) * np.diff(fine))])
         expected = np.diff(np.interp(edges, fine, cdf / cdf[-1])) * observed.sum()
         assert stats.chisquare(observed, expected).pvalue > 1e-3
-        assert mu.mean() == pytest.approx(voided_red_cotton.g[row], abs=5 * mu.std() / math.sqrt(mu.size))
+        assert mu.mean() == pytest.approx(red_cotton.g[row], abs=5 * mu.std() / math.sqrt(mu.size))
 
 
 @pytest.mark.parametrize("g", [-0.5, 0.0, 0.3, 0.85])
@@ -306,13 +306,13 @@ def test_percus_yevick_structure_factor_against_its_defining_integral(fraction):
     assert percus_yevick_structure_factor(400.0, f) == pytest.approx(1.0, abs=2e-3)
 
 
-def test_percus_yevick_change_for_the_paper_medium(voided_red_cotton, red_cotton_py):
-    factor = red_cotton_py.mu_s / voided_red_cotton.mu_s
+def test_percus_yevick_change_for_the_paper_medium(red_cotton, red_cotton_py):
+    factor = red_cotton_py.mu_s / red_cotton.mu_s
     # The expectation for f = 0.14: roughly 0.5–0.65 × μs.
     assert np.all((factor > 0.5) & (factor < 0.65))
     # Correlations suppress forward (small-q) scattering most: g drops at every wavelength.
-    assert np.all(red_cotton_py.g < voided_red_cotton.g)
-    np.testing.assert_array_equal(red_cotton_py.mu_a, voided_red_cotton.mu_a)
+    assert np.all(red_cotton_py.g < red_cotton.g)
+    np.testing.assert_array_equal(red_cotton_py.mu_a, red_cotton.mu_a)
     np.testing.assert_allclose(phase_integral(red_cotton_py.cos_theta, red_cotton_py.phase), 1.0)
     assert red_cotton_py.dependent_scattering == "percus-yevick"
 
@@ -328,14 +328,14 @@ def test_percus_yevick_vanishes_for_a_dilute_medium():
 # ---- the command ---------------------------------------------------------------------------------------
 
 
-def test_optics_command_json_and_plot(tmp_path, capsys, voided_red_cotton, red_cotton_py):
+def test_optics_command_json_and_plot(tmp_path, capsys, red_cotton, red_cotton_py):
     png = tmp_path / "optics.png"
     assert main(["optics", "--preset", "paper_2008", "--json", "--plot", str(png)]) == 0
     report = json.loads(capsys.readouterr().out)
-    np.testing.assert_allclose(report["mu_s_per_mm"], voided_red_cotton.mu_s)
-    np.testing.assert_allclose(report["albedo"], voided_red_cotton.albedo)
-    np.testing.assert_allclose(report["percus_yevick_factor"]["mu_s"], red_cotton_py.mu_s / voided_red_cotton.mu_s)
-    np.testing.assert_allclose(report["percus_yevick_factor"]["g"], red_cotton_py.g / voided_red_cotton.g)
+    np.testing.assert_allclose(report["mu_s_per_mm"], red_cotton.mu_s)
+    np.testing.assert_allclose(report["albedo"], red_cotton.albedo)
+    np.testing.assert_allclose(report["percus_yevick_factor"]["mu_s"], red_cotton_py.mu_s / red_cotton.mu_s)
+    np.testing.assert_allclose(report["percus_yevick_factor"]["g"], red_cotton_py.g / red_cotton.g)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
 
 

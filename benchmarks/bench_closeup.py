@@ -1,8 +1,8 @@
 """Render cost of the close-up (issue 46): the default close-up sample (clothlight.weave.closeup:
 plied, irregular cotton sheeting) with voided_red_cotton's yarn material (the default until the fibre
 red) and its flyaway fibres in Cycles' hair BSDF, against a Principled BSDF with sheen under Cycles'
-default SVM on the same geometry (the sample and its fibres), CPU, interleaved renders; each ratio is the median over the
-rounds of that round's own ratio.  Goals: at most 2x the reference, and the fibres at most 1.5x the
+default SVM on the same geometry (the sample and its fibres), CPU, interleaved renders; each ratio is
+the median over the rounds of that round's own ratio.  Goals: at most 2x the reference, and the fibres at most 1.5x the
 close-up without them.  Writes each configuration's last render as a PNG and prints the folder (a
 temporary one, or ``--out DIR``).
 

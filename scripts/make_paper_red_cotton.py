@@ -52,7 +52,8 @@ def main() -> None:
     header = ["# The paper's own measured red cotton (§6.1, Table 1: B/R 0.08, G/R 0.011 at normal light and view;",
               "# Fig. 9: darker and redder lit from behind), written by `python scripts/make_paper_red_cotton.py`:",
               "# voided_red_cotton's yarn (fitted to MERL's red-fabric2) with the lightest shade recipe that gives",
-              f"# its §6.1 front swatch (specular excluded) Table 1's ratios: {recipe_text}, fibre {recipe[-1]:.3g} /mm.",
+              f"# its §6.1 front swatch (specular excluded) Table 1's ratios: {recipe_text}, "
+              f"fibre {recipe[-1]:.3g} /mm.",
               f"# {figures}.",
               "# The paper's literal medium is paper_2008."]
     OUT.write_text("\n".join(header) + "\n\n" + to_toml(config), encoding="utf-8")

@@ -27,8 +27,9 @@ from clothlight.blender.sample_object import build_sample_object
 from clothlight.weave.closeup import closeup_settings, sheeting_weave
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.bake import bake
-from precompute.optics.medium import DEFAULT_PRESET, load_preset_config
+from precompute.optics.medium import load_preset_config
 from render_cost import REFERENCE, light_and_camera, paired_ratio, principled_with_sheen
+from subject_medium import SUBJECT_PRESET
 
 QUICK = "--quick" in sys.argv
 PIXELS, SAMPLES, REPEATS = (160, 16, 3) if QUICK else (320, 64, 7)
@@ -39,19 +40,19 @@ if "--out" in sys.argv:
 else:
     out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-closeup-"))
 grids = ["transport.angular_resolution=8", "transport.incidence_resolution=9"]
-tables = yarn_tables_from_bake(bake(DEFAULT_PRESET, grids, paths_per_cell=500).folder)
+tables = yarn_tables_from_bake(bake(SUBJECT_PRESET, grids, paths_per_cell=500).folder)
 
 bpy.ops.wm.read_homefile(use_empty=True)
 scene = bpy.context.scene
 configure_measurement_render(scene, resolution=(PIXELS, PIXELS), samples=SAMPLES)
 scene.cycles.shading_system = False   # Cycles' default SVM: every material here is plain nodes
-params = sheeting_weave(DEFAULT_PRESET)
+params = sheeting_weave(SUBJECT_PRESET)
 sample = build_sample_object(params)
-fibres = build_flyaway_object(sample, params, closeup_settings(load_preset_config(DEFAULT_PRESET)[0]), DEFAULT_PRESET)
+fibres = build_flyaway_object(sample, params, closeup_settings(load_preset_config(SUBJECT_PRESET)[0]), SUBJECT_PRESET)
 # a close-up: about 5 mm of cloth across the frame, seen at 45° (the sample is modelled in mm)
 light_and_camera(scene, (0.0, -5.0, 5.0), (0.785, 0.0, 0.0))
 reference = principled_with_sheen()
-yarn = build_yarn_material(tables, f"{DEFAULT_PRESET} general", mode=GENERAL_MODE)
+yarn = build_yarn_material(tables, f"{SUBJECT_PRESET} general", mode=GENERAL_MODE)
 hair = fibres.data.materials[0]
 assert not any(node.type == "SCRIPT" for node in yarn.node_tree.nodes), "the general mode in plain nodes (SVM)"
 print(f"{params.warp_count} × {params.weft_count} yarns of {params.ply_count} plies at {params.twist_angle_deg:g}°, "

@@ -35,8 +35,8 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from precompute import bake as bake_module
-from precompute.optics.medium import DEFAULT_PRESET
 from precompute.transport.cylinder import BLOCKS_PER_WORKER
+from subject_medium import SUBJECT_PRESET
 
 #: Trivial tasks timed for the scheduler's overhead.
 OVERHEAD_TASKS = 400
@@ -154,7 +154,7 @@ def bench_idle(workers: int) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
-    parser.add_argument("--preset", default=DEFAULT_PRESET)
+    parser.add_argument("--preset", default=SUBJECT_PRESET)
     parser.add_argument("--set", dest="overrides", action="append", default=[])
     parser.add_argument("--paths", type=int)
     parser.add_argument("--single-process", action="store_true")

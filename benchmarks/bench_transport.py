@@ -42,7 +42,6 @@ import numba
 import numpy as np
 
 from precompute.slab import native as native_slab
-from precompute.optics.medium import DEFAULT_PRESET
 from precompute.optics.coefficients import load_preset, medium_optics
 from precompute.transport import (
     TransportGrids,
@@ -57,6 +56,7 @@ from precompute.transport import (
 )
 from precompute.transport import _kernels
 from precompute.transport.cylinder import mean_cos_per_cell
+from subject_medium import SUBJECT_PRESET
 
 ALL_THREADS = numba.config.NUMBA_NUM_THREADS
 
@@ -121,7 +121,7 @@ def yarn() -> None:
         slab_run = simulate_hg_slab(0.9, 0.75, 2.0, 1.0, paths=4_000_000, seed=4, threads=1)
     slab_rate = slab_run.events / spent[0]
     print(f"van de Hulst slab kernel alone, 1 thread: {slab_rate / 1e6:.2f} M events per CPU-second")
-    for preset in ("paper_2008", DEFAULT_PRESET):
+    for preset in ("paper_2008", SUBJECT_PRESET):
         optics, geometry = yarn_of(preset)
         simulate_yarn(optics, geometry, TransportGrids(16, 8, 4), paths_per_cell=100)  # compile
         for threads in sorted({1, ALL_THREADS}):
@@ -141,7 +141,7 @@ def yarn() -> None:
 def one_wavelength() -> None:
     """Where a yarn collision's cost lies: the default yarn's medium at one wavelength (550 nm, its own phase
     table) has the same geometry, phase sampling and exit binning and none of the spectral bookkeeping."""
-    optics, geometry = yarn_of(DEFAULT_PRESET)
+    optics, geometry = yarn_of(SUBJECT_PRESET)
     medium = medium_from_optics(optics)
     k = int(np.argmin(np.abs(medium.wavelengths_nm - 550.0)))
     single = TransportMedium(medium.wavelengths_nm[k:k + 1], medium.mu_s[k:k + 1], medium.mu_a[k:k + 1],
@@ -155,7 +155,7 @@ def one_wavelength() -> None:
                                       threads=1)
         runs[name] = transport.events / spent[0]
     (full_name, full), (single_name, alone) = runs.items()
-    print(f"{DEFAULT_PRESET} yarn kernel alone, 1 thread: {full_name} {full / 1e6:.2f} M events per CPU-second, "
+    print(f"{SUBJECT_PRESET} yarn kernel alone, 1 thread: {full_name} {full / 1e6:.2f} M events per CPU-second, "
           f"{single_name} {alone / 1e6:.2f} M: the spectral bookkeeping makes a collision {alone / full:.2f}x dearer")
 
 

@@ -17,15 +17,16 @@ from clothlight.blender.sample_object import build_sample_object
 from clothlight.weave import WeaveParameters
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.bake import bake
-from precompute.optics.medium import DEFAULT_PRESET
 from render_cost import light_and_camera, print_render_cost
+from subject_medium import SUBJECT_PRESET
 
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-material-"))
 grids = ["transport.angular_resolution=8", "transport.incidence_resolution=9"]
-# The default (a scattering medium: almost no light crosses a yarn unscattered), a yarn of fibres in air
-# (its unscattered light, straight through the yarn's thin edges, one more closure in plain nodes) and the
-# paper's literal medium (a tinted glass rod: the unscattered light is most of its red, and its closures cost).
-PRESETS = (DEFAULT_PRESET, "blue_cotton", "paper_2008")
+# The particle red the figures were measured on (a scattering medium: almost no light crosses a yarn
+# unscattered), a yarn of fibres in air (its unscattered light, straight through the yarn's thin edges,
+# one more closure in plain nodes) and the paper's literal medium (a tinted glass rod: the unscattered
+# light is most of its red, and its closures cost).
+PRESETS = (SUBJECT_PRESET, "blue_cotton", "paper_2008")
 tables = {name: yarn_tables_from_bake(bake(name, grids, paths_per_cell=500, cache_dir=out / "cache").folder)
           for name in PRESETS}
 

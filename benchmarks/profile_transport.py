@@ -41,12 +41,12 @@ SAMPLES_PER_SECOND = 4000
 def run_traced(mode: str, paths: int, target: float | None, folder: pathlib.Path) -> None:
     """The traced child: warm up, trace, and copy the executable anonymous mappings into ``folder``."""
     sys.path.insert(0, str(REPO))
-    from precompute.optics.medium import DEFAULT_PRESET
     from precompute.optics.coefficients import load_preset, medium_optics
     from precompute.transport import TransportGrids, YarnGeometry, simulate_hg_slab, simulate_yarn
+    from subject_medium import SUBJECT_PRESET
 
     if mode == "yarn":
-        optics = medium_optics(load_preset(DEFAULT_PRESET))
+        optics = medium_optics(load_preset(SUBJECT_PRESET))
         geometry = YarnGeometry(0.1, optics.boundary_index)
         simulate_yarn(optics, geometry, TransportGrids(8, 2, 3), paths_per_cell=16, threads=1)
 

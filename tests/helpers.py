@@ -13,6 +13,7 @@ import numpy as np
 import OpenEXR
 
 from precompute.optics.cook_torrance import cook_torrance_between as _cook_torrance_between
+from precompute.optics.medium import DEFAULT_PRESET
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 #: Modules that only Blender provides.
@@ -178,9 +179,9 @@ def add_sun_and_camera(scene, toward_sun, toward_camera, irradiance: float):
 
 # -- the extension zip ----------------------------------------------------------------------------
 
-#: The preset the test build pre-bakes, and with what: one preset, tiny grids and budget, are enough to
-#: test the mechanism (`make extension` pre-bakes every preset's own bake).
-PREBAKED_PRESET = "voided_red_cotton"
+#: The preset the test build pre-bakes, and with what: the default (a fresh scene's Base Medium), tiny grids
+#: and budget, are enough to test the mechanism (`make extension` pre-bakes every preset's own bake).
+PREBAKED_PRESET = DEFAULT_PRESET
 PREBAKED_TRANSPORT = {"paths_per_cell": 64, "n_around": 4, "n_along": 2, "angular_resolution": 4,
                       "incidence_resolution": 5}
 #: The goniometer settings of its cloth pre-bake: small, to test the mechanism.

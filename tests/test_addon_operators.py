@@ -381,6 +381,7 @@ def test_a_dye_range_bakes_once_then_a_dye_change_rebakes_from_it_and_recolours_
 
 def test_bake_tables_reports_bad_input_by_parameter_name(addon, scene):
     medium = scene.clothlight.medium
+    medium.base = "voided_red_cotton"  # a medium of particles
     tiny(medium)
     medium.particle_volume_fraction = 0.74  # the densest packing of spheres, which the medium must stay below
     with pytest.raises(RuntimeError, match="volume_fraction"):
@@ -714,7 +715,7 @@ def test_panels_draw_existing_properties_and_operators_and_say_where_tables_come
         assert in_fibres == (random and "dye" in preset_config(name))
         assert (scene.clothlight.medium.request().dye_series is None) == (in_fibres or "dye" not in preset_config(name))
     scene.clothlight.medium.use_dye_series = False
-    scene.clothlight.medium.base = "voided_red_cotton"
+    scene.clothlight.medium.base = PREBAKED_PRESET
     tiny(scene.clothlight.medium)
     weave = scene.clothlight.weave
     weave.pattern, weave.cross_section, weave.auto_crimp = "plain", "ELLIPTICAL", False  # the default sample

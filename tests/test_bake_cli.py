@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+import tomllib
 
 import numpy as np
 import OpenEXR
@@ -64,7 +65,9 @@ def test_header_carries_everything_needed_to_reproduce(baked):
     assert meta["code_version"] == precompute.__version__ and len(meta["code_digest"]["spectral"]) == 64
     # Every medium parameter, with its unit in its name, exactly as the preset defines it.
     assert meta["medium"] == json.loads(json.dumps(load_preset().to_dict()))  # the default preset
-    assert meta["medium"]["particles"][0]["diameter_nm"] == 150.0 and meta["medium"]["yarn"]["radius_mm"] == 0.1
+    written = tomllib.loads((PRESET_DIR / "red_cotton.toml").read_text())  # the preset file's own numbers
+    assert meta["medium"]["fibres"]["diameter_um"] == written["fibres"]["diameter_um"]
+    assert meta["medium"]["yarn"]["radius_mm"] == written["yarn"]["radius_mm"] == 0.1
     assert len(meta["medium"]["dye"]["mass_absorption_cm2_per_g"]) > 10  # the dye spectrum itself
     assert meta["transport"] == {"n_around": 8, "n_along": 4, "angular_resolution": N_O, "incidence_resolution": N_I,
                                  "paths_per_cell": PATHS, "target_rel_stderr": None, "seed": SEED}
@@ -73,7 +76,7 @@ def test_header_carries_everything_needed_to_reproduce(baked):
     assert meta["paths"]["incidence_cells_traced"] == N_O**2 // 2 and meta["paths"]["total"] == PATHS * N_O**2 // 2
     assert meta["layout"] == {"incidence_resolution": N_I, "exit_resolution": N_O}
     assert meta["colour"]["illuminant"] == "D65" and "1/sr" in meta["units"]["rho"]
-    assert meta["wavelengths_nm"][0] == 390.0 and meta["host_index"] == pytest.approx(1.557)
+    assert meta["wavelengths_nm"][0] == 390.0 and meta["host_index"] == written["host"]["refractive_index"] == 1.0
 
 
 def test_tables_follow_the_layout_spec(baked):

@@ -83,15 +83,33 @@ def _object_to_world(tree, attribute_name: str, vector_type: str, location):
     return transform.outputs["Vector"]
 
 
+def _packed_tables(material) -> set:
+    """The packed tables (``lobes.exr``, ``unscattered.exr``) ``material``'s nodes read."""
+    return {node.image for node in material.node_tree.nodes if node.type == "TEX_IMAGE" and node.image
+            and node.image.name.startswith((LOBE_IMAGE_PREFIX, UNSCATTERED_IMAGE_PREFIX))}
+
+
+def _remove_unused(images) -> None:
+    for image in images:
+        if image.users == 0:
+            bpy.data.images.remove(image)
+
+
+def remove_yarn_material(material) -> None:
+    """Delete ``material`` and the packed tables only it read: a material replaced by another (the
+    general mode's by the sun mode's, which reads no ``unscattered.exr``) must leave no orphans."""
+    images = _packed_tables(material)
+    bpy.data.materials.remove(material)
+    _remove_unused(images)
+
+
 def _fresh_material(name: str):
     """The material named ``name`` (made if missing) emptied of its nodes and ClothLight properties;
     packed tables only it used are removed (a material built again must not leave orphans)."""
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
-    images = {node.image for node in material.node_tree.nodes if node.type == "TEX_IMAGE" and node.image}
+    images = _packed_tables(material)
     material.node_tree.nodes.clear()
-    for image in images:
-        if image.users == 0 and image.name.startswith((LOBE_IMAGE_PREFIX, UNSCATTERED_IMAGE_PREFIX)):
-            bpy.data.images.remove(image)
+    _remove_unused(images)
     for key in ("clothlight_shader", MODE_PROPERTY, TABLES_PROPERTY):
         material.pop(key, None)
     return material

@@ -40,6 +40,7 @@ from .materials import (
     material_mode,
     needs_osl,
     read_other_tables,
+    remove_yarn_material,
     sync_sun,
     yarn_tables_folder,
 )
@@ -184,7 +185,7 @@ def _targets(context):
 def remove_if_unused(material) -> None:
     """Delete a ClothLight material nothing uses any more (no orphan data blocks)."""
     if material is not None and "clothlight_shader" in material and material.users == 0:
-        bpy.data.materials.remove(material)
+        remove_yarn_material(material)
 
 
 class CLOTHLIGHT_OT_apply_material(bpy.types.Operator):

@@ -194,7 +194,7 @@ def test_an_unreachable_colour_is_reported_and_written_only_when_applied_anyway(
     assert bpy.ops.clothlight.apply_colour_match.poll()
     # applied anyway: the nearest recipe is written and becomes the medium
     assert bpy.ops.clothlight.apply_colour_match() == {"FINISHED"}
-    preset = addon.colours / "red_cotton_ffffff.toml"
+    preset = addon.colours / "voided_red_cotton_ffffff.toml"
     assert preset.read_text(encoding="utf-8") == outcome.text
     assert medium.base == "CUSTOM" and medium.request().preset == str(preset)
     assert medium.last_colour_match().written and not bpy.ops.clothlight.apply_colour_match.poll()

@@ -48,7 +48,7 @@ def main() -> int:
 
     from clothlight.fit.forward import build_forward_model
     from fabric_figures import bake_folder_brdf, bake_folder_sample
-    from precompute.optics.medium import load_preset_config
+    from precompute.optics.medium import DEFAULT_PRESET, load_preset_config
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--tables", type=pathlib.Path, nargs="+", required=True, help="bake folders")
@@ -58,7 +58,7 @@ def main() -> int:
     views = [(float(t), 180.0, 0.0, 0.0) for t in theta] + [(180.0 - float(t), 180.0, 0.0, 0.0) for t in theta]
     luminance = np.array(LUMINANCE)
     for folder in args.tables:
-        config, base_dir = load_preset_config("voided_red_cotton")
+        config, base_dir = load_preset_config(DEFAULT_PRESET)  # its yarn and sample the bake folder's
         model = build_forward_model(views, bake_folder_sample(config, folder), base_dir, seed=0)
         rgb = bake_folder_brdf(model, folder)
         front, back = (weights @ rgb[k * len(theta):(k + 1) * len(theta)] for k in (0, 1))

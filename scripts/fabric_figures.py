@@ -78,7 +78,7 @@ def main() -> int:
     from precompute.fit.figures import fabric_figures, figures_text
     from precompute.fit.objective import Objective, load_measurement, split_views
     from precompute.optics.cook_torrance import specular_from_config
-    from precompute.optics.medium import load_preset_config
+    from precompute.optics.medium import DEFAULT_PRESET, load_preset_config
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--measured", type=pathlib.Path, required=True, help="a measured-data CSV")
@@ -98,7 +98,7 @@ def main() -> int:
     if args.fit is not None:
         cloth, label = fit_folder_brdf(args.fit, objective.measured)
     else:
-        config, base_dir = load_preset_config(args.preset or "voided_red_cotton")
+        config, base_dir = load_preset_config(args.preset or DEFAULT_PRESET)
         if args.tables is not None:
             config = bake_folder_sample(config, args.tables)
         model = build_forward_model(views.forward_views, config, base_dir, seed=0)

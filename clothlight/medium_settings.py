@@ -135,6 +135,15 @@ def preset_config(name: str) -> dict:
 #: not a shipped preset: its request names the file by its absolute path.
 CUSTOM_BASE = "CUSTOM"
 
+#: The number a .blend stores for each Base Medium: Blender keeps an enum property as its item's number,
+#: not its name, so a shipped preset's number never changes and a new preset is appended with the next
+#: one.  The first ten are the presets' sorted positions that files saved before 2026-12-07 hold.
+BASE_MEDIUM_NUMBERS = {name: number for number, name in enumerate((
+    "beige_cotton", "blue_cotton", "dark_dyed_cotton", "delustred_polyester", "paper_2008", "paper_red_cotton",
+    "pink_felt", "red_cotton", "undyed_cotton", "white_cotton",
+    "voided_red_cotton",
+))} | {CUSTOM_BASE: 999}
+
 
 def is_preset_file(name_or_path: str) -> bool:
     """Whether a request's ``preset`` is a preset TOML file rather than a shipped preset's name."""

@@ -586,6 +586,8 @@ def test_shipped_presets_are_found_by_blender_and_give_valid_settings(addon, sce
         assert medium.request() == addon["medium_settings"].preset_request(medium.base)
         bases.add(medium.base)
     assert bases == set(preset_names())
+    numbers = {item.identifier: item.value for item in scene.clothlight.medium.bl_rna.properties["base"].enum_items}
+    assert numbers == addon["medium_settings"].BASE_MEDIUM_NUMBERS  # what a .blend stores for each
 
 
 def test_a_user_medium_preset_is_saved_where_blender_keeps_presets_and_restores_the_values(addon, scene):

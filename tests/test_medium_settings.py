@@ -4,6 +4,8 @@ a bake request's overrides and the panel's values map into each other and back."
 import pytest
 
 from clothlight.medium_settings import (
+    BASE_MEDIUM_NUMBERS,
+    CUSTOM_BASE,
     exposed_values,
     medium_keys,
     preset_config,
@@ -12,7 +14,7 @@ from clothlight.medium_settings import (
     takes_dye_series,
     typed_number,
 )
-from precompute.optics.medium import PRESET_DIR
+from precompute.optics.medium import PRESET_DIR, preset_names
 
 
 def test_a_request_read_into_panel_values_asks_for_the_same_bake_again():
@@ -62,3 +64,12 @@ def test_the_dye_range_is_offered_where_the_bake_can_reweight_the_dye(name, take
     if not takes:
         with pytest.raises(ParameterError, match="dye_series"):
             check_dye_series(bake_configuration(name), (0.5, 5.0))
+
+
+def test_every_base_medium_has_a_number_of_its_own_that_saved_files_keep():
+    # Blender stores the Base Medium as its item's number: one per shipped preset and the custom file
+    assert set(BASE_MEDIUM_NUMBERS) == set(preset_names()) | {CUSTOM_BASE}
+    assert len(set(BASE_MEDIUM_NUMBERS.values())) == len(BASE_MEDIUM_NUMBERS)
+    # the ten presets of files saved before the numbers were frozen hold their sorted positions of then
+    frozen = sorted(name for name, number in BASE_MEDIUM_NUMBERS.items() if number < 10)
+    assert [BASE_MEDIUM_NUMBERS[name] for name in frozen] == list(range(10))

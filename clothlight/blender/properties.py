@@ -34,6 +34,7 @@ from ..fit_job import FREE_PARAMETERS, FitRequest
 from .garment.density import DEFAULT_THREADS_PER_CM, THREADS_PER_CM
 from ..colour_match_job import ColourMatchOutcome
 from ..medium_settings import (
+    BASE_MEDIUM_NUMBERS,
     CUSTOM_BASE,
     BakeRequest,
     config_value,
@@ -274,12 +275,12 @@ def _default(key: str, fallback: float) -> float:
 
 def _base_items():
     items = []
-    for index, name in enumerate(_medium.preset_names()):
+    for name in _medium.preset_names():
         description = str(preset_config(name).get("description", name))
-        items.append((name, bpy.path.display_name(name), description, index))
-    # an index of its own, apart from the shipped presets': a .blend keeps it whatever presets ship later
+        items.append((name, bpy.path.display_name(name), description, BASE_MEDIUM_NUMBERS[name]))
     items.append((CUSTOM_BASE, "Custom File", "A preset TOML file of your own (Custom File below): a colour's "
-                                              "shade recipe that Match Colour wrote, a fit's preset.toml", 999))
+                                              "shade recipe that Match Colour wrote, a fit's preset.toml",
+                  BASE_MEDIUM_NUMBERS[CUSTOM_BASE]))
     return items
 
 

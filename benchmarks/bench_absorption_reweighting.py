@@ -20,6 +20,7 @@ import sys
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+from subject_medium import SUBJECT_PRESET
 
 import numpy as np
 
@@ -62,7 +63,7 @@ def main() -> None:
     dyes = [float(d) for d in args.dyes.split(",")]
     run_budget = {"paths_per_cell": args.paths} if args.paths else {"target_rel_stderr": args.target}
 
-    config, base_dir = load_preset_config("voided_red_cotton")
+    config, base_dir = load_preset_config(SUBJECT_PRESET)
 
     def optics_at(dye: float):
         config["dye"]["weight_percent"] = dye

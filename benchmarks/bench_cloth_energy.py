@@ -36,8 +36,9 @@ import tempfile
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+from subject_medium import SUBJECT_PRESET
 
-DEFAULT_YARNS = ("voided_red_cotton", "white_cotton")
+DEFAULT_YARNS = (SUBJECT_PRESET, "white_cotton")
 #: Below this broad-light albedo a channel's gain is too small to measure q from.
 LEAST_ALBEDO_FOR_Q = 0.2
 

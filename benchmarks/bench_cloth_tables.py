@@ -51,9 +51,10 @@ import tempfile
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+from subject_medium import SUBJECT_PRESET
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-DEFAULT_YARNS = ("voided_red_cotton", str(ROOT / "example_blends" / "tables" / "paper_2008"))
+DEFAULT_YARNS = (SUBJECT_PRESET, str(ROOT / "example_blends" / "tables" / "paper_2008"))
 
 
 def _yarn_folder(yarn: str, cache_dir) -> pathlib.Path:

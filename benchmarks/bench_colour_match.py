@@ -25,6 +25,7 @@ import sys
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+from subject_medium import SUBJECT_PRESET
 
 import numpy as np
 
@@ -49,7 +50,7 @@ def fabric_srgb(path: pathlib.Path) -> np.ndarray:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--preset", default="voided_red_cotton")
+    parser.add_argument("--preset", default=SUBJECT_PRESET)
     parser.add_argument("--fabrics", help="comma-separated fabric names (default: every CSV in the folder)")
     parser.add_argument("--plot", type=pathlib.Path, help="PNG of each target beside its recipe's colour")
     parser.add_argument("--check-grid", action="store_true", help="also the nearest recipe of a dense grid")

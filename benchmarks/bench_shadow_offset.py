@@ -19,11 +19,12 @@ import sys
 import tempfile
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+from subject_medium import SUBJECT_PRESET
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--yarn", default="voided_red_cotton", help="a preset's name or a yarn bake folder")
+    parser.add_argument("--yarn", default=SUBJECT_PRESET, help="a preset's name or a yarn bake folder")
     parser.add_argument("--views", type=int, default=12, help="front exit cells rendered (default 12)")
     args = parser.parse_args()
 

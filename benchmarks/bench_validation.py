@@ -19,16 +19,17 @@ import tempfile
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+from subject_medium import SUBJECT_PRESET
 
 import numpy as np
 
 
-def cached_red_cotton_bake() -> pathlib.Path | None:
+def cached_subject_bake() -> pathlib.Path | None:
     from precompute.cache.entries import default_cache_dir
 
     root = pathlib.Path(default_cache_dir())
     bakes = [p.parent for p in root.glob("tables/*/summary.json")
-             if json.loads(p.read_text()).get("medium", {}).get("name") == "voided_red_cotton"]
+             if json.loads(p.read_text()).get("medium", {}).get("name") == SUBJECT_PRESET]
     return max(bakes, key=lambda p: p.stat().st_mtime) if bakes else None
 
 
@@ -44,7 +45,7 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=5, help="renders per view for the noise figure")
     parser.add_argument("--tables", type=pathlib.Path, default=None)
     args = parser.parse_args()
-    tables = args.tables or cached_red_cotton_bake()
+    tables = args.tables or cached_subject_bake()
     materials = ("yarn", "baseline") if tables else ("baseline",)
     out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-validation-"))
     print(f"{os.cpu_count()} CPU cores; {args.resolution}² px, {args.samples} spp; tables: {tables}")

@@ -1,6 +1,6 @@
 """The main job (`make demo`): everything ClothLight does, end to end, on the default medium.
 
-1. Medium optics of the paper's red cotton: a table, JSON and a plot.
+1. Medium optics of the default red cotton (fibres in air): a table, JSON and a plot.
 2. The Monte-Carlo bake of its yarn BRDF tables (cached: a second run is instant).
 3. Plots of the baked tables (in-plane curves, exit maps, albedo spectra, colour swatches).
 4. The virtual gonioreflectometer in Blender: the woven sample under the paper's sweep (θi = 0, 30,

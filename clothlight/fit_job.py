@@ -59,6 +59,12 @@ FREE_PARAMETERS = (
      "the white first reflections of the cloth's surface fibres (the shader's FuzzAlbedo)"),
     ("fuzz_depth", "Fuzz Depth", "", 0.0, 2.0,
      "the optical depth of the surface fibres, which shade the yarn beneath them (the shader's FuzzDepth; 0: none)"),
+    ("fuzz_asymmetry", "Fuzz Asymmetry", "", -0.5, 0.9,
+     "the Henyey–Greenstein g of the surface fibres' scattering (the shader's FuzzAsymmetry; 0: isotropic)"),
+    ("fuzz_tint_red", "Fuzz Red Tint", "", 0.1, 10.0,
+     "the fuzz's red albedo over its green (the shader's FuzzTint)"),
+    ("fuzz_tint_blue", "Fuzz Blue Tint", "", 0.1, 10.0,
+     "the fuzz's blue albedo over its green (the shader's FuzzTint)"),
 )
 
 #: precompute's command-line names of a fit's inputs → the request's (messages name what the user set).

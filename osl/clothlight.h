@@ -159,7 +159,9 @@ closure color cl_cloth_specular_closure(vector Nc, normal N, float weight, float
 // depth `depth` > 0 along Nc lets through to the yarns beneath, and back out, only
 // T(mu_i, mu_o), and reflects by itself only the light it does not let through.  depth = 0 is the
 // fuzz of the presets before it had a depth (a veneer over an unshaded cloth): each function below
-// then answers exactly what the shader did before.
+// then answers exactly what the shader did before.  Fibres scatter forward: the fuzz's phase function
+// is a Henyey-Greenstein one of asymmetry g (0: isotropic, the law itself), and dyed fibres colour
+// what they scatter (the shader's FuzzTint multiplies what these functions return).
 
 // Gauss-Legendre nodes over mu_i in (0, 1) of the general mode's sums (FUZZ_ALBEDO_NODES): numpy's
 // leggauss(8) mapped by mu = (x + 1) / 2, weight w / 2 (tests/test_osl_twins.py holds them to it).
@@ -169,6 +171,17 @@ closure color cl_cloth_specular_closure(vector Nc, normal N, float weight, float
                               0.5917173212478248, 0.7627662049581645, 0.8983332387068134, 0.9801449282487681}
 #define CL_FUZZ_NODE_WEIGHTS {0.050614268145188344, 0.11119051722668717, 0.15685332293894352, 0.18134189168918088, \
                               0.18134189168918088, 0.15685332293894352, 0.11119051722668717, 0.050614268145188344}
+// Midpoint azimuths on (0, pi) of the directional albedo of a fuzz that is not isotropic (FUZZ_ALBEDO_AZIMUTHS).
+#define CL_FUZZ_AZIMUTHS 16
+
+// 4 pi p_HG(-L.V; g) (fuzz_phase): the fuzz's phase function relative to an isotropic one between
+// the directions toward the light and the viewer, -L.V the cosine of the scattering angle.
+float cl_fuzz_phase(float cos_between, float g)
+{
+    if (g == 0.0)
+        return 1.0;
+    return (1.0 - g * g) / pow(1.0 + g * g + 2.0 * g * cos_between, 1.5);
+}
 
 // T(mu_i, mu_o) = exp(-depth (1/|mu_i| + 1/|mu_o|)) (fuzz_transmittance): Beer-Lambert along both
 // slant paths through the fuzz.  |mu|: light from behind the cloth crosses the fuzz on its back
@@ -208,44 +221,60 @@ float cl_fuzz_yarn_share(float mu_o, float depth)
     return exp(-depth / max(mu_o, 1e-6)) * cl_fuzz_hemispherical_transmittance(depth);
 }
 
-// The fuzz's directional albedo at the view cosine mu_o (> 0) (fuzz_albedo_at_view): without a
-// depth the semi-infinite law's closed form (A / 2)(1 - mu_o ln(1 + 1/mu_o)); with one,
-// (A / 2) int_0^1 mu_i (1 - T(mu_i, mu_o)) / (mu_i + mu_o) dmu_i by the nodes above.
-float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth)
+// The fuzz's directional albedo at the view cosine mu_o (> 0) (fuzz_albedo_at_view): isotropic and
+// without a depth the semi-infinite law's closed form (A / 2)(1 - mu_o ln(1 + 1/mu_o)); else
+// (A / 2) int_0^1 mu_i (1 - T(mu_i, mu_o)) P(mu_i) / (mu_i + mu_o) dmu_i by the nodes above, P the
+// phase function's mean over the azimuth between light and view (1 when isotropic).
+float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth, float g)
 {
-    if (depth <= 0.0)
+    if (depth <= 0.0 && g == 0.0)
         return 0.5 * albedo * (1.0 - mu_o * log(1.0 + 1.0 / mu_o));
     float mu[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_COSINES;
     float weight[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_WEIGHTS;
-    float view_path = exp(-depth / mu_o);
+    float view_path = depth > 0.0 ? exp(-depth / mu_o) : 0.0;
+    float sin_o = sqrt(max(1.0 - mu_o * mu_o, 0.0));
     float sum = 0.0;
-    for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++)
-        sum += weight[k] * mu[k] * (1.0 - exp(-depth / mu[k]) * view_path) / (mu[k] + mu_o);
+    for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++) {
+        float phase = 1.0;
+        if (g != 0.0) {
+            float sin_i = sqrt(1.0 - mu[k] * mu[k]);
+            phase = 0.0;
+            for (int j = 0; j < CL_FUZZ_AZIMUTHS; j++) {
+                float phi = (j + 0.5) * M_PI / CL_FUZZ_AZIMUTHS;
+                phase += cl_fuzz_phase(mu[k] * mu_o + sin_i * sin_o * cos(phi), g);
+            }
+            phase /= CL_FUZZ_AZIMUTHS;
+        }
+        float shade = depth > 0.0 ? 1.0 - exp(-depth / mu[k]) * view_path : 1.0;
+        sum += weight[k] * mu[k] * shade * phase / (mu[k] + mu_o);
+    }
     return 0.5 * albedo * sum;
 }
 
 // The fuzz's radiance per irradiance (1/sr): the Lommel-Seeliger law A / (4 pi (mu_i + mu_o)) about
-// Nc times (n_c.l), cut on yarn faces turned away from the light as cl_cloth_specular is; a fuzz of
-// depth reflects (1 - T) of it, the light it does not let through (fuzz_brdf).
-float cl_cloth_fuzz(vector Nc, vector N_out, vector L, vector V, float albedo, float depth)
+// Nc times its phase function of asymmetry g (cl_fuzz_phase) times (n_c.l), cut on yarn faces turned
+// away from the light as cl_cloth_specular is; a fuzz of depth reflects (1 - T) of it, the light it
+// does not let through (fuzz_brdf).
+float cl_cloth_fuzz(vector Nc, vector N_out, vector L, vector V, float albedo, float depth, float g)
 {
     float mu_i = dot(Nc, L);
     float mu_o = dot(Nc, V);
     if (dot(N_out, L) <= 0.0 || mu_i <= 0.0 || mu_o <= 0.0)
         return 0.0;
-    float law = albedo * mu_i / (4.0 * M_PI * (mu_i + mu_o));
+    float law = albedo * cl_fuzz_phase(dot(L, V), g) * mu_i / (4.0 * M_PI * (mu_i + mu_o));
     return depth > 0.0 ? law * (1.0 - cl_fuzz_transmittance(mu_i, mu_o, depth)) : law;
 }
 
 // The general modes' closure for the fuzz: a diffuse lobe about Nc of the weight that returns the
 // fuzz's directional albedo at this view (cl_fuzz_albedo_at_view), the light spread over the
-// lights as a Lambertian's.  Faces turned below the cloth plane get none, as for the sheen.
-closure color cl_cloth_fuzz_closure(vector Nc, normal N, vector V, float albedo, float depth)
+// lights as a Lambertian's (a forward-scattering fuzz's light goes to every light alike, its total
+// at each view kept).  Faces turned below the cloth plane get none, as for the sheen.
+closure color cl_cloth_fuzz_closure(vector Nc, normal N, vector V, float albedo, float depth, float g)
 {
     float mu_o = max(dot(Nc, V), 1e-6);
     closure color lobe = 0;
     if (albedo > 0.0 && dot(N, Nc) > 0.0)
-        lobe = cl_fuzz_albedo_at_view(mu_o, albedo, depth) * diffuse(Nc);
+        lobe = cl_fuzz_albedo_at_view(mu_o, albedo, depth, g) * diffuse(Nc);
     return lobe;
 }
 

@@ -84,7 +84,7 @@ from precompute.tables.color import (
 )
 from precompute.distributed import LOCAL, check_scheduler, open_executor
 from precompute.errors import ParameterError
-from precompute.optics.cook_torrance import FIT_TABLE, sheen_index, specular_from_config
+from precompute.optics.cook_torrance import FIT_TABLE, FUZZ_SHAPE_KEYS, fuzz_colour, sheen_index, specular_from_config
 from precompute.optics.measured_sample import SAMPLE_TABLE, sample_weave_name
 from precompute.tables.grids import AngularGrid
 from precompute.optics.medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
@@ -128,7 +128,10 @@ SPECULAR_BOUNDS = {"specular_weight": Bound(f"{FIT_TABLE}.specular_weight", 0.0,
                    "specular_slope": Bound(f"{FIT_TABLE}.specular_slope", 0.0, float("inf"), low_open=True,
                                            high_open=True),
                    "fuzz_albedo": Bound(f"{FIT_TABLE}.fuzz_albedo", 0.0, 1.0),
-                   "fuzz_depth": Bound(f"{FIT_TABLE}.fuzz_depth", 0.0, float("inf"), high_open=True)}
+                   "fuzz_depth": Bound(f"{FIT_TABLE}.fuzz_depth", 0.0, float("inf"), high_open=True),
+                   "fuzz_asymmetry": Bound(f"{FIT_TABLE}.fuzz_asymmetry", -1.0, 1.0, low_open=True, high_open=True),
+                   "fuzz_tint_red": Bound(f"{FIT_TABLE}.fuzz_tint_red", 0.0, float("inf"), high_open=True),
+                   "fuzz_tint_blue": Bound(f"{FIT_TABLE}.fuzz_tint_blue", 0.0, float("inf"), high_open=True)}
 #: Version of the spectral stage's file (spectral.npz); bump when its content changes meaning.
 SPECTRAL_FORMAT = "clothlight-spectral/2"
 #: Incidence samples per side of the sphere square that the closure fit uses in all (cells ×
@@ -301,10 +304,15 @@ def specular_settings(config: Mapping, medium: MediumParameters) -> dict:
     values = {key: SPECULAR_BOUNDS[key].check(value) for key, value in given.items()}
     defaulted = [key for key, value in FIT_DEFAULTS.items() if key not in table and value]  # fuzz: none
     source = SPECULAR_FROM_PRESET + (f"; {', '.join(defaulted)}: {default['source']}" if defaulted else "")
-    # the fuzz's depth only where it has one, so that the tables of every other preset keep their keys
+    # the fuzz's depth, phase function and colour only where it has them, so that the tables of every
+    # other preset keep their keys
     depth = {"fuzz_depth": values["fuzz_depth"]} if values["fuzz_depth"] > 0.0 else {}
+    shape = {key: values[key] for key in FUZZ_SHAPE_KEYS if values[key] != FIT_DEFAULTS[key]}
+    if max(fuzz_colour(values)) > 1.0:
+        raise ParameterError(f"{FIT_TABLE}.fuzz_albedo", values["fuzz_albedo"],
+                             "an albedo whose every channel (fuzz_tint_red and fuzz_tint_blue times it) is at most 1")
     return {"weight": values["specular_weight"], "slope": values["specular_slope"], "index": default["index"],
-            "fuzz_albedo": values["fuzz_albedo"], **depth, "source": source}
+            "fuzz_albedo": values["fuzz_albedo"], **depth, **shape, "source": source}
 
 
 def _integer(name: str, value, low: int, high: int | None = None) -> int:

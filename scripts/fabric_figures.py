@@ -28,9 +28,10 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 def bake_folder_brdf(model, folder: pathlib.Path):
     """The cloth BRDF (n_views + 2, 3) of a bake folder's tables through ``model``'s response, with
-    the specular term and the fuzz its summary records."""
+    the specular term and the fuzz (albedo, depth, asymmetry, tint) its summary records."""
     from clothlight.validation.response import TableLayout
     from precompute.optics import ballistic
+    from precompute.optics.cook_torrance import fuzz_colour
     from precompute.tables import folder as table_folder
 
     checked = table_folder.check_yarn_table_folder(folder.resolve())
@@ -43,7 +44,9 @@ def bake_folder_brdf(model, folder: pathlib.Path):
     return model.cloth_brdf(atlas, attenuation, layout, specular_weight=float(specular["weight"]),
                             specular_slope=float(specular["slope"]), specular_index=float(specular["index"]),
                             fuzz_albedo=float(specular["fuzz_albedo"]),
-                            fuzz_depth=float(specular.get("fuzz_depth", 0.0)))
+                            fuzz_depth=float(specular.get("fuzz_depth", 0.0)),
+                            fuzz_asymmetry=float(specular.get("fuzz_asymmetry", 0.0)),
+                            fuzz_tint=fuzz_colour({**specular, "fuzz_albedo": 1.0}))
 
 
 def bake_folder_sample(config: dict, folder: pathlib.Path) -> dict:

@@ -1,6 +1,6 @@
 """The fuzz term (precompute.optics.lommel_seeliger): Hapke's single-scattering law of an isotropic
-layer, its closed-form directional albedo against a quadrature of its definition, and what the fit's
-cloth response adds with it."""
+layer, its closed-form directional albedo against a quadrature of its definition, a layer that
+scatters forward, and what the fit's cloth response adds with it."""
 
 from __future__ import annotations
 
@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from precompute.optics.cook_torrance import direction
-from precompute.optics.lommel_seeliger import (fuzz_albedo_at_view, fuzz_brdf, fuzz_transmittance,
+from precompute.optics.lommel_seeliger import (fuzz_albedo_at_view, fuzz_brdf, fuzz_phase, fuzz_transmittance,
                                               hemispherical_transmittance, lommel_seeliger, lommel_seeliger_albedo)
+from precompute.optics.phase import henyey_greenstein_phase
 
 
 @pytest.mark.parametrize("theta_o_deg", [0.0, 30.0, 60.0, 85.0])
@@ -74,3 +75,40 @@ def test_the_general_modes_sums_are_the_integrals_they_stand_for(depth):
         exact = quad(lambda mu: 2 * math.pi * mu * float(fuzz_brdf(
             np.array([math.sqrt(1.0 - mu**2), 0.0, mu]), view, 0.4, depth)), 0.0, 1.0, limit=200)[0]
         assert fuzz_albedo_at_view(mu_o, 0.4, depth) == pytest.approx(exact, rel=2e-3)
+
+
+@pytest.mark.parametrize("asymmetry", [-0.3, 0.5, 0.85])
+@pytest.mark.parametrize("depth", [0.0, 0.3])
+def test_a_fuzz_that_scatters_forward_weighs_the_layer_by_its_phase_function(asymmetry, depth):
+    rng = np.random.default_rng(11)
+    light, view = (direction(rng.uniform(0, 85, 40), rng.uniform(0, 360, 40)) for _ in range(2))
+    scattering = -np.sum(light * view, axis=-1)  # the light's way in against the view's way out
+    phase = 4 * math.pi * henyey_greenstein_phase(scattering, asymmetry)
+    np.testing.assert_allclose(fuzz_phase(light, view, asymmetry), phase)
+    forward = fuzz_brdf(light, view, 0.4, depth, asymmetry)
+    np.testing.assert_allclose(forward, fuzz_brdf(light, view, 0.4, depth) * phase)
+    # reciprocal, and isotropic at g = 0 exactly as before
+    np.testing.assert_allclose(forward, fuzz_brdf(view, light, 0.4, depth, asymmetry))
+    np.testing.assert_array_equal(fuzz_brdf(light, view, 0.4, depth, 0.0), fuzz_brdf(light, view, 0.4, depth))
+    # forward (light grazing from one side, seen grazing from the other) against back toward the light
+    grazing, beyond = direction(75.0, 180.0), direction(75.0, 0.0)
+    ratio = fuzz_brdf(grazing, beyond, 0.4, depth, asymmetry) / fuzz_brdf(grazing, grazing, 0.4, depth, asymmetry)
+    assert (ratio > 10.0) if asymmetry > 0.4 else (ratio < 1.0)
+
+
+@pytest.mark.parametrize("asymmetry", [0.5, 0.85])
+@pytest.mark.parametrize("depth", [0.0, 0.3])
+@pytest.mark.parametrize("theta_o_deg", [5.0, 45.0, 80.0])
+def test_the_directional_albedo_of_a_forward_fuzz_is_the_integral_of_its_brdf(asymmetry, depth, theta_o_deg):
+    # a(μo) = ∫ f μi dω over the upper hemisphere, by a midpoint rule in θi and φi (400 × 800)
+    theta = (np.arange(400) + 0.5) / 400 * math.pi / 2
+    phi = (np.arange(800) + 0.5) / 800 * 2 * math.pi
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    light = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    view = direction(theta_o_deg, 0.0)
+    f = fuzz_brdf(light, view, 0.7, depth, asymmetry)
+    integral = np.sum(f * np.cos(t) * np.sin(t)) * (math.pi / 2 / 400) * (2 * math.pi / 800)
+    mu_o = math.cos(math.radians(theta_o_deg))
+    assert fuzz_albedo_at_view(mu_o, 0.7, depth, asymmetry) == pytest.approx(integral, rel=1e-3)
+    # the forward light goes down into the cloth: less comes back than from an isotropic fuzz
+    assert fuzz_albedo_at_view(mu_o, 0.7, depth, asymmetry) < fuzz_albedo_at_view(mu_o, 0.7, depth)

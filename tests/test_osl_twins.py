@@ -44,3 +44,5 @@ def test_the_header_sums_the_fuzz_over_the_gauss_legendre_nodes_of_its_numpy_twi
     np.testing.assert_allclose(header_list("CL_FUZZ_NODE_COSINES"), cosines, rtol=1e-15)
     np.testing.assert_allclose(header_list("CL_FUZZ_NODE_WEIGHTS"), weights, rtol=1e-15)
     assert abs(np.sum(weights) - 1.0) < 1e-14  # a rule on (0, 1)
+    # and a fuzz that scatters forward over the same midpoint azimuths
+    assert header_defines()["CL_FUZZ_AZIMUTHS"] == lommel_seeliger.FUZZ_ALBEDO_AZIMUTHS

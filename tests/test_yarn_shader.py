@@ -92,10 +92,12 @@ def spec_sun_rho(atlas, attenuation, wi, wo):
 
 
 def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, *, cloth_normal=(0.0, 0.0, 1.0),
-                specular_weight=0.0, specular_index=None, plain_nodes=None, fuzz_albedo=0.0, fuzz_depth=0.0):
+                specular_weight=0.0, specular_index=None, plain_nodes=None, fuzz_albedo=0.0, fuzz_depth=0.0,
+                fuzz_shape=None):
     """A lit, viewed patch of yarn; the material in plain nodes renders under SVM, as a user's would.
     The specular term's slope is 0.8, its index ``specular_index`` (None: the host's); a fuzz of
-    ``fuzz_depth`` 0 is left out of the record, as bakes from before it have none."""
+    ``fuzz_depth`` 0 is left out of the record, as bakes from before it have none, and so are the
+    fuzz's asymmetry and tint unless ``fuzz_shape`` gives them."""
     scene = empty_render_scene(resolution=8, samples=1 if mode == SUN_MODE else 16, bounces=0)
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     plane = bpy.context.active_object
@@ -106,7 +108,7 @@ def patch_scene(tables, mode, view_zenith_deg, view_azimuth_deg, sun_direction, 
     index = {} if specular_index is None else {"index": specular_index}
     depth = {"fuzz_depth": fuzz_depth} if fuzz_depth else {}
     tables = dataclasses.replace(tables, specular={"weight": specular_weight, "slope": 0.8, "fuzz_albedo": fuzz_albedo,
-                                                   **index, **depth})
+                                                   **index, **depth, **(fuzz_shape or {})})
     material = build_yarn_material(tables, mode=mode, plain_nodes=plain_nodes)
     mesh.materials.append(material)
 
@@ -344,6 +346,9 @@ def test_the_fuzz_is_lommel_seeliger_in_sun_mode_and_its_albedo_in_the_general_m
 
 #: A fuzz of optical depth (the specular record's fuzz_depth) and its albedo, for the tests of its shading.
 FUZZ_DEPTH, FUZZ_ALBEDO = 0.3, 0.4
+#: A fuzz of dyed fibres that scatter forward: its asymmetry and tint (the record's keys).
+FORWARD_RED_FUZZ = {"fuzz_asymmetry": 0.6, "fuzz_tint_red": 2.0, "fuzz_tint_blue": 0.5}
+
 
 
 def render_patch_mean(tmp_path, tables, mode, view, sun_direction, **scene_options):
@@ -351,6 +356,35 @@ def render_patch_mean(tmp_path, tables, mode, view, sun_direction, **scene_optio
     zenith, azimuth = math.degrees(math.acos(view[2])), math.degrees(math.atan2(view[1], view[0]))
     scene, _ = patch_scene(tables, mode, zenith, azimuth, sun_direction, **scene_options)
     return render_to_array(scene, tmp_path / "patch.exr")[..., :3].reshape(-1, 3).mean(axis=0)
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("mode, plain_nodes", [(SUN_MODE, False), (GENERAL_MODE, False), (GENERAL_MODE, True)],
+                         ids=["sun", "general-osl", "general-plain-nodes"])
+@pytest.mark.parametrize("depth", [0.0, FUZZ_DEPTH], ids=["veneer", "of-depth"])
+def test_a_fuzz_that_scatters_forward_is_its_phase_function_in_sun_mode_and_its_albedo_in_the_general_mode(
+        tmp_path, synthetic_tables, mode, plain_nodes, depth):
+    # Sun mode: the layer's law times 4π p_HG(−l·v; g), per channel its tint.  General mode: a diffuse
+    # lobe that returns its directional albedo at the view (a sum over light cosines and azimuths;
+    # in plain nodes a Float Curve over μo).  The sun behind the view (forward scattering): far more
+    # than the isotropic fuzz in sun mode, less in all in the general mode (the forward light goes
+    # down into the cloth).
+    tables = without_unscattered_light(synthetic_tables[0], tmp_path)
+    view, sun_direction = unit([0.96, 0.03, 0.28]), unit([-0.96, 0.0, 0.28])
+    tint = np.array([FORWARD_RED_FUZZ["fuzz_tint_red"], 1.0, FORWARD_RED_FUZZ["fuzz_tint_blue"]])
+    asymmetry = FORWARD_RED_FUZZ["fuzz_asymmetry"]
+    means = [render_patch_mean(tmp_path, tables, mode, view, sun_direction, plain_nodes=plain_nodes,
+                               fuzz_albedo=albedo, fuzz_depth=depth, fuzz_shape=FORWARD_RED_FUZZ)
+             for albedo in (FUZZ_ALBEDO, 0.0)]
+    fuzz = (means[0] - means[1]) / SUN_IRRADIANCE  # the yarn's light, shaded alike by a fuzz of any albedo
+    if mode == SUN_MODE:
+        expected = fuzz_brdf(sun_direction, view, FUZZ_ALBEDO, depth, asymmetry) * sun_direction[2] * tint
+        assert expected[1] > 2.0 * fuzz_brdf(sun_direction, view, FUZZ_ALBEDO, depth) * sun_direction[2]
+        np.testing.assert_allclose(fuzz, expected, rtol=1e-3)
+    else:
+        albedo = fuzz_albedo_at_view(view[2], FUZZ_ALBEDO, depth, asymmetry)
+        assert albedo < 0.7 * fuzz_albedo_at_view(view[2], FUZZ_ALBEDO, depth)
+        np.testing.assert_allclose(fuzz, albedo / math.pi * sun_direction[2] * tint, rtol=0.02)
 
 
 @pytest.mark.blender

@@ -38,10 +38,12 @@ LOBE_SHAPE_SOCKETS = {
 }
 
 #: cloth_yarn.osl's inputs for the bake's specular record (``summary.json`` → ``specular``); its
-#: SpecularIOR is ``YarnTableFiles.specular_index``.  A record without ``fuzz_depth`` (a bake from
-#: before it) has a fuzz of depth 0, the veneer it was rendered with.
+#: SpecularIOR is ``YarnTableFiles.specular_index``, FuzzTint the record's ``fuzz_tint_red`` and
+#: ``fuzz_tint_blue`` (:func:`precompute.optics.cook_torrance.fuzz_colour`).  A record without
+#: ``fuzz_depth`` or ``fuzz_asymmetry`` (a bake from before them) has a fuzz of depth 0, the veneer it was
+#: rendered with, isotropic.
 SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope", "FuzzAlbedo": "fuzz_albedo",
-                    "FuzzDepth": "fuzz_depth"}
+                    "FuzzDepth": "fuzz_depth", "FuzzAsymmetry": "fuzz_asymmetry"}
 
 #: cloth_yarn.osl's inputs for the closure-mixture weights, keyed by lobe in the order of the tiles
 #: of ``lobes.exr`` (precompute.tables.closure_fit.LOBES).
@@ -181,7 +183,8 @@ def build_yarn_material(
     ----------
     tables
         A :class:`clothlight.yarn_tables.YarnTableFiles`: checked table paths and resolutions, and the
-        specular term the bake recorded (SpecularWeight, Slope, FuzzAlbedo and FuzzDepth; the shader's
+        specular term the bake recorded (SpecularWeight, Slope, FuzzAlbedo, FuzzDepth, FuzzAsymmetry and
+        FuzzTint; the shader's
         defaults where it has none).
     mode
         :data:`SUN_MODE` (exact under the scene's sun, for validation) or
@@ -351,8 +354,10 @@ def _read_tables(material, shader, tables) -> None:
     shader.inputs["SpecularIOR"].default_value = tables.specular_index
     if tables.specular is not None:
         from precompute.tables.folder import default_specular
-        for socket, key in SPECULAR_SOCKETS.items():  # fuzz_depth: 0 where neither record has it
+        from precompute.optics.cook_torrance import fuzz_colour
+        for socket, key in SPECULAR_SOCKETS.items():  # fuzz_depth, fuzz_asymmetry: 0 where neither record has it
             shader.inputs[socket].default_value = tables.specular.get(key, default_specular().get(key, 0.0))
+        shader.inputs["FuzzTint"].default_value = (*fuzz_colour({**tables.specular, "fuzz_albedo": 1.0}), 1.0)
 
 
 def sync_sun(material, sun_object) -> None:

@@ -212,12 +212,14 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
     their sockets and the socket of the share of the yarn's light that crosses a fuzz of optical
     depth τ > 0 (the specular record's ``fuzz_depth``) both ways, exp(−τ/μo) times the hemispherical
     transmittance (``cl_fuzz_yarn_share``), or None for τ = 0: no node for it."""
+    from precompute.optics.cook_torrance import fuzz_colour
     from precompute.optics.lommel_seeliger import hemispherical_transmittance
     from precompute.tables import folder as table_folder
     specular = tables.specular or table_folder.default_specular()
     weight, slope = float(specular["weight"]), float(specular["slope"])
     fuzz = float(specular.get("fuzz_albedo", 0.0))
     depth = float(specular.get("fuzz_depth", 0.0))
+    asymmetry = float(specular.get("fuzz_asymmetry", 0.0))
     if weight <= 0.0 and fuzz <= 0.0 and depth <= 0.0:
         return [], None
     cosine = nodes.vector_math("DOT_PRODUCT", cloth_normal, toward_view, location=(-1400, -700)).outputs["Value"]
@@ -243,6 +245,9 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
         through = nodes.math("EXPONENT", nodes.math("DIVIDE", -depth, mu, location=(-950, -1450)),
                              location=(-800, -1450))  # exp(−τ/μo), the view's path through the fuzz
         yarn_share = nodes.math("MULTIPLY", through, hemispherical_transmittance(depth), location=(-650, -1450))
+    if asymmetry != 0.0:
+        albedo = _fuzz_albedo_curve(nodes, mu, fuzz, depth, asymmetry) if fuzz > 0.0 else None
+    elif depth > 0.0:
         albedo = _fuzz_layer_albedo(nodes, mu, through, fuzz, depth) if fuzz > 0.0 else None
     else:
         # a(μo) = (A/2)(1 − μo ln(1 + 1/μo)), the semi-infinite layer's
@@ -252,9 +257,43 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
                             0.5 * fuzz, location=(-350, -1300))
     if fuzz > 0.0:
         colour = nodes.math("MULTIPLY", albedo, face_on_side, location=(-200, -1300))
+        tint = tuple(fuzz_colour({**specular, "fuzz_albedo": 1.0}))
+        if tint != (1.0, 1.0, 1.0):  # dyed surface fibres (FuzzTint)
+            colour = nodes.vector_math("MULTIPLY", colour, tint, location=(-50, -1300)).outputs[0]
         closures.append(nodes.node("ShaderNodeBsdfDiffuse", (100, -1300), {"Color": colour, "Normal": toward}
                                    ).outputs[0])
     return closures, yarn_share
+
+
+#: Points of the Float Curve that holds a forward-scattering fuzz's directional albedo over μo
+#: (:func:`_fuzz_albedo_curve`), even in √μo where it bends most, toward grazing.
+FUZZ_CURVE_POINTS = 25
+
+
+def _fuzz_albedo_curve(nodes, mu, albedo: float, depth: float, asymmetry: float):
+    """The socket of the directional albedo at the view of a fuzz of albedo A, optical depth τ and
+    asymmetry g ≠ 0 (``cl_fuzz_albedo_at_view``; :func:`precompute.optics.lommel_seeliger.fuzz_albedo_at_view`):
+    the sum over light cosines and azimuths has no few-node form, so a Float Curve holds it at
+    :data:`FUZZ_CURVE_POINTS` cosines, linear between them (vector handles), read at μo."""
+    import numpy as np
+    from precompute.optics.lommel_seeliger import fuzz_albedo_at_view
+
+    cosines = np.linspace(0.0, 1.0, FUZZ_CURVE_POINTS) ** 2
+    values = fuzz_albedo_at_view(cosines, albedo, depth, asymmetry)
+    node = nodes.node("ShaderNodeFloatCurve", (-650, -1300), {"Value": mu})
+    mapping = node.mapping
+    mapping.use_clip = False
+    curve = mapping.curves[0]
+    while len(curve.points) > 2:
+        curve.points.remove(curve.points[-1])
+    curve.points[0].location = (float(cosines[0]), float(values[0]))
+    curve.points[1].location = (float(cosines[-1]), float(values[-1]))
+    for x, y in zip(cosines[1:-1], values[1:-1]):
+        curve.points.new(float(x), float(y))
+    for point in curve.points:
+        point.handle_type = "VECTOR"
+    mapping.update()
+    return node.outputs["Value"]
 
 
 def _fuzz_layer_albedo(nodes, mu, through, albedo: float, depth: float):

@@ -189,17 +189,17 @@ class ForwardModel:
         return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), *per_view.shape[1:]).mean(axis=1)
 
     def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float,
-                   specular_index: float | None = None, fuzz_albedo: float = 0.0,
-                   fuzz_depth: float = 0.0) -> np.ndarray:
-        """The cloth BRDF of given tables at the measured views, averaged over the sample azimuths."""
+                   specular_index: float | None = None, **fuzz) -> np.ndarray:
+        """The cloth BRDF of given tables at the measured views, averaged over the sample azimuths;
+        ``fuzz``: the fuzz's keywords of :meth:`clothlight.validation.response.ClothResponse.cloth_brdf`."""
         return self._mean_over_azimuths(self.response.cloth_brdf(
             atlas, attenuation, layout, specular_weight=specular_weight, specular_slope=specular_slope,
-            specular_index=specular_index, fuzz_albedo=fuzz_albedo, fuzz_depth=fuzz_depth))
+            specular_index=specular_index, **fuzz))
 
     def parts(self, config: dict, *, relative_error: float, seed: int):
         """The cloth BRDF split into what the medium gives and what the cloth-scale terms do: the
         first (n_views, 3), 1/sr, with neither, and :class:`ClothTerms`, ``terms(weight, slope,
-        fuzz_albedo=0, fuzz_depth=0)`` (n_views,), 1/sr, white: the sheen and the fuzz, and
+        **fuzz)`` (n_views, 3), 1/sr: the sheen and the fuzz, and
         ``terms.transmittance(fuzz_depth)``, the fuzz's shade on the first.  A fit optimises their
         parameters for each medium in milliseconds."""
         atlas, attenuation, layout = self.tables(config, relative_error=relative_error, seed=seed)
@@ -207,24 +207,25 @@ class ForwardModel:
         return yarn, ClothTerms(self, sheen_index(medium_from_dict(config, self.base_dir)))
 
     def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
-                 seed: int, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray:
+                 seed: int, **fuzz) -> np.ndarray:
         yarn, terms = self.parts(config, relative_error=relative_error, seed=seed)
         return cloth_from_parts(yarn, terms, {"specular_weight": specular_weight, "specular_slope": specular_slope,
-                                              "fuzz_albedo": fuzz_albedo, "fuzz_depth": fuzz_depth})
+                                              **fuzz})
 
 
 class ClothTerms:
     """The cloth-scale terms of one candidate at a forward model's views (:meth:`ForwardModel.parts`):
-    ``terms(weight, slope, fuzz_albedo=0, fuzz_depth=0)`` what the sheen and the fuzz add (n_views,),
-    1/sr, white, and ``terms.transmittance(fuzz_depth)`` (n_views,) the share of the yarn's light that
-    crosses the fuzz (:mod:`precompute.optics.lommel_seeliger`)."""
+    ``terms(weight, slope, fuzz_albedo=0, fuzz_depth=0, fuzz_asymmetry=0, fuzz_tint=(1, 1, 1))`` what the
+    sheen and the fuzz add (n_views, 3), 1/sr, RGB, and ``terms.transmittance(fuzz_depth)`` (n_views,)
+    the share of the yarn's light that crosses the fuzz (:mod:`precompute.optics.lommel_seeliger`)."""
 
     def __init__(self, model: ForwardModel, index: float):
         self.model, self.index = model, index
 
-    def __call__(self, weight: float, slope: float, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray:
-        return self.model._mean_over_azimuths(
-            self.model.response.specular_brdf(weight, slope, self.index, fuzz_albedo, fuzz_depth))
+    def __call__(self, weight: float, slope: float, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0,
+                 fuzz_asymmetry: float = 0.0, fuzz_tint=(1.0, 1.0, 1.0)) -> np.ndarray:
+        return self.model._mean_over_azimuths(self.model.response.specular_brdf(
+            weight, slope, self.index, fuzz_albedo, fuzz_depth, fuzz_asymmetry, fuzz_tint))
 
     def transmittance(self, fuzz_depth: float) -> np.ndarray:
         return self.model._mean_over_azimuths(self.model.response.fuzz_transmittance(fuzz_depth))

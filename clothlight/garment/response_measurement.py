@@ -30,6 +30,7 @@ import numpy as np
 from precompute.errors import ParameterError
 from precompute.optics import ballistic
 from precompute.optics.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT, cook_torrance
+from precompute.optics.cook_torrance import fuzz_colour
 from precompute.optics.lommel_seeliger import fuzz_brdf, fuzz_transmittance
 from precompute.tables import exr
 from precompute.tables import layout as table_layout
@@ -49,9 +50,9 @@ class YarnLookup:
     """What the sun-mode yarn shader reads of a yarn's tables: the BRDF atlas (N_i·N_o, N_i·N_o, C)
     (``brdf.exr``), the unscattered light's attenuation (M, C) (``unscattered.exr``), their layout
     (grids, host index, the sun mode's cone) and the specular term's ``weight``, ``slope`` (Beckmann
-    rms slope m) and ``ior``, as the shader's sockets hold them (float32), and its fuzz albedo and depth
-    (``FuzzAlbedo``, ``FuzzDepth``, :mod:`precompute.optics.lommel_seeliger`), part of ρ as the sun mode
-    emits it."""
+    rms slope m) and ``ior``, as the shader's sockets hold them (float32), and its fuzz albedo, depth,
+    asymmetry and tint (``FuzzAlbedo``, ``FuzzDepth``, ``FuzzAsymmetry``, ``FuzzTint`` RGB,
+    :mod:`precompute.optics.lommel_seeliger`), part of ρ as the sun mode emits it."""
 
     atlas: np.ndarray
     attenuation: np.ndarray
@@ -59,6 +60,8 @@ class YarnLookup:
     specular: dict
     fuzz_albedo: float = 0.0
     fuzz_depth: float = 0.0
+    fuzz_asymmetry: float = 0.0
+    fuzz_tint: tuple = (1.0, 1.0, 1.0)
 
 
 def yarn_lookup(tables) -> YarnLookup:
@@ -73,7 +76,9 @@ def yarn_lookup(tables) -> YarnLookup:
                       np.asarray(attenuation, float).reshape(-1, attenuation.shape[-1]), layout,
                       {"weight": _socket(specular.get("weight", DEFAULT_WEIGHT)),
                        "slope": _socket(specular.get("slope", DEFAULT_SLOPE)), "ior": _socket(tables.specular_index)},
-                      _socket(specular.get("fuzz_albedo", 0.0)), _socket(specular.get("fuzz_depth", 0.0)))
+                      _socket(specular.get("fuzz_albedo", 0.0)), _socket(specular.get("fuzz_depth", 0.0)),
+                      _socket(specular.get("fuzz_asymmetry", 0.0)),
+                      tuple(_socket(v) for v in fuzz_colour({**specular, "fuzz_albedo": 1.0})))
 
 
 def _socket(value: float) -> float:
@@ -148,12 +153,12 @@ def response_specular(response: GarmentResponse, weight: float, slope: float, io
     return {side: f_cos * visibility[side] for side in SIDES}, visibility
 
 
-def response_fuzz(response: GarmentResponse, albedo: float, depth: float = 0.0) -> dict:
+def response_fuzz(response: GarmentResponse, albedo: float, depth: float = 0.0, asymmetry: float = 0.0) -> dict:
     """The fuzz term's part of ρ per side (N_i², N_o²), 1/sr: f_fuzz(ω_i, ω_o) cos θ_i about the cloth
-    normal on the viewer's side (``cl_cloth_fuzz``, a fuzz of optical depth ``depth``) on the share of
-    the patch that is lit yarn facing the sun, as for the specular term."""
+    normal on the viewer's side (``cl_cloth_fuzz``, a fuzz of optical depth ``depth`` and asymmetry
+    ``asymmetry``) on the share of the patch that is lit yarn facing the sun, as for the specular term."""
     facing, toward_sun, toward_camera = _lit_facing_cells(response)
-    f_cos = fuzz_brdf(toward_sun, toward_camera, albedo, depth) * np.maximum(toward_sun[..., 2], 0.0)
+    f_cos = fuzz_brdf(toward_sun, toward_camera, albedo, depth, asymmetry) * np.maximum(toward_sun[..., 2], 0.0)
     return {side: f_cos * facing[side] for side in SIDES}
 
 
@@ -174,8 +179,8 @@ def measurement_from_response(response: GarmentResponse, yarn: YarnLookup,
         shade = response_fuzz_transmittance(response, yarn.fuzz_depth)[..., None]
         rho = {side: rho[side] * shade for side in SIDES}
     if yarn.fuzz_albedo > 0.0:
-        fuzz = response_fuzz(response, yarn.fuzz_albedo, yarn.fuzz_depth)
-        rho = {side: rho[side] + fuzz[side][..., None] for side in SIDES}
+        fuzz = response_fuzz(response, yarn.fuzz_albedo, yarn.fuzz_depth, yarn.fuzz_asymmetry)
+        rho = {side: rho[side] + fuzz[side][..., None] * np.asarray(yarn.fuzz_tint) for side in SIDES}
     specular, visibility = response_specular(response, **yarn.specular)
     return ClothMeasurement({side: rho[side] + specular[side][..., None] for side in SIDES}, specular, visibility,
                             dict(yarn.specular), response.coverage(), float(response.shape["patch_mm"]),

@@ -132,18 +132,21 @@ class ClothResponse:
         return np.unique(rho_map.indices)
 
     def specular_brdf(self, weight: float, slope: float, index: float, fuzz_albedo: float = 0.0,
-                      fuzz_depth: float = 0.0) -> np.ndarray:
-        """The cloth-scale terms' share of each view's cloth BRDF (n_views,), 1/sr: (w f_CT + f_fuzz) (n_c·l) s,
-        the Cook–Torrance sheen and the fuzz of optical depth ``fuzz_depth``
-        (:func:`precompute.optics.lommel_seeliger.fuzz_brdf`) about the cloth normal, on the lit yarn
-        faces turned to the sun (the shader's sun mode cuts both alike)."""
+                      fuzz_depth: float = 0.0, fuzz_asymmetry: float = 0.0, fuzz_tint=(1.0, 1.0, 1.0)) -> np.ndarray:
+        """The cloth-scale terms' share of each view's cloth BRDF (n_views, 3), 1/sr, RGB: (w f_CT + f_fuzz)
+        (n_c·l) s, the white Cook–Torrance sheen and the fuzz of optical depth ``fuzz_depth`` and asymmetry
+        ``fuzz_asymmetry`` (:func:`precompute.optics.lommel_seeliger.fuzz_brdf`) about the cloth normal,
+        of albedo ``fuzz_albedo`` times ``fuzz_tint`` per channel, on the lit yarn faces turned to the sun
+        (the shader's sun mode cuts both alike)."""
         from precompute.optics.cook_torrance import cook_torrance
         from precompute.optics.lommel_seeliger import fuzz_brdf
 
-        terms = weight * cook_torrance(self._toward_sun, self._toward_camera, slope, index)
+        sheen = weight * cook_torrance(self._toward_sun, self._toward_camera, slope, index)
+        terms = np.repeat(sheen[:, None], 3, axis=1)
         if fuzz_albedo:
-            terms = terms + fuzz_brdf(self._toward_sun, self._toward_camera, fuzz_albedo, fuzz_depth)
-        return terms * self._toward_sun[:, 2] * self._specular_share
+            fuzz = fuzz_brdf(self._toward_sun, self._toward_camera, fuzz_albedo, fuzz_depth, fuzz_asymmetry)
+            terms = terms + fuzz[:, None] * np.asarray(fuzz_tint, float)
+        return terms * (self._toward_sun[:, 2] * self._specular_share)[:, None]
 
     def fuzz_transmittance(self, fuzz_depth: float) -> np.ndarray:
         """(n_views,) the share of each view's yarn light that crosses a fuzz of optical depth
@@ -168,15 +171,17 @@ class ClothResponse:
 
     def cloth_brdf(self, atlas: np.ndarray, attenuation: np.ndarray | None, layout: TableLayout, *,
                    specular_weight: float, specular_slope: float, specular_index: float | None = None,
-                   fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray:
+                   fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0, fuzz_asymmetry: float = 0.0,
+                   fuzz_tint=(1.0, 1.0, 1.0)) -> np.ndarray:
         """The cloth BRDF (n_views, C), 1/sr, that a sun-mode sweep of the yarn material measures.
 
         ``atlas``: the BRDF atlas image (N_i·N_o, N_i·N_o, C) (``brdf.exr``); ``attenuation``: the
         unscattered light's table (M, C) or (1, M, C) (``unscattered.exr``), or None for a material
         without it; ``layout`` must describe both.  ``specular_weight``, ``specular_slope``,
         ``specular_index``: the shader's ``SpecularWeight``, ``Slope`` (Beckmann rms slope m) and
-        ``SpecularIOR`` (None: the layout's host index); ``fuzz_albedo``, ``fuzz_depth``: its
-        ``FuzzAlbedo`` and ``FuzzDepth`` (the yarn's light shaded by :meth:`fuzz_transmittance`).
+        ``SpecularIOR`` (None: the layout's host index); ``fuzz_albedo``, ``fuzz_depth``,
+        ``fuzz_asymmetry``, ``fuzz_tint``: its ``FuzzAlbedo``, ``FuzzDepth``, ``FuzzAsymmetry`` and
+        ``FuzzTint`` (the yarn's light shaded by :meth:`fuzz_transmittance`).
         """
         atlas = np.asarray(atlas, float)
         side = layout.incidence_resolution * layout.exit_resolution
@@ -193,7 +198,8 @@ class ClothResponse:
         index = layout.index if specular_index is None else specular_index
         if fuzz_depth:
             brdf = brdf * self.fuzz_transmittance(fuzz_depth)[:, None]
-        return brdf + self.specular_brdf(specular_weight, specular_slope, index, fuzz_albedo, fuzz_depth)[:, None]
+        return brdf + self.specular_brdf(specular_weight, specular_slope, index, fuzz_albedo, fuzz_depth,
+                                         fuzz_asymmetry, fuzz_tint)[:, :brdf.shape[1]]
 
     def save(self, path) -> pathlib.Path:
         """Write the response to ``path`` (``.npz``, compressed)."""

@@ -62,7 +62,7 @@ from precompute.fit.baseline import BaselineFit, fit_baseline
 from precompute.fit.figures import band_penalty, band_ratios
 from precompute.fit.objective import Objective, Views, load_measurement, parse_target_ratios, split_views
 from precompute.fit.parameters import FitParameter, apply, initial_values, parse_free, total_volume_fraction
-from precompute.optics.cook_torrance import FIT_TABLE, specular_from_config
+from precompute.optics.cook_torrance import FIT_TABLE, fuzz_colour, specular_from_config
 
 #: The objective of a candidate the medium refuses (volume fractions summing to 0.74 or more), plus
 #: 100 × how far over it is: far above any misfit (a zero model scores 1).
@@ -77,7 +77,7 @@ class ForwardModel(Protocol):
     """A forward model: the cloth's (n_views, 3) BRDF, 1/sr, at the views it was built for."""
 
     def __call__(self, config: dict, *, specular_weight: float, specular_slope: float, relative_error: float,
-                 seed: int, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0) -> np.ndarray: ...
+                 seed: int, **fuzz) -> np.ndarray: ...
 
 
 class FitCancelled(KeyboardInterrupt):
@@ -611,6 +611,9 @@ PROFILE_GRID_SIZE = 343
 PROFILE_MIN_POINTS = 7
 #: How many of the grid's best points the bounded local search starts from.
 PROFILE_POLISHED = 3
+#: The most points the scan takes (7 per parameter for four: the sheen and the fuzz's albedo and
+#: depth); beyond, the fuzz's shape freed too, it scans a Sobol' set of 2048 instead of the grid.
+PROFILE_MAX_SCANNED = 2401
 
 
 #: Rec. 709 luminance of linear R, G, B.
@@ -629,10 +632,13 @@ def back_front_penalty(swatch_rgb: np.ndarray, max_back_front: float) -> float:
 def cloth_from_parts(medium_part: np.ndarray, specular_part: Callable, keywords: Mapping[str, float]) -> np.ndarray:
     """The cloth BRDF (n, 3), 1/sr, of a forward model's ``parts``: the medium's part, shaded by a fuzz
     of depth where ``keywords`` holds one (``specular_part.transmittance``), plus what the sheen and
-    the fuzz add, ``specular_part`` at the sheen's weight and slope of ``keywords`` and at its fuzz
-    albedo and depth where it holds them."""
-    fuzz = {key: keywords[key] for key in ("fuzz_albedo", "fuzz_depth") if keywords.get(key)}
-    terms = specular_part(keywords["specular_weight"], keywords["specular_slope"], **fuzz)[:, None]
+    the fuzz add (n, 3), ``specular_part`` at the sheen's weight and slope of ``keywords`` and at its
+    fuzz albedo, depth, asymmetry and tint where it holds them
+    (:func:`precompute.optics.cook_torrance.fuzz_colour`)."""
+    fuzz = {key: keywords[key] for key in ("fuzz_albedo", "fuzz_depth", "fuzz_asymmetry") if keywords.get(key)}
+    if fuzz.get("fuzz_albedo"):
+        fuzz["fuzz_tint"] = fuzz_colour({**keywords, "fuzz_albedo": 1.0})
+    terms = specular_part(keywords["specular_weight"], keywords["specular_slope"], **fuzz)
     if fuzz.get("fuzz_depth"):
         medium_part = medium_part * specular_part.transmittance(fuzz["fuzz_depth"])[:, None]
     return medium_part + terms
@@ -642,8 +648,9 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
                           profiled: Sequence[FitParameter], keywords: Mapping[str, float]) -> dict[str, float]:
     """The values of the specular parameters ``profiled`` that minimise ``objective`` for one medium:
     its cloth BRDF without the specular term ``medium_part`` (n, 3) plus ``specular_part(weight,
-    slope, fuzz_albedo, fuzz_depth)`` (n,) (:func:`cloth_from_parts`).  A grid of about
-    :data:`PROFILE_GRID_SIZE` points over their [0, 1] box (log
+    slope, **fuzz)`` (n, 3) (:func:`cloth_from_parts`).  A grid of about
+    :data:`PROFILE_GRID_SIZE` points over their [0, 1] box (a Sobol' set beyond
+    :data:`PROFILE_MAX_SCANNED`; log
     where they say), then bounded L-BFGS-B from its :data:`PROFILE_POLISHED` best points; no forward
     evaluation.  Variable projection: the optimiser outside searches only the medium, whose every
     candidate gets its best sheen."""
@@ -654,8 +661,13 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
         return objective(cloth_from_parts(medium_part, specular_part, values))
 
     points = max(PROFILE_MIN_POINTS, round(PROFILE_GRID_SIZE ** (1.0 / len(profiled))))
-    axes = [np.linspace(0.0, 1.0, points)] * len(profiled)
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(profiled))
+    if points ** len(profiled) <= PROFILE_MAX_SCANNED:
+        axes = [np.linspace(0.0, 1.0, points)] * len(profiled)
+        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(profiled))
+    else:  # a full grid would be too many: a scrambled Sobol' set of as many points fills the box as evenly
+        from scipy.stats import qmc
+
+        grid = qmc.Sobol(len(profiled), seed=0).random_base2(int(math.log2(PROFILE_MAX_SCANNED)))
     scanned = np.array([misfit(u) for u in grid])
     best = None
     for start in grid[np.argsort(scanned, kind="stable")[:PROFILE_POLISHED]]:

@@ -262,6 +262,15 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
                       "precompute.optics.lommel_seeliger): they reflect as a layer that deep and shade the yarn "
                       "beneath by exp(−τ (1/μi + 1/μo)); 0 keeps the fuzz a veneer that shades nothing, 2 "
                       "hides the yarn from a normal view but for 2 %"),
+    FitParameter("fuzz_asymmetry", "fuzz_asymmetry", "", -0.5, 0.9, log=False,
+                 note="the Henyey–Greenstein g of the surface fibres' scattering (the shader's FuzzAsymmetry, "
+                      "precompute.optics.lommel_seeliger): 0 is isotropic, the Lommel–Seeliger law; a fibre "
+                      "scatters forward (its transmission lobe), 0.9 nearly all within 25° of straight on"),
+    FitParameter("fuzz_tint_red", "fuzz_tint_red", "", 0.1, 10.0, log=True,
+                 note="the fuzz's red albedo over its green (the shader's FuzzTint): 1 is white; dyed surface "
+                      "fibres colour what they scatter, a red cotton's 3–5 times"),
+    FitParameter("fuzz_tint_blue", "fuzz_tint_blue", "", 0.1, 10.0, log=True,
+                 note="the fuzz's blue albedo over its green (the shader's FuzzTint): 1 is white"),
 )}
 
 

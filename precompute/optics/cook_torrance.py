@@ -36,13 +36,23 @@ DEFAULT_IOR = 1.557
 DEFAULT_FUZZ_ALBEDO = 0.0
 #: ... and fuzz depth (``FuzzDepth``): 0, the fuzz a veneer that shades nothing beneath it.
 DEFAULT_FUZZ_DEPTH = 0.0
+#: ... its asymmetry (``FuzzAsymmetry``, the Henyey–Greenstein g): 0, isotropic, the Lommel–Seeliger law.
+DEFAULT_FUZZ_ASYMMETRY = 0.0
+#: ... and its red and blue albedo relative to its green (``FuzzTint``): 1, white.
+DEFAULT_FUZZ_TINT = 1.0
 #: The preset table holding the fitted cloth-scale terms (``[fit]``, keys ``specular_weight``,
-#: ``specular_slope``, ``fuzz_albedo`` and ``fuzz_depth``, the shader's SpecularWeight, Slope, FuzzAlbedo and FuzzDepth;
-#: ``python -m clothlight.fit`` writes it); the medium's loader ignores it.
+#: ``specular_slope``, ``fuzz_albedo``, ``fuzz_depth``, ``fuzz_asymmetry``, ``fuzz_tint_red`` and
+#: ``fuzz_tint_blue``, the shader's SpecularWeight, Slope, FuzzAlbedo, FuzzDepth, FuzzAsymmetry and
+#: FuzzTint; ``python -m clothlight.fit`` writes it); the medium's loader ignores it.
 FIT_TABLE = "fit"
 #: The ``[fit]`` table's keys and the shader's defaults for them.
 SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE,
-                     "fuzz_albedo": DEFAULT_FUZZ_ALBEDO, "fuzz_depth": DEFAULT_FUZZ_DEPTH}
+                     "fuzz_albedo": DEFAULT_FUZZ_ALBEDO, "fuzz_depth": DEFAULT_FUZZ_DEPTH,
+                     "fuzz_asymmetry": DEFAULT_FUZZ_ASYMMETRY, "fuzz_tint_red": DEFAULT_FUZZ_TINT,
+                     "fuzz_tint_blue": DEFAULT_FUZZ_TINT}
+#: The keys of the fuzz's phase function and colour: a record holds them only where they are not the
+#: defaults, so that the tables of the presets before them keep their keys.
+FUZZ_SHAPE_KEYS = ("fuzz_asymmetry", "fuzz_tint_red", "fuzz_tint_blue")
 
 
 def cook_torrance_between(light, view, m=DEFAULT_SLOPE, n=DEFAULT_IOR) -> float:
@@ -145,6 +155,15 @@ def specular_from_config(config: Mapping) -> dict[str, float]:
     return {key: float(table.get(key, default)) for key, default in SPECULAR_DEFAULTS.items()}
 
 
-__all__ = ["DEFAULT_FUZZ_ALBEDO", "DEFAULT_FUZZ_DEPTH", "DEFAULT_IOR", "DEFAULT_SLOPE", "DEFAULT_WEIGHT",
-           "FIT_TABLE", "SPECULAR_DEFAULTS", "cloth_specular", "cook_torrance", "cook_torrance_between",
-           "dielectric_fresnel", "direction", "sheen_index", "specular_from_config"]
+def fuzz_colour(record: Mapping) -> np.ndarray:
+    """The fuzz's albedo per channel (3,), RGB, of a specular record or keywords (``fuzz_albedo``,
+    ``fuzz_tint_red``, ``fuzz_tint_blue``, absent keys at their defaults): A (t_R, 1, t_B)."""
+    albedo = float(record.get("fuzz_albedo", DEFAULT_FUZZ_ALBEDO))
+    return albedo * np.array([float(record.get("fuzz_tint_red", DEFAULT_FUZZ_TINT)), 1.0,
+                              float(record.get("fuzz_tint_blue", DEFAULT_FUZZ_TINT))])
+
+
+__all__ = ["DEFAULT_FUZZ_ALBEDO", "DEFAULT_FUZZ_ASYMMETRY", "DEFAULT_FUZZ_DEPTH", "DEFAULT_FUZZ_TINT", "DEFAULT_IOR",
+           "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "FUZZ_SHAPE_KEYS", "SPECULAR_DEFAULTS", "cloth_specular",
+           "cook_torrance", "cook_torrance_between",
+           "dielectric_fresnel", "direction", "fuzz_colour", "sheen_index", "specular_from_config"]

@@ -28,6 +28,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from precompute.optics.cook_torrance import FUZZ_SHAPE_KEYS
+
 from ...yarn_tables import yarn_tables_from_bake
 from ...garment.goniometry import MEASUREMENT_METHODS, SIDES, ClothMeasurement
 from ...garment.response import GarmentResponse
@@ -77,8 +79,8 @@ def yarn_inputs(yarn_tables) -> dict:
     """What the sun-mode yarn material reads of a yarn bake: ρ and the unscattered light's
     attenuation (the pixels' hashes, not the bake's cache key, which also changes with the closure
     fit), the host index, the weight, slope and index of the specular term (a fitted preset's,
-    ``YarnTableFiles.specular``; None: the shader's defaults) and the fuzz albedo and depth where there
-    are (the keys only then: the cloth bakes of yarns without fuzz keep theirs)."""
+    ``YarnTableFiles.specular``; None: the shader's defaults) and the fuzz albedo, depth, asymmetry and
+    tint where there are (the keys only then: the cloth bakes of yarns without them keep theirs)."""
     rho = precompute_tables.read_table(yarn_tables.brdf_path, "brdf").pixels
     attenuation = precompute_tables.read_table(yarn_tables.unscattered_path, "unscattered").pixels
     specular = yarn_tables.specular
@@ -87,10 +89,9 @@ def yarn_inputs(yarn_tables) -> dict:
               "host_index": yarn_tables.host_index,
               "specular": None if specular is None else {key: float(specular[key]) for key in ("weight", "slope")},
               "specular_index": yarn_tables.specular_index}
-    for key in ("fuzz_albedo", "fuzz_depth"):
-        value = float((specular or {}).get(key, 0.0))
-        if value:
-            inputs[key] = value
+    for key in ("fuzz_albedo", "fuzz_depth", *FUZZ_SHAPE_KEYS):
+        if key in (specular or {}) and (key in FUZZ_SHAPE_KEYS or float(specular[key])):
+            inputs[key] = float(specular[key])
     return inputs
 
 

@@ -302,7 +302,9 @@ def specular_settings(config: Mapping, medium: MediumParameters) -> dict:
     if not table:
         return default
     values = {key: SPECULAR_BOUNDS[key].check(value) for key, value in given.items()}
-    defaulted = [key for key, value in FIT_DEFAULTS.items() if key not in table and value]  # fuzz: none
+    # the fuzz: none, isotropic and white where the table leaves it out
+    defaulted = [key for key, value in FIT_DEFAULTS.items()
+                 if key not in table and value and key not in FUZZ_SHAPE_KEYS]
     source = SPECULAR_FROM_PRESET + (f"; {', '.join(defaulted)}: {default['source']}" if defaulted else "")
     # the fuzz's depth, phase function and colour only where it has them, so that the tables of every
     # other preset keep their keys

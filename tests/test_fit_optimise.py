@@ -216,7 +216,8 @@ def test_the_specular_term_is_profiled_when_the_model_splits_it_off(measured):
         assert result.parameters[name] == pytest.approx(value, rel=0.1), name
     assert result.specular == pytest.approx({"specular_weight": result.parameters["specular_weight"],
                                              "specular_slope": result.parameters["specular_slope"], "fuzz_albedo": 0.0,
-                                             "fuzz_depth": 0.0})
+                                             "fuzz_depth": 0.0, "fuzz_asymmetry": 0.0, "fuzz_tint_red": 1.0,
+                                             "fuzz_tint_blue": 1.0})
     candidates = [e for e in result.history if e.kind == "candidate"]
     assert len({e.parameters["specular_slope"] for e in candidates}) > 1  # fitted per candidate
     assert len(model.calls) <= 150
@@ -394,7 +395,9 @@ def test_the_profiled_sheen_is_the_best_in_its_box_not_the_nearest_basin():
         return (1.0 - 0.5 * math.exp(-np.sum((unit - broad) ** 2) / 0.1)
                 - 1.0 * math.exp(-np.sum((unit - narrow) ** 2) / 0.005))
 
-    values = fit_profiled_specular(objective, np.zeros((2, 3)), lambda weight, slope: np.array([weight, slope]),
-                                   profiled, {})
+    def terms(weight, slope):  # (n, 3): the objective reads the two back from the red channel
+        return np.array([[weight] * 3, [slope] * 3])
+
+    values = fit_profiled_specular(objective, np.zeros((2, 3)), terms, profiled, {})
     unit = np.array([p.to_unit(values[p.name]) for p in profiled])
     np.testing.assert_allclose(unit, narrow, atol=0.02)

@@ -23,7 +23,7 @@ from precompute.fit.baseline import baseline_brdf, fit_baseline
 from precompute.fit.objective import Objective
 from precompute.fit.optimise import (PROFILE_MAX_SCANNED, PROFILE_MIN_POINTS, FitCancelled,
                                      fit_profiled_specular)
-from precompute.optics.cook_torrance import SPECULAR_DEFAULTS
+from precompute.optics.cook_torrance import SPECULAR_DEFAULTS, fuzz_colour
 from precompute.fit.parameters import PARAMETERS
 from precompute.fit.parameters import VOIDS, species_table
 from precompute.fit.report import preset_toml
@@ -353,6 +353,11 @@ def test_a_dyed_fuzz_that_scatters_forward_is_recovered_by_the_profile(tmp_path)
     values = fit_profiled_specular(objective, medium, terms, profiled, start)
     for name, value in {**sheen, **fuzz}.items():
         assert values[name] == pytest.approx(value, rel=0.02), name
+    # a fuzz that would return more red light than it meets is out of bounds whatever fits best
+    bright = {**fuzz, "fuzz_albedo": 0.4}
+    rgb = truth(config, relative_error=0.0, seed=0, **sheen, **bright)
+    over = fit_profiled_specular(lambda model: float(np.mean((model / rgb - 1.0) ** 2)), medium, terms, profiled, start)
+    assert max(fuzz_colour(over)) <= 1.0 < max(fuzz_colour(bright))
     # an isotropic white fuzz cannot take its place
     white = fit_profiled_specular(objective, medium, terms, profiled[:4], start)
     assert objective(cloth_from_parts(medium, terms, {**start, **white})) > 0.02 > 100 * objective(

@@ -650,15 +650,17 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
     its cloth BRDF without the specular term ``medium_part`` (n, 3) plus ``specular_part(weight,
     slope, **fuzz)`` (n, 3) (:func:`cloth_from_parts`).  A grid of about
     :data:`PROFILE_GRID_SIZE` points over their [0, 1] box (a Sobol' set beyond
-    :data:`PROFILE_MAX_SCANNED`; log
-    where they say), then bounded L-BFGS-B from its :data:`PROFILE_POLISHED` best points; no forward
+    :data:`PROFILE_MAX_SCANNED`; log where they say; the fuzz's albedo at most 1 in every channel,
+    :func:`fuzz_within_unit_albedo`), then bounded L-BFGS-B from its :data:`PROFILE_POLISHED` best points; no forward
     evaluation.  Variable projection: the optimiser outside searches only the medium, whose every
     candidate gets its best sheen."""
     from scipy.optimize import minimize
 
+    def values_at(u) -> dict:
+        return fuzz_within_unit_albedo({**keywords, **{p.path: p.from_unit(float(x)) for p, x in zip(profiled, u)}})
+
     def misfit(u) -> float:
-        values = {**keywords, **{p.path: p.from_unit(float(x)) for p, x in zip(profiled, u)}}
-        return objective(cloth_from_parts(medium_part, specular_part, values))
+        return objective(cloth_from_parts(medium_part, specular_part, values_at(u)))
 
     points = max(PROFILE_MIN_POINTS, round(PROFILE_GRID_SIZE ** (1.0 / len(profiled))))
     if points ** len(profiled) <= PROFILE_MAX_SCANNED:
@@ -674,7 +676,21 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
         result = minimize(misfit, start, method="L-BFGS-B", bounds=[(0.0, 1.0)] * len(profiled))
         if best is None or result.fun < best.fun:
             best = result
-    return {p.name: p.from_unit(float(x)) for p, x in zip(profiled, best.x)}
+    values = values_at(best.x)
+    return {p.name: values[p.path] for p in profiled}
+
+
+def fuzz_within_unit_albedo(keywords: Mapping[str, float]) -> dict:
+    """``keywords`` with each fuzz tint cut to 1 / ``fuzz_albedo`` where it is more: a fuzz cannot
+    return more light than it meets in any channel (an albedo of at most 1, what the bake checks).
+    The profile searches a box (:func:`fit_profiled_specular`), where that bound is not a face:
+    beyond it the channel's albedo stays 1, a misfit that is flat there rather than a wall."""
+    keywords = dict(keywords)
+    albedo = float(keywords.get("fuzz_albedo", 0.0))
+    for key in ("fuzz_tint_red", "fuzz_tint_blue"):
+        if albedo > 0.0 and key in keywords:
+            keywords[key] = min(float(keywords[key]), 1.0 / albedo)
+    return keywords
 
 
 def bound_hits(free: Sequence[FitParameter], values: Mapping[str, float]) -> list[str]:
@@ -691,5 +707,5 @@ def bound_hits(free: Sequence[FitParameter], values: Mapping[str, float]) -> lis
 
 
 __all__ = ["INFEASIBLE_OBJECTIVE", "AccuracySchedule", "Budget", "Evaluation", "FitCancelled", "FitProgress",
-           "FitResult", "ForwardModel", "Refused", "bound_hits", "check_budget", "fit_medium", "minimise",
-           "population_size"]
+           "FitResult", "ForwardModel", "Refused", "bound_hits", "check_budget", "fit_medium",
+           "fuzz_within_unit_albedo", "minimise", "population_size"]

@@ -47,8 +47,9 @@ The layer's single scattering with a Henyey–Greenstein phase function p_HG of 
     f_layer(l, v) = A 4π p_HG(−l·v; g) (1 − T(μi, μo)) / (4π (μi + μo))                     (fuzz_brdf)
 
 with −l·v the cosine of the scattering angle between the light's way in and the view's way out
-(g = 0: the law above, 4π p = 1), and the albedo A may be a colour (``[fit] fuzz_albedo_red``,
-``_green``, ``_blue``, the fibres' own: they are dyed), applied by the caller per channel.  The
+(g = 0: the law above, 4π p = 1), and the albedo A may be a colour, the fibres' own: they are dyed
+(``[fit] fuzz_albedo`` its green, ``fuzz_tint_red`` and ``fuzz_tint_blue`` its red and blue over it,
+:func:`precompute.optics.cook_torrance.fuzz_colour`), applied by the caller per channel.  The
 directional albedo of a phase function that is not isotropic depends on the azimuth:
 :func:`fuzz_albedo_at_view` sums over it too.
 """

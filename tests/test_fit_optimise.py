@@ -235,7 +235,7 @@ class SwatchForward(SeparableForward):
         front = medium[np.argmin(np.abs(self.angles[:, 0]) + np.abs(self.angles[:, 2]))]
         back = front * 0.01 / void  # 0.2 at the truth's 5 % voids
         rows = np.vstack([medium, front, back])
-        return rows, lambda weight, slope: np.concatenate([specular(weight, slope), [0.0, 0.0]])
+        return rows, lambda weight, slope: np.concatenate([specular(weight, slope), np.zeros((2, 3))])
 
 
 @pytest.mark.slow

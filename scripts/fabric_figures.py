@@ -31,7 +31,7 @@ def bake_folder_brdf(model, folder: pathlib.Path):
     the specular term and the fuzz (albedo, depth, asymmetry, tint) its summary records."""
     from clothlight.validation.response import TableLayout
     from precompute.optics import ballistic
-    from precompute.optics.cook_torrance import fuzz_colour
+    from precompute.optics.cook_torrance import fuzz_tint
     from precompute.tables import folder as table_folder
 
     checked = table_folder.check_yarn_table_folder(folder.resolve())
@@ -46,7 +46,7 @@ def bake_folder_brdf(model, folder: pathlib.Path):
                             fuzz_albedo=float(specular["fuzz_albedo"]),
                             fuzz_depth=float(specular.get("fuzz_depth", 0.0)),
                             fuzz_asymmetry=float(specular.get("fuzz_asymmetry", 0.0)),
-                            fuzz_tint=fuzz_colour({**specular, "fuzz_albedo": 1.0}))
+                            fuzz_tint=fuzz_tint(specular))
 
 
 def bake_folder_sample(config: dict, folder: pathlib.Path) -> dict:

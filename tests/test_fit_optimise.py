@@ -79,13 +79,25 @@ def real_fabric_views() -> list[tuple]:
     return views
 
 
-def write_measurement(path, truth=TRUTH):
-    views = real_fabric_views()
-    rgb = synthetic_brdf(views, **truth)
-    rows = [",".join(f"{v:g}" for v in view) + "," + ",".join(f"{c:.8g}" for c in values)
+def write_csv(path, views, rgb):
+    """A measurement CSV of ``rgb`` (n, 3), 1/sr, at ``views`` (θi, φi, θo, φo); returns ``path``."""
+    rows = [",".join(f"{v:g}" for v in view) + "," + ",".join(f"{c:.10g}" for c in values)
             for view, values in zip(views, rgb)]
     path.write_text("# synthetic cloth for the fit tests\ntheta_i,phi_i,theta_o,phi_o,R,G,B\n" + "\n".join(rows) + "\n")
     return path
+
+
+def write_measurement(path, truth=TRUTH):
+    views = real_fabric_views()
+    return write_csv(path, views, synthetic_brdf(views, **truth))
+
+
+def truth_config():
+    """:func:`preset_with_voids`'s content and folder with the voids and dye of :data:`TRUTH`."""
+    config, base_dir = preset_with_voids()
+    config["particles"][-1]["volume_fraction"] = TRUTH["void_fraction"]
+    config["dye"]["weight_percent"] = TRUTH["dye_weight_percent"]
+    return config, base_dir
 
 
 def preset_with_voids(specular_weight: float | None = None):
@@ -187,11 +199,7 @@ def test_baseline_fit_recovers_a_known_lambert_and_cook_torrance(tmp_path):
     views = real_fabric_views()
     albedo, weight, slope = (0.55, 0.04, 0.12), 0.7, 0.3
     rgb = baseline_brdf(views, albedo, weight, slope)
-    path = tmp_path / "baseline.csv"
-    path.write_text("theta_i,phi_i,theta_o,phi_o,R,G,B\n" + "\n".join(
-        ",".join(f"{v:g}" for v in view) + "," + ",".join(f"{c:.10g}" for c in values)
-        for view, values in zip(views, rgb)) + "\n")
-    fit = fit_baseline(Objective(load_measurement(path)))
+    fit = fit_baseline(Objective(load_measurement(write_csv(tmp_path / "baseline.csv", views, rgb))))
     assert fit.albedo == pytest.approx(albedo, rel=1e-3)
     assert fit.weight == pytest.approx(weight, rel=1e-3)
     assert fit.slope == pytest.approx(slope, rel=1e-3)
@@ -306,16 +314,10 @@ class ShadedForward(SyntheticForward):
 def test_a_fuzz_of_depth_is_profiled_with_the_sheen_and_recovered(tmp_path):
     views = real_fabric_views()
     truth = ShadedForward(views, noisy=False)
-    config, base_dir = preset_with_voids()
-    config["particles"][-1]["volume_fraction"] = TRUTH["void_fraction"]
-    config["dye"]["weight_percent"] = TRUTH["dye_weight_percent"]
+    config, base_dir = truth_config()
     rgb = truth(config, specular_weight=TRUTH["specular_weight"], specular_slope=TRUTH["specular_slope"],
                 relative_error=0.0, seed=0, fuzz_albedo=0.3, fuzz_depth=0.4)
-    path = tmp_path / "shaded.csv"
-    path.write_text("theta_i,phi_i,theta_o,phi_o,R,G,B\n" + "\n".join(
-        ",".join(f"{v:g}" for v in view) + "," + ",".join(f"{c:.8g}" for c in values)
-        for view, values in zip(views, rgb)))
-    measurement = load_measurement(path)
+    measurement = load_measurement(write_csv(tmp_path / "shaded.csv", views, rgb))
     free = "void_fraction,dye_weight_percent,specular_weight,specular_slope,fuzz_albedo,fuzz_depth"
     result = fit_medium(measurement, preset_with_voids()[0], base_dir, free=free, seed=3, budget=60,
                         forward_model=ShadedForward(split_views(measurement).forward_views, noisy=False))
@@ -334,17 +336,11 @@ def test_a_dyed_fuzz_that_scatters_forward_is_recovered_by_the_profile(tmp_path)
     # polishes; at the true medium it finds the sheen and the fuzz that made the cloth
     views = real_fabric_views()
     truth = ShadedForward(views, noisy=False)
-    config, _ = preset_with_voids()
-    config["particles"][-1]["volume_fraction"] = TRUTH["void_fraction"]
-    config["dye"]["weight_percent"] = TRUTH["dye_weight_percent"]
+    config, _ = truth_config()
     sheen = {"specular_weight": TRUTH["specular_weight"], "specular_slope": TRUTH["specular_slope"]}
     fuzz = {"fuzz_albedo": 0.2, "fuzz_depth": 0.3, "fuzz_asymmetry": 0.6, "fuzz_tint_red": 3.0, "fuzz_tint_blue": 0.5}
     rgb = truth(config, relative_error=0.0, seed=0, **sheen, **fuzz)
-    path = tmp_path / "forward_fuzz.csv"
-    path.write_text("theta_i,phi_i,theta_o,phi_o,R,G,B\n" + "\n".join(
-        ",".join(f"{v:g}" for v in view) + "," + ",".join(f"{c:.8g}" for c in values)
-        for view, values in zip(views, rgb)))
-    measurement = load_measurement(path)
+    measurement = load_measurement(write_csv(tmp_path / "forward_fuzz.csv", views, rgb))
     objective = Objective(measurement, split_views(measurement))
     medium, terms = truth.parts(config, relative_error=0.0, seed=0)
     start = {**SPECULAR_DEFAULTS, "fuzz_depth": 0.0}

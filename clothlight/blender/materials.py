@@ -39,7 +39,7 @@ LOBE_SHAPE_SOCKETS = {
 
 #: cloth_yarn.osl's inputs for the bake's specular record (``summary.json`` → ``specular``); its
 #: SpecularIOR is ``YarnTableFiles.specular_index``, FuzzTint the record's ``fuzz_tint_red`` and
-#: ``fuzz_tint_blue`` (:func:`precompute.optics.cook_torrance.fuzz_colour`).  A record without
+#: ``fuzz_tint_blue`` (:func:`precompute.optics.cook_torrance.fuzz_tint`).  A record without
 #: ``fuzz_depth`` or ``fuzz_asymmetry`` (a bake from before them) has a fuzz of depth 0, the veneer it was
 #: rendered with, isotropic.
 SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope", "FuzzAlbedo": "fuzz_albedo",
@@ -354,10 +354,10 @@ def _read_tables(material, shader, tables) -> None:
     shader.inputs["SpecularIOR"].default_value = tables.specular_index
     if tables.specular is not None:
         from precompute.tables.folder import default_specular
-        from precompute.optics.cook_torrance import fuzz_colour
+        from precompute.optics.cook_torrance import fuzz_tint
         for socket, key in SPECULAR_SOCKETS.items():  # fuzz_depth, fuzz_asymmetry: 0 where neither record has it
             shader.inputs[socket].default_value = tables.specular.get(key, default_specular().get(key, 0.0))
-        shader.inputs["FuzzTint"].default_value = (*fuzz_colour({**tables.specular, "fuzz_albedo": 1.0}), 1.0)
+        shader.inputs["FuzzTint"].default_value = (*fuzz_tint(tables.specular), 1.0)
 
 
 def sync_sun(material, sun_object) -> None:

@@ -212,7 +212,7 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
     their sockets and the socket of the share of the yarn's light that crosses a fuzz of optical
     depth τ > 0 (the specular record's ``fuzz_depth``) both ways, exp(−τ/μo) times the hemispherical
     transmittance (``cl_fuzz_yarn_share``), or None for τ = 0: no node for it."""
-    from precompute.optics.cook_torrance import fuzz_colour
+    from precompute.optics.cook_torrance import fuzz_tint
     from precompute.optics.lommel_seeliger import hemispherical_transmittance
     from precompute.tables import folder as table_folder
     specular = tables.specular or table_folder.default_specular()
@@ -257,7 +257,7 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
                             0.5 * fuzz, location=(-350, -1300))
     if fuzz > 0.0:
         colour = nodes.math("MULTIPLY", albedo, face_on_side, location=(-200, -1300))
-        tint = tuple(fuzz_colour({**specular, "fuzz_albedo": 1.0}))
+        tint = tuple(fuzz_tint(specular))
         if tint != (1.0, 1.0, 1.0):  # dyed surface fibres (FuzzTint)
             colour = nodes.vector_math("MULTIPLY", colour, tint, location=(-50, -1300)).outputs[0]
         closures.append(nodes.node("ShaderNodeBsdfDiffuse", (100, -1300), {"Color": colour, "Normal": toward}

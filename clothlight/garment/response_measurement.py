@@ -30,7 +30,7 @@ import numpy as np
 from precompute.errors import ParameterError
 from precompute.optics import ballistic
 from precompute.optics.cook_torrance import DEFAULT_SLOPE, DEFAULT_WEIGHT, cook_torrance
-from precompute.optics.cook_torrance import fuzz_colour
+from precompute.optics.cook_torrance import fuzz_tint
 from precompute.optics.lommel_seeliger import fuzz_brdf, fuzz_transmittance
 from precompute.tables import exr
 from precompute.tables import layout as table_layout
@@ -78,7 +78,7 @@ def yarn_lookup(tables) -> YarnLookup:
                        "slope": _socket(specular.get("slope", DEFAULT_SLOPE)), "ior": _socket(tables.specular_index)},
                       _socket(specular.get("fuzz_albedo", 0.0)), _socket(specular.get("fuzz_depth", 0.0)),
                       _socket(specular.get("fuzz_asymmetry", 0.0)),
-                      tuple(_socket(v) for v in fuzz_colour({**specular, "fuzz_albedo": 1.0})))
+                      tuple(_socket(v) for v in fuzz_tint(specular)))
 
 
 def _socket(value: float) -> float:

@@ -62,7 +62,7 @@ from precompute.fit.baseline import BaselineFit, fit_baseline
 from precompute.fit.figures import band_penalty, band_ratios
 from precompute.fit.objective import Objective, Views, load_measurement, parse_target_ratios, split_views
 from precompute.fit.parameters import FitParameter, apply, initial_values, parse_free, total_volume_fraction
-from precompute.optics.cook_torrance import FIT_TABLE, fuzz_colour, specular_from_config
+from precompute.optics.cook_torrance import FIT_TABLE, fuzz_tint, specular_from_config
 
 #: The objective of a candidate the medium refuses (volume fractions summing to 0.74 or more), plus
 #: 100 × how far over it is: far above any misfit (a zero model scores 1).
@@ -634,10 +634,10 @@ def cloth_from_parts(medium_part: np.ndarray, specular_part: Callable, keywords:
     of depth where ``keywords`` holds one (``specular_part.transmittance``), plus what the sheen and
     the fuzz add (n, 3), ``specular_part`` at the sheen's weight and slope of ``keywords`` and at its
     fuzz albedo, depth, asymmetry and tint where it holds them
-    (:func:`precompute.optics.cook_torrance.fuzz_colour`)."""
+    (:func:`precompute.optics.cook_torrance.fuzz_tint`)."""
     fuzz = {key: keywords[key] for key in ("fuzz_albedo", "fuzz_depth", "fuzz_asymmetry") if keywords.get(key)}
     if fuzz.get("fuzz_albedo"):
-        fuzz["fuzz_tint"] = fuzz_colour({**keywords, "fuzz_albedo": 1.0})
+        fuzz["fuzz_tint"] = fuzz_tint(keywords)
     terms = specular_part(keywords["specular_weight"], keywords["specular_slope"], **fuzz)
     if fuzz.get("fuzz_depth"):
         medium_part = medium_part * specular_part.transmittance(fuzz["fuzz_depth"])[:, None]

@@ -155,15 +155,21 @@ def specular_from_config(config: Mapping) -> dict[str, float]:
     return {key: float(table.get(key, default)) for key, default in SPECULAR_DEFAULTS.items()}
 
 
+def fuzz_tint(record: Mapping) -> np.ndarray:
+    """The fuzz's albedo per channel over its green (3,), RGB, of a specular record or keywords
+    (``fuzz_tint_red``, ``fuzz_tint_blue``, absent keys at their defaults): (t_R, 1, t_B), the
+    shader's FuzzTint."""
+    return np.array([float(record.get("fuzz_tint_red", DEFAULT_FUZZ_TINT)), 1.0,
+                     float(record.get("fuzz_tint_blue", DEFAULT_FUZZ_TINT))])
+
+
 def fuzz_colour(record: Mapping) -> np.ndarray:
-    """The fuzz's albedo per channel (3,), RGB, of a specular record or keywords (``fuzz_albedo``,
-    ``fuzz_tint_red``, ``fuzz_tint_blue``, absent keys at their defaults): A (t_R, 1, t_B)."""
-    albedo = float(record.get("fuzz_albedo", DEFAULT_FUZZ_ALBEDO))
-    return albedo * np.array([float(record.get("fuzz_tint_red", DEFAULT_FUZZ_TINT)), 1.0,
-                              float(record.get("fuzz_tint_blue", DEFAULT_FUZZ_TINT))])
+    """The fuzz's albedo per channel (3,), RGB, of a specular record or keywords: ``fuzz_albedo``
+    (absent: 0) times :func:`fuzz_tint`."""
+    return float(record.get("fuzz_albedo", DEFAULT_FUZZ_ALBEDO)) * fuzz_tint(record)
 
 
 __all__ = ["DEFAULT_FUZZ_ALBEDO", "DEFAULT_FUZZ_ASYMMETRY", "DEFAULT_FUZZ_DEPTH", "DEFAULT_FUZZ_TINT", "DEFAULT_IOR",
            "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "FUZZ_SHAPE_KEYS", "SPECULAR_DEFAULTS", "cloth_specular",
            "cook_torrance", "cook_torrance_between",
-           "dielectric_fresnel", "direction", "fuzz_colour", "sheen_index", "specular_from_config"]
+           "dielectric_fresnel", "direction", "fuzz_colour", "fuzz_tint", "sheen_index", "specular_from_config"]

@@ -225,30 +225,92 @@ float cl_fuzz_yarn_share(float mu_o, float depth)
 // without a depth the semi-infinite law's closed form (A / 2)(1 - mu_o ln(1 + 1/mu_o)); else
 // (A / 2) int_0^1 mu_i (1 - T(mu_i, mu_o)) P(mu_i) / (mu_i + mu_o) dmu_i by the nodes above, P the
 // phase function's mean over the azimuth between light and view (1 when isotropic).
-float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth, float g)
+// The same in two parts (fuzz_albedo_sides_at_view): the light from lights on the view's side of
+// Nc (azimuth from the view's within 90 degrees: the first half of the azimuths) and from the far side.
+void cl_fuzz_albedo_sides_at_view(float mu_o, float albedo, float depth, float g, output float near,
+                                  output float far)
 {
-    if (depth <= 0.0 && g == 0.0)
-        return 0.5 * albedo * (1.0 - mu_o * log(1.0 + 1.0 / mu_o));
     float mu[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_COSINES;
     float weight[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_WEIGHTS;
     float view_path = depth > 0.0 ? exp(-depth / mu_o) : 0.0;
     float sin_o = sqrt(max(1.0 - mu_o * mu_o, 0.0));
-    float sum = 0.0;
+    near = 0.0;
+    far = 0.0;
     for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++) {
-        float phase = 1.0;
-        if (g != 0.0) {
-            float sin_i = sqrt(1.0 - mu[k] * mu[k]);
-            phase = 0.0;
-            for (int j = 0; j < CL_FUZZ_AZIMUTHS; j++) {
-                float phi = (j + 0.5) * M_PI / CL_FUZZ_AZIMUTHS;
-                phase += cl_fuzz_phase(mu[k] * mu_o + sin_i * sin_o * cos(phi), g);
-            }
-            phase /= CL_FUZZ_AZIMUTHS;
-        }
+        float sin_i = sqrt(1.0 - mu[k] * mu[k]);
         float shade = depth > 0.0 ? 1.0 - exp(-depth / mu[k]) * view_path : 1.0;
-        sum += weight[k] * mu[k] * shade * phase / (mu[k] + mu_o);
+        float layer = weight[k] * mu[k] * shade / (mu[k] + mu_o);
+        for (int j = 0; j < CL_FUZZ_AZIMUTHS; j++) {
+            float phi = (j + 0.5) * M_PI / CL_FUZZ_AZIMUTHS;
+            float term = layer * cl_fuzz_phase(mu[k] * mu_o + sin_i * sin_o * cos(phi), g);
+            if (2 * j < CL_FUZZ_AZIMUTHS)
+                near += term;
+            else
+                far += term;
+        }
     }
+    near *= 0.5 * albedo / CL_FUZZ_AZIMUTHS;
+    far *= 0.5 * albedo / CL_FUZZ_AZIMUTHS;
+}
+
+float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth, float g)
+{
+    if (depth <= 0.0 && g == 0.0)
+        return 0.5 * albedo * (1.0 - mu_o * log(1.0 + 1.0 / mu_o));
+    if (g != 0.0) {
+        float near, far;
+        cl_fuzz_albedo_sides_at_view(mu_o, albedo, depth, g, near, far);
+        return near + far;
+    }
+    float mu[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_COSINES;
+    float weight[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_WEIGHTS;
+    float view_path = exp(-depth / mu_o);
+    float sum = 0.0;
+    for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++)
+        sum += weight[k] * mu[k] * (1.0 - exp(-depth / mu[k]) * view_path) / (mu[k] + mu_o);
     return 0.5 * albedo * sum;
+}
+
+// The general modes' forward lobe of a fuzz that scatters forward (FUZZ_FORWARD_SLOPE,
+// forward_lobe_table): a Beckmann reflection about Nc without a Fresnel factor, and its directional
+// albedo a_m and half its excess of far-side light b_m at view angles even from 0 to 90 degrees.
+#define CL_FUZZ_FORWARD_SLOPE 0.5
+#define CL_FUZZ_FORWARD_POINTS 17
+#define CL_FUZZ_FORWARD_ALBEDO {0.9429983746314629, 0.9412738422079397, 0.9362494301777113, 0.9283539178470588, \
+                                0.9182469768575782, 0.9067628396613615, 0.8948785895018003, 0.8837264038738433, \
+                                0.8745880242687172, 0.8687622934139941, 0.8673753318544225, 0.8713086057342564, \
+                                0.8812822615622632, 0.8980201075329203, 0.9224330244705113, 0.9558051481784868, \
+                                0.999474201583473}
+#define CL_FUZZ_FORWARD_EXCESS {0.0, 0.038815398249673894, 0.07713759092081232, 0.11448408205697216, \
+                                0.15040568047939823, 0.184527237887312, 0.21660515924521642, 0.24659299494783635, \
+                                0.274684682163827, 0.30128070677875957, 0.3268786195983064, 0.35196839222403703, \
+                                0.3769953408507523, 0.40239439154010176, 0.4286753484387816, 0.45654400354875946, \
+                                0.4867906180148369}
+
+// The weights of the general modes' diffuse lobe and forward lobe of the fuzz at the view cosine mu_o
+// (fuzz_general_lobes): the lobe's share s = b / b_m held to [0, a / a_m], the diffuse d = a - s a_m,
+// so that both the light the fuzz returns at this view and its excess from far-side lights are kept.
+void cl_fuzz_general_lobes(float mu_o, float albedo, float depth, float g, output float diffuse_weight,
+                           output float forward_weight)
+{
+    forward_weight = 0.0;
+    if (g == 0.0) {
+        diffuse_weight = cl_fuzz_albedo_at_view(mu_o, albedo, depth, g);
+        return;
+    }
+    float near, far;
+    cl_fuzz_albedo_sides_at_view(mu_o, albedo, depth, g, near, far);
+    float lobe_albedo[CL_FUZZ_FORWARD_POINTS] = CL_FUZZ_FORWARD_ALBEDO;
+    float lobe_excess[CL_FUZZ_FORWARD_POINTS] = CL_FUZZ_FORWARD_EXCESS;
+    float x = acos(clamp(mu_o, 0.0, 1.0)) / M_PI_2 * (CL_FUZZ_FORWARD_POINTS - 1);
+    int i = min((int)floor(x), CL_FUZZ_FORWARD_POINTS - 2);
+    float t = x - i;
+    float a_m = mix(lobe_albedo[i], lobe_albedo[i + 1], t);
+    float b_m = mix(lobe_excess[i], lobe_excess[i + 1], t);
+    float total = near + far;
+    if (b_m > 0.0)
+        forward_weight = clamp(0.5 * (far - near) / b_m, 0.0, total / a_m);
+    diffuse_weight = max(total - forward_weight * a_m, 0.0);
 }
 
 // The fuzz's radiance per irradiance (1/sr): the Lommel-Seeliger law A / (4 pi (mu_i + mu_o)) about
@@ -265,16 +327,21 @@ float cl_cloth_fuzz(vector Nc, vector N_out, vector L, vector V, float albedo, f
     return depth > 0.0 ? law * (1.0 - cl_fuzz_transmittance(mu_i, mu_o, depth)) : law;
 }
 
-// The general modes' closure for the fuzz: a diffuse lobe about Nc of the weight that returns the
-// fuzz's directional albedo at this view (cl_fuzz_albedo_at_view), the light spread over the
-// lights as a Lambertian's (a forward-scattering fuzz's light goes to every light alike, its total
-// at each view kept).  Faces turned below the cloth plane get none, as for the sheen.
+// The general modes' closures for the fuzz: a diffuse lobe about Nc and, for a fuzz that scatters
+// forward, a Beckmann lobe about Nc, of the weights cl_fuzz_general_lobes gives at this view (an
+// isotropic fuzz: the diffuse lobe of its directional albedo alone).  Faces turned below the cloth
+// plane get none, as for the sheen.
 closure color cl_cloth_fuzz_closure(vector Nc, normal N, vector V, float albedo, float depth, float g)
 {
     float mu_o = max(dot(Nc, V), 1e-6);
     closure color lobe = 0;
-    if (albedo > 0.0 && dot(N, Nc) > 0.0)
-        lobe = cl_fuzz_albedo_at_view(mu_o, albedo, depth, g) * diffuse(Nc);
+    if (albedo > 0.0 && dot(N, Nc) > 0.0) {
+        float diffuse_weight, forward_weight;
+        cl_fuzz_general_lobes(mu_o, albedo, depth, g, diffuse_weight, forward_weight);
+        lobe = diffuse_weight * diffuse(Nc);
+        if (forward_weight > 0.0)
+            lobe += forward_weight * microfacet("beckmann", Nc, CL_FUZZ_FORWARD_SLOPE, 1.0, 0);
+    }
     return lobe;
 }
 

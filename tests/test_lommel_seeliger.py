@@ -1,6 +1,6 @@
 """The fuzz term (precompute.optics.lommel_seeliger): Hapke's single-scattering law of an isotropic
 layer, its closed-form directional albedo against a quadrature of its definition, a layer that
-scatters forward, and what the fit's cloth response adds with it."""
+scatters forward, the general modes' two lobes for it, and what the fit's cloth response adds with it."""
 
 from __future__ import annotations
 
@@ -9,9 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from precompute.optics.cook_torrance import direction
-from precompute.optics.lommel_seeliger import (fuzz_albedo_at_view, fuzz_brdf, fuzz_phase, fuzz_transmittance,
-                                              hemispherical_transmittance, lommel_seeliger, lommel_seeliger_albedo)
+from precompute.optics.cook_torrance import beckmann_reflection, direction
+from precompute.optics.lommel_seeliger import (FUZZ_FORWARD_SLOPE, forward_lobe_albedos, fuzz_albedo_at_view,
+                                              fuzz_albedo_sides_at_view, fuzz_brdf, fuzz_general_lobes, fuzz_phase,
+                                              fuzz_transmittance, hemispherical_transmittance, lommel_seeliger,
+                                              lommel_seeliger_albedo)
 from precompute.optics.phase import henyey_greenstein_phase
 
 
@@ -112,3 +114,56 @@ def test_the_directional_albedo_of_a_forward_fuzz_is_the_integral_of_its_brdf(as
     assert fuzz_albedo_at_view(mu_o, 0.7, depth, asymmetry) == pytest.approx(integral, rel=1e-3)
     # the forward light goes down into the cloth: less comes back than from an isotropic fuzz
     assert fuzz_albedo_at_view(mu_o, 0.7, depth, asymmetry) < fuzz_albedo_at_view(mu_o, 0.7, depth)
+
+
+def _hemisphere_midpoints(theta_o_deg: float, count: int = 400):
+    """Lights at midpoints in θi and φi over the upper hemisphere (count × 2 count), the solid-angle
+    weights times μi, and the view at ``theta_o_deg`` leaning toward −x (φ = 180°)."""
+    theta = (np.arange(count) + 0.5) / count * math.pi / 2
+    phi = (np.arange(2 * count) + 0.5) / (2 * count) * 2 * math.pi
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    light = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    weight = np.cos(t) * np.sin(t) * (math.pi / 2 / count) * (math.pi / count)
+    return light, weight, direction(theta_o_deg, 180.0)
+
+
+@pytest.mark.parametrize("theta_o_deg", [10.0, 45.0, 80.0])
+def test_the_forward_lobes_albedos_are_the_integrals_of_its_brdf(theta_o_deg):
+    # a_m = ∫ f_m μi dω; b_m half the far side's (lights at x > 0, the view leaning toward −x) less the near's
+    light, weight, view = _hemisphere_midpoints(theta_o_deg)
+    lobe = beckmann_reflection(light, view, FUZZ_FORWARD_SLOPE) * weight
+    far = light[..., 0] > 0.0
+    albedo, excess = forward_lobe_albedos(math.cos(math.radians(theta_o_deg)))
+    assert albedo == pytest.approx(lobe.sum(), rel=2e-3)
+    assert excess == pytest.approx(0.5 * (lobe[far].sum() - lobe[~far].sum()), rel=5e-3)
+    assert 0.0 < excess < 0.5 * albedo <= 0.5  # a reflection lobe: most of its light from the far side
+
+
+@pytest.mark.parametrize("depth", [0.0, 0.3])
+@pytest.mark.parametrize("theta_o_deg", [10.0, 45.0, 80.0])
+def test_the_general_modes_two_lobes_keep_the_fuzzs_light_and_its_far_side_excess(depth, theta_o_deg):
+    # d + s a_m = a and s b_m = b: the diffuse lobe returns as much from either side, the forward lobe
+    # b_m more from the far side; both are the fuzz's own sides (its BRDF integrated side by side)
+    light, weight, view = _hemisphere_midpoints(theta_o_deg)
+    f = fuzz_brdf(light, view, 0.7, depth, 0.76) * weight
+    far = light[..., 0] > 0.0
+    mu_o = math.cos(math.radians(theta_o_deg))
+    near_sum, far_sum = fuzz_albedo_sides_at_view(mu_o, 0.7, depth, 0.76)
+    assert far_sum == pytest.approx(f[far].sum(), rel=5e-3) and near_sum == pytest.approx(f[~far].sum(), rel=5e-3)
+    diffuse, forward = fuzz_general_lobes(mu_o, 0.7, depth, 0.76)
+    lobe = beckmann_reflection(light, view, FUZZ_FORWARD_SLOPE) * weight
+    total = diffuse / math.pi * weight + forward * lobe  # a diffuse closure of weight d is d/π
+    assert total.sum() == pytest.approx(near_sum + far_sum, rel=3e-3)
+    assert forward > 0.0 and diffuse > 0.0
+    assert total[far].sum() - total[~far].sum() == pytest.approx(far_sum - near_sum, rel=1e-2)
+    # the diffuse lobe alone (the general modes before) has no far-side excess at all
+    assert far_sum - near_sum > 0.08 * (far_sum + near_sum)
+
+
+def test_an_isotropic_fuzz_is_a_diffuse_lobe_alone_and_the_general_mode_as_before():
+    mu_o = np.linspace(0.05, 1.0, 9)
+    diffuse, forward = fuzz_general_lobes(mu_o, 0.4, 0.3, 0.0)
+    np.testing.assert_array_equal(forward, 0.0)
+    np.testing.assert_array_equal(diffuse, fuzz_albedo_at_view(mu_o, 0.4, 0.3))
+    # a fuzz that scatters back has less far-side light than near: no forward lobe either
+    np.testing.assert_array_equal(fuzz_general_lobes(mu_o, 0.4, 0.3, -0.3)[1], 0.0)

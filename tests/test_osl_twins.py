@@ -46,3 +46,14 @@ def test_the_header_sums_the_fuzz_over_the_gauss_legendre_nodes_of_its_numpy_twi
     assert abs(np.sum(weights) - 1.0) < 1e-14  # a rule on (0, 1)
     # and a fuzz that scatters forward over the same midpoint azimuths
     assert header_defines()["CL_FUZZ_AZIMUTHS"] == lommel_seeliger.FUZZ_ALBEDO_AZIMUTHS
+
+
+def test_the_header_tabulates_the_fuzzs_forward_lobe_as_its_numpy_twin():
+    # cl_fuzz_general_lobes interpolates the lobe's albedos in θo between the same points
+    # (lommel_seeliger.forward_lobe_table), of the same Beckmann slope
+    defines = header_defines()
+    assert defines["CL_FUZZ_FORWARD_SLOPE"] == lommel_seeliger.FUZZ_FORWARD_SLOPE
+    assert defines["CL_FUZZ_FORWARD_POINTS"] == lommel_seeliger.FUZZ_FORWARD_POINTS
+    _, albedo, excess = lommel_seeliger.forward_lobe_table()
+    np.testing.assert_allclose(header_list("CL_FUZZ_FORWARD_ALBEDO"), albedo, rtol=1e-15)
+    np.testing.assert_allclose(header_list("CL_FUZZ_FORWARD_EXCESS"), excess, rtol=1e-15, atol=1e-300)

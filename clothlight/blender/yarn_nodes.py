@@ -208,12 +208,13 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
     """The cloth's specular and fuzz closures (``cl_cloth_specular_closure``, ``cl_cloth_fuzz_closure``):
     about the cloth normal turned toward the viewer, on faces whose normal is on its side only, the
     sheen weighted by the specular weight, the fuzz a diffuse lobe weighted by its directional albedo
-    at the view (:func:`precompute.optics.lommel_seeliger.fuzz_albedo_at_view`).  Returns the list of
-    their sockets and the socket of the share of the yarn's light that crosses a fuzz of optical
+    at the view (:func:`precompute.optics.lommel_seeliger.fuzz_albedo_at_view`), shared with a forward
+    Glossy lobe where it scatters forward (:func:`precompute.optics.lommel_seeliger.fuzz_general_lobes`).
+    Returns the list of their sockets and the socket of the share of the yarn's light that crosses a fuzz of optical
     depth τ > 0 (the specular record's ``fuzz_depth``) both ways, exp(−τ/μo) times the hemispherical
     transmittance (``cl_fuzz_yarn_share``), or None for τ = 0: no node for it."""
     from precompute.optics.cook_torrance import fuzz_tint
-    from precompute.optics.lommel_seeliger import hemispherical_transmittance
+    from precompute.optics.lommel_seeliger import FUZZ_FORWARD_SLOPE, hemispherical_transmittance
     from precompute.tables import folder as table_folder
     specular = tables.specular or table_folder.default_specular()
     weight, slope = float(specular["weight"]), float(specular["slope"])
@@ -245,8 +246,9 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
         through = nodes.math("EXPONENT", nodes.math("DIVIDE", -depth, mu, location=(-950, -1450)),
                              location=(-800, -1450))  # exp(−τ/μo), the view's path through the fuzz
         yarn_share = nodes.math("MULTIPLY", through, hemispherical_transmittance(depth), location=(-650, -1450))
+    forward = None
     if asymmetry != 0.0:
-        albedo = _fuzz_albedo_curve(nodes, mu, fuzz, depth, asymmetry) if fuzz > 0.0 else None
+        albedo, forward = _fuzz_lobe_curves(nodes, mu, fuzz, depth, asymmetry) if fuzz > 0.0 else (None, None)
     elif depth > 0.0:
         albedo = _fuzz_layer_albedo(nodes, mu, through, fuzz, depth) if fuzz > 0.0 else None
     else:
@@ -256,40 +258,55 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
         albedo = nodes.math("MULTIPLY_ADD", nodes.math("MULTIPLY", mu, log, location=(-500, -1300)), -0.5 * fuzz,
                             0.5 * fuzz, location=(-350, -1300))
     if fuzz > 0.0:
-        colour = nodes.math("MULTIPLY", albedo, face_on_side, location=(-200, -1300))
         tint = tuple(fuzz_tint(specular))
-        if tint != (1.0, 1.0, 1.0):  # dyed surface fibres (FuzzTint)
-            colour = nodes.vector_math("MULTIPLY", colour, tint, location=(-50, -1300)).outputs[0]
-        closures.append(nodes.node("ShaderNodeBsdfDiffuse", (100, -1300), {"Color": colour, "Normal": toward}
-                                   ).outputs[0])
+        for weight, y in ((albedo, -1300), (forward, -1150)):
+            if weight is None:
+                continue
+            colour = nodes.math("MULTIPLY", weight, face_on_side, location=(-200, y))
+            if tint != (1.0, 1.0, 1.0):  # dyed surface fibres (FuzzTint)
+                colour = nodes.vector_math("MULTIPLY", colour, tint, location=(-50, y)).outputs[0]
+            if weight is albedo:
+                lobe = nodes.node("ShaderNodeBsdfDiffuse", (100, y), {"Color": colour, "Normal": toward})
+            else:  # the forward lobe: Glossy BSDF, no Fresnel factor, roughness² the Beckmann slope
+                lobe = nodes.node("ShaderNodeBsdfAnisotropic", (100, y),
+                                  {"Color": colour, "Normal": toward, "Roughness": math.sqrt(FUZZ_FORWARD_SLOPE),
+                                   "Anisotropy": 0.0}, distribution="BECKMANN")
+            closures.append(lobe.outputs[0])
     return closures, yarn_share
 
 
-#: Points of the Float Curve that holds a forward-scattering fuzz's directional albedo over μo
-#: (:func:`_fuzz_albedo_curve`), even in √μo where it bends most, toward grazing.
+#: Points of the Float Curves that hold a forward-scattering fuzz's lobe weights over μo
+#: (:func:`_fuzz_lobe_curves`), even in √μo where they bend most, toward grazing.
 FUZZ_CURVE_POINTS = 25
 
 
-def _fuzz_albedo_curve(nodes, mu, albedo: float, depth: float, asymmetry: float):
-    """The socket of the directional albedo at the view of a fuzz of albedo A, optical depth τ and
-    asymmetry g ≠ 0 (``cl_fuzz_albedo_at_view``; :func:`precompute.optics.lommel_seeliger.fuzz_albedo_at_view`):
-    the sum over light cosines and azimuths has no few-node form, so a Float Curve holds it at
-    :data:`FUZZ_CURVE_POINTS` cosines, linear between them (vector handles), read at μo."""
+def _fuzz_lobe_curves(nodes, mu, albedo: float, depth: float, asymmetry: float):
+    """The sockets of the weights of the diffuse and the forward lobe at the view of a fuzz of albedo
+    A, optical depth τ and asymmetry g ≠ 0 (``cl_fuzz_general_lobes``;
+    :func:`precompute.optics.lommel_seeliger.fuzz_general_lobes`): the sums over light cosines and
+    azimuths have no few-node form, so two Float Curves hold them at :data:`FUZZ_CURVE_POINTS` cosines,
+    linear between them (vector handles), read at μo."""
     import numpy as np
-    from precompute.optics.lommel_seeliger import fuzz_albedo_at_view
+    from precompute.optics.lommel_seeliger import fuzz_general_lobes
 
     cosines = np.linspace(0.0, 1.0, FUZZ_CURVE_POINTS) ** 2
-    values = fuzz_albedo_at_view(cosines, albedo, depth, asymmetry)
-    node = nodes.node("ShaderNodeFloatCurve", (-650, -1300), {"Value": mu})
+    return tuple(_float_curve(nodes, mu, cosines, values, (-650, y))
+                 for values, y in zip(fuzz_general_lobes(cosines, albedo, depth, asymmetry), (-1300, -1150)))
+
+
+def _float_curve(nodes, x, points_x, points_y, location):
+    """The socket of a Float Curve node through the points (``points_x``, ``points_y``), linear between
+    them (vector handles) and not clipped, read at the socket ``x``."""
+    node = nodes.node("ShaderNodeFloatCurve", location, {"Value": x})
     mapping = node.mapping
     mapping.use_clip = False
     curve = mapping.curves[0]
     while len(curve.points) > 2:
         curve.points.remove(curve.points[-1])
-    curve.points[0].location = (float(cosines[0]), float(values[0]))
-    curve.points[1].location = (float(cosines[-1]), float(values[-1]))
-    for x, y in zip(cosines[1:-1], values[1:-1]):
-        curve.points.new(float(x), float(y))
+    curve.points[0].location = (float(points_x[0]), float(points_y[0]))
+    curve.points[1].location = (float(points_x[-1]), float(points_y[-1]))
+    for px, py in zip(points_x[1:-1], points_y[1:-1]):
+        curve.points.new(float(px), float(py))
     for point in curve.points:
         point.handle_type = "VECTOR"
     mapping.update()

@@ -91,18 +91,34 @@ def cook_torrance(light, view, m: float = DEFAULT_SLOPE, n: float = DEFAULT_IOR)
     """:func:`cook_torrance_between`, vectorised: ``light`` and ``view`` are (..., 3) unit vectors
     (broadcast together) toward the light and the viewer; the BRDF (...), 1/sr, about +z."""
     light, view = np.broadcast_arrays(np.asarray(light, float), np.asarray(view, float))
+    return dielectric_fresnel(_cosine_with_half(light, view), n) * beckmann_reflection(light, view, m)
+
+
+def beckmann_reflection(light, view, m: float) -> np.ndarray:
+    """The Beckmann microfacet reflection of rms slope ``m`` without a Fresnel factor, D G / (4 (n·l)(n·v))
+    (…), 1/sr, about +z between unit directions ``light`` and ``view`` (…, 3) (broadcast together): the
+    module docstring's f_CT with F = 1, what Cycles' ``microfacet("beckmann", …)`` closure and its
+    Glossy BSDF (Beckmann, roughness √m) reflect; 0 unless both are above the plane."""
+    light, view = np.broadcast_arrays(np.asarray(light, float), np.asarray(view, float))
     nl, nv = light[..., 2], view[..., 2]
     above = (nl > 0.0) & (nv > 0.0)
-    half = light + view
-    norm = np.linalg.norm(half, axis=-1)
-    half = half / np.where(norm > 0.0, norm, 1.0)[..., None]
+    half = _half_vector(light, view)
     nh = np.clip(half[..., 2], 1e-9, 1.0)
-    c = np.clip(np.sum(view * half, axis=-1), 0.0, 1.0)
     tan2 = (1.0 - nh * nh) / (nh * nh)
     d = np.exp(-tan2 / (m * m)) / (math.pi * m * m * nh**4)
     g_att = 1.0 / (1.0 + _smith_lambda(nv, m) + _smith_lambda(nl, m))
     safe = np.where(above, 4.0 * nl * nv, 1.0)
-    return np.where(above, dielectric_fresnel(c, n) * d * g_att / safe, 0.0)
+    return np.where(above, d * g_att / safe, 0.0)
+
+
+def _half_vector(light: np.ndarray, view: np.ndarray) -> np.ndarray:
+    half = light + view
+    norm = np.linalg.norm(half, axis=-1)
+    return half / np.where(norm > 0.0, norm, 1.0)[..., None]
+
+
+def _cosine_with_half(light: np.ndarray, view: np.ndarray) -> np.ndarray:
+    return np.clip(np.sum(view * _half_vector(light, view), axis=-1), 0.0, 1.0)
 
 
 def dielectric_fresnel(cos_theta, n: float = DEFAULT_IOR) -> np.ndarray:
@@ -171,5 +187,5 @@ def fuzz_colour(record: Mapping) -> np.ndarray:
 
 __all__ = ["DEFAULT_FUZZ_ALBEDO", "DEFAULT_FUZZ_ASYMMETRY", "DEFAULT_FUZZ_DEPTH", "DEFAULT_FUZZ_TINT", "DEFAULT_IOR",
            "DEFAULT_SLOPE", "DEFAULT_WEIGHT", "FIT_TABLE", "FUZZ_SHAPE_KEYS", "SPECULAR_DEFAULTS", "cloth_specular",
-           "cook_torrance", "cook_torrance_between",
+           "beckmann_reflection", "cook_torrance", "cook_torrance_between",
            "dielectric_fresnel", "direction", "fuzz_colour", "fuzz_tint", "sheen_index", "specular_from_config"]

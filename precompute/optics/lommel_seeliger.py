@@ -52,6 +52,20 @@ with −l·v the cosine of the scattering angle between the light's way in and t
 :func:`precompute.optics.cook_torrance.fuzz_colour`), applied by the caller per channel.  The
 directional albedo of a phase function that is not isotropic depends on the azimuth:
 :func:`fuzz_albedo_at_view` sums over it too.
+
+**A forward lobe in the general modes.**  A diffuse lobe of the directional albedo a(μo) keeps the
+fuzz's light at each view but spreads it over every light: seen from a light low on the same side, a
+forward fuzz is brighter than it is, and at grazing views facing a light low on the far side, its
+rising forward peak is missing.  The general modes split a(μo) in two closures about the cloth
+normal: a diffuse lobe of weight d and a Beckmann reflection of rms slope :data:`FUZZ_FORWARD_SLOPE`
+without a Fresnel factor (:func:`precompute.optics.cook_torrance.beckmann_reflection`) of weight s,
+chosen so that both the light the fuzz returns and how much more of it comes from lights on the far
+side of the view than from lights on its own side are the fuzz's:
+
+    d + s a_m(μo) = a(μo),        s b_m(μo) = b(μo),        b = (a_far − a_near) / 2
+
+(:func:`fuzz_general_lobes`; a_m, b_m the lobe's, :func:`forward_lobe_albedos`, a diffuse lobe's
+b being 0), s held to [0, a / a_m].  An isotropic fuzz has b = 0: a diffuse lobe alone, as before.
 """
 
 from __future__ import annotations
@@ -60,6 +74,7 @@ import math
 
 import numpy as np
 
+from precompute.optics.cook_torrance import beckmann_reflection
 from precompute.optics.phase import henyey_greenstein_phase
 
 
@@ -153,12 +168,98 @@ def fuzz_albedo_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0, asymmetry
 
 
 def _azimuth_mean_phase(mu_i: np.ndarray, mu_o: np.ndarray, asymmetry: float, azimuths: int) -> np.ndarray:
-    """(…, nodes) the mean of :func:`fuzz_phase` over the azimuth between light and view, the light at
-    the cosines ``mu_i`` (nodes,), the view at ``mu_o`` (…): −l·v = −(μi μo + sin θi sin θo cos φ)."""
+    """(…, nodes) the mean of :func:`fuzz_phase` over the azimuth between light and view (:func:`_azimuth_phase`)."""
+    return _azimuth_phase(mu_i, mu_o, asymmetry, azimuths).mean(axis=-1)
+
+
+def _azimuth_phase(mu_i: np.ndarray, mu_o: np.ndarray, asymmetry: float, azimuths: int) -> np.ndarray:
+    """(…, nodes, azimuths) :func:`fuzz_phase` at ``azimuths`` midpoints φ on (0, π) between light and
+    view (φ < π/2 the view's side), the light at the cosines ``mu_i`` (nodes,), the view at ``mu_o``
+    (…): −l·v = −(μi μo + sin θi sin θo cos φ)."""
     phi = (np.arange(azimuths) + 0.5) * math.pi / azimuths
     sin_i, sin_o = np.sqrt(1.0 - mu_i ** 2), np.sqrt(1.0 - mu_o[..., None] ** 2)
     cos_scattering = -(mu_i * mu_o[..., None])[..., None] - (sin_i * sin_o)[..., None] * np.cos(phi)
-    return 4.0 * math.pi * henyey_greenstein_phase(cos_scattering, asymmetry).mean(axis=-1)
+    return 4.0 * math.pi * henyey_greenstein_phase(cos_scattering, asymmetry)
+
+
+def fuzz_albedo_sides_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0, asymmetry: float = 0.0,
+                              nodes: int = FUZZ_ALBEDO_NODES,
+                              azimuths: int = FUZZ_ALBEDO_AZIMUTHS) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`fuzz_albedo_at_view` (…) in two parts, (a_near, a_far): the light from lights on the view's
+    side of the cloth normal (azimuth from the view's within 90°) and from those on the far side, by the
+    same sums (``azimuths`` even: half of its midpoints each side); a_near = a_far for an isotropic fuzz."""
+    if azimuths % 2:
+        raise ValueError(f"azimuths must be even to split at 90°, not {azimuths}")
+    mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
+    mu_i, weight = fuzz_quadrature(nodes)
+    shade = 1.0 - fuzz_transmittance(mu_i, mu_o[..., None], depth) if depth > 0.0 else 1.0
+    layer = (shade * mu_i / (mu_i + mu_o[..., None]))[..., None]
+    phase = _azimuth_phase(mu_i, mu_o, asymmetry, azimuths)
+    half = azimuths // 2
+    sides = [np.sum(weight * np.mean(layer * part, axis=-1), axis=-1) * albedo / 4.0
+             for part in (phase[..., :half], phase[..., half:])]
+    return sides[0], sides[1]
+
+
+#: The rms slope of the general modes' forward lobe of a fuzz (``CL_FUZZ_FORWARD_SLOPE``): the fuzz's
+#: forward light rises toward grazing, most of it at the grazing mirror direction of the view.
+FUZZ_FORWARD_SLOPE = 0.5
+#: View angles, even in θo from 0 to 90°, at which ``osl/clothlight.h`` tabulates that lobe's albedos.
+FUZZ_FORWARD_POINTS = 17
+
+
+def forward_lobe_albedos(mu_o, slope: float = FUZZ_FORWARD_SLOPE, nodes: int = 48,
+                         azimuths: int = 96) -> tuple[np.ndarray, np.ndarray]:
+    """(a_m, b_m) (…) of the general modes' forward lobe at the view cosine ``mu_o`` (…): the directional
+    albedo of :func:`precompute.optics.cook_torrance.beckmann_reflection` of rms slope ``slope`` and half
+    its excess of light from lights on the far side of the normal over the view's side, by
+    ``nodes``-point Gauss–Legendre over μi and ``azimuths`` midpoints over (0, π) (even in azimuth)."""
+    mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
+    mu_i, weight = np.polynomial.legendre.leggauss(nodes)
+    mu_i, weight = 0.5 * (mu_i + 1.0), 0.5 * weight
+    phi = (np.arange(azimuths) + 0.5) * math.pi / azimuths
+    sin_i = np.sqrt(1.0 - mu_i ** 2)
+    light = np.stack([sin_i[:, None] * np.cos(phi), sin_i[:, None] * np.sin(phi),
+                      np.broadcast_to(mu_i[:, None], (nodes, azimuths))], axis=-1)
+    view = np.stack([-np.sqrt(1.0 - mu_o ** 2), np.zeros_like(mu_o), mu_o], axis=-1)
+    lobe = beckmann_reflection(light, view[..., None, None, :], slope) * (weight * mu_i)[:, None]
+    # azimuth 0 is the far side here: the view leans toward −x
+    far, near = (2.0 * math.pi / azimuths * lobe[..., part].sum(axis=(-2, -1))
+                 for part in (slice(0, azimuths // 2), slice(azimuths // 2, None)))
+    return far + near, 0.5 * (far - near)
+
+
+def forward_lobe_table(slope: float = FUZZ_FORWARD_SLOPE,
+                       points: int = FUZZ_FORWARD_POINTS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The view angles θo (radians), even from 0 to π/2, and (a_m, b_m) there (:func:`forward_lobe_albedos`):
+    the table the shader interpolates linearly in θo (``CL_FUZZ_FORWARD_ALBEDO``, ``CL_FUZZ_FORWARD_EXCESS``;
+    b_m falls as sin θo to 0 at normal view, which √μo or μo would miss)."""
+    angles = np.linspace(0.0, 0.5 * math.pi, points)
+    return (angles, *forward_lobe_albedos(np.cos(angles), slope))
+
+
+def _forward_lobe_at(mu_o: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    angles, albedo, excess = _FORWARD_LOBE_TABLE
+    angle = np.arccos(np.clip(mu_o, 0.0, 1.0))
+    return np.interp(angle, angles, albedo), np.interp(angle, angles, excess)
+
+
+def fuzz_general_lobes(mu_o, albedo: float = 1.0, depth: float = 0.0,
+                       asymmetry: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """The general modes' weights (d, s) (…) at the view cosine ``mu_o`` (…) of the fuzz's diffuse lobe
+    and of its forward lobe (module docstring): s = b / b_m held to [0, a / a_m], d = a − s a_m, with
+    (a_m, b_m) interpolated linearly in θo from :func:`forward_lobe_table`, as the shader does;
+    (:func:`fuzz_albedo_at_view`, 0) for an isotropic fuzz."""
+    if asymmetry == 0.0:
+        total = fuzz_albedo_at_view(mu_o, albedo, depth)
+        return total, np.zeros_like(total)
+    near, far = fuzz_albedo_sides_at_view(mu_o, albedo, depth, asymmetry)
+    lobe_albedo, lobe_excess = _forward_lobe_at(np.clip(np.asarray(mu_o, float), 1e-6, 1.0))
+    total = near + far
+    with np.errstate(divide="ignore", invalid="ignore"):
+        forward = np.where(lobe_excess > 0.0, 0.5 * (far - near) / np.where(lobe_excess > 0.0, lobe_excess, 1.0), 0.0)
+    forward = np.clip(forward, 0.0, total / lobe_albedo)
+    return np.maximum(total - forward * lobe_albedo, 0.0), forward
 
 
 def hemispherical_transmittance(depth: float, nodes: int = FUZZ_ALBEDO_NODES) -> float:
@@ -172,6 +273,9 @@ def hemispherical_transmittance(depth: float, nodes: int = FUZZ_ALBEDO_NODES) ->
     return float(np.sum(2.0 * weight * mu * np.exp(-depth / mu)))
 
 
-__all__ = ["FUZZ_ALBEDO_AZIMUTHS", "FUZZ_ALBEDO_NODES", "fuzz_albedo_at_view", "fuzz_brdf", "fuzz_phase",
-           "fuzz_quadrature", "fuzz_transmittance",
+_FORWARD_LOBE_TABLE = forward_lobe_table()
+
+__all__ = ["FUZZ_ALBEDO_AZIMUTHS", "FUZZ_ALBEDO_NODES", "FUZZ_FORWARD_POINTS", "FUZZ_FORWARD_SLOPE",
+           "forward_lobe_albedos", "forward_lobe_table", "fuzz_albedo_at_view", "fuzz_albedo_sides_at_view",
+           "fuzz_brdf", "fuzz_general_lobes", "fuzz_phase", "fuzz_quadrature", "fuzz_transmittance",
            "hemispherical_transmittance", "lommel_seeliger", "lommel_seeliger_albedo"]

@@ -247,7 +247,7 @@ def _forward_lobe_at(mu_o: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def fuzz_general_lobes(mu_o, albedo: float = 1.0, depth: float = 0.0,
                        asymmetry: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """The general modes' weights (d, s) (…) at the view cosine ``mu_o`` (…) of the fuzz's diffuse lobe
-    and of its forward lobe (module docstring): s = b / b_m held to [0, a / a_m], d = a − s a_m, with
+    and of its forward lobe (module docstring): s = b / b_m held to [0, a / a_m], d = a − s a_m (≥ 0), with
     (a_m, b_m) interpolated linearly in θo from :func:`forward_lobe_table`, as the shader does;
     (:func:`fuzz_albedo_at_view`, 0) for an isotropic fuzz."""
     if asymmetry == 0.0:

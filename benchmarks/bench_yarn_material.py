@@ -1,6 +1,7 @@
 """Render cost of the yarn material vs a Principled BSDF with sheen on the same woven mesh
-(same resolution, samples, lights; CPU), on the default preset, on a yarn of fibres in air and on the
-paper's literal medium.  A general mode in plain Cycles nodes (SVM) has its OSL general mode timed beside it.
+(same resolution, samples, lights; CPU), on the particle red the figures were measured on, on the
+default (a yarn of fibres in air under a fuzz that scatters forward), on another yarn of fibres in air and
+on the paper's literal medium.  A general mode in plain Cycles nodes (SVM) has its OSL general mode timed beside it.
 Target (issues 7, 18): at most 2x."""
 
 import pathlib
@@ -17,16 +18,18 @@ from clothlight.blender.sample_object import build_sample_object
 from clothlight.weave import WeaveParameters
 from clothlight.yarn_tables import yarn_tables_from_bake
 from precompute.bake import bake
+from precompute.optics.medium import DEFAULT_PRESET
 from render_cost import light_and_camera, print_render_cost
 from subject_medium import SUBJECT_PRESET
 
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-material-"))
 grids = ["transport.angular_resolution=8", "transport.incidence_resolution=9"]
 # The particle red the figures were measured on (a scattering medium: almost no light crosses a yarn
-# unscattered), a yarn of fibres in air (its unscattered light, straight through the yarn's thin edges,
-# one more closure in plain nodes) and the paper's literal medium (a tinted glass rod: the unscattered
-# light is most of its red, and its closures cost).
-PRESETS = (SUBJECT_PRESET, "blue_cotton", "paper_2008")
+# unscattered), the default and blue_cotton, yarns of fibres in air (their unscattered light, straight
+# through the yarn's thin edges, one more closure in plain nodes; the default's fuzz scatters forward,
+# one more again, and its weights are read from Float Curves) and the paper's literal medium (a tinted
+# glass rod: the unscattered light is most of its red, and its closures cost).
+PRESETS = (SUBJECT_PRESET, DEFAULT_PRESET, "blue_cotton", "paper_2008")
 tables = {name: yarn_tables_from_bake(bake(name, grids, paths_per_cell=500, cache_dir=out / "cache").folder)
           for name in PRESETS}
 

@@ -221,12 +221,10 @@ float cl_fuzz_yarn_share(float mu_o, float depth)
     return exp(-depth / max(mu_o, 1e-6)) * cl_fuzz_hemispherical_transmittance(depth);
 }
 
-// The fuzz's directional albedo at the view cosine mu_o (> 0) (fuzz_albedo_at_view): isotropic and
-// without a depth the semi-infinite law's closed form (A / 2)(1 - mu_o ln(1 + 1/mu_o)); else
-// (A / 2) int_0^1 mu_i (1 - T(mu_i, mu_o)) P(mu_i) / (mu_i + mu_o) dmu_i by the nodes above, P the
-// phase function's mean over the azimuth between light and view (1 when isotropic).
-// The same in two parts (fuzz_albedo_sides_at_view): the light from lights on the view's side of
-// Nc (azimuth from the view's within 90 degrees: the first half of the azimuths) and from the far side.
+// The fuzz's directional albedo at the view cosine mu_o (> 0) in two parts (fuzz_albedo_sides_at_view):
+// the light from lights on the view's side of Nc (azimuth from the view's within 90 degrees: the first
+// half of the azimuths) and from the far side, each (A / 2) int_0^1 mu_i (1 - T) P / (mu_i + mu_o) dmu_i
+// over its side, P the phase function's mean over that side's azimuths.
 void cl_fuzz_albedo_sides_at_view(float mu_o, float albedo, float depth, float g, output float near,
                                   output float far)
 {
@@ -253,6 +251,10 @@ void cl_fuzz_albedo_sides_at_view(float mu_o, float albedo, float depth, float g
     far *= 0.5 * albedo / CL_FUZZ_AZIMUTHS;
 }
 
+// The fuzz's directional albedo at the view cosine mu_o (> 0) (fuzz_albedo_at_view): isotropic and
+// without a depth the semi-infinite law's closed form (A / 2)(1 - mu_o ln(1 + 1/mu_o)); else
+// (A / 2) int_0^1 mu_i (1 - T(mu_i, mu_o)) P(mu_i) / (mu_i + mu_o) dmu_i by the nodes above, P the
+// phase function's mean over the azimuth between light and view (1 when isotropic).
 float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth, float g)
 {
     if (depth <= 0.0 && g == 0.0)
@@ -288,7 +290,7 @@ float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth, float g)
                                 0.4867906180148369}
 
 // The weights of the general modes' diffuse lobe and forward lobe of the fuzz at the view cosine mu_o
-// (fuzz_general_lobes): the lobe's share s = b / b_m held to [0, a / a_m], the diffuse d = a - s a_m,
+// (fuzz_general_lobes): the lobe's share s = b / b_m held to [0, a / a_m], the diffuse d = a - s a_m (>= 0),
 // so that both the light the fuzz returns at this view and its excess from far-side lights are kept.
 void cl_fuzz_general_lobes(float mu_o, float albedo, float depth, float g, output float diffuse_weight,
                            output float forward_weight)

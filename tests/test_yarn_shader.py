@@ -394,6 +394,29 @@ def test_a_fuzz_that_scatters_forward_is_its_phase_function_in_sun_mode_and_lean
 
 
 @pytest.mark.blender
+@pytest.mark.parametrize("plain_nodes", [False, True], ids=["osl", "plain-nodes"])
+def test_a_forward_fuzz_seen_from_the_lights_side_is_dimmer_than_a_diffuse_lobe_in_the_general_mode(
+        tmp_path, synthetic_tables, plain_nodes):
+    # The sun low on the view's own side (back-scattering): the forward lobe sends it little, so the
+    # general mode gives less than the diffuse lobe of the same albedo did, and is closer to the fuzz.
+    tables = without_unscattered_light(synthetic_tables[0], tmp_path)
+    view, sun_direction = unit([0.8, 0.05, 0.6]), unit([0.85, -0.05, 0.52])
+    tint = np.array([FORWARD_RED_FUZZ["fuzz_tint_red"], 1.0, FORWARD_RED_FUZZ["fuzz_tint_blue"]])
+    asymmetry = FORWARD_RED_FUZZ["fuzz_asymmetry"]
+    means = [render_patch_mean(tmp_path, tables, GENERAL_MODE, view, sun_direction, plain_nodes=plain_nodes,
+                               fuzz_albedo=albedo, fuzz_depth=FUZZ_DEPTH, fuzz_shape=FORWARD_RED_FUZZ)
+             for albedo in (FUZZ_ALBEDO, 0.0)]
+    fuzz = (means[0] - means[1]) / SUN_IRRADIANCE
+    diffuse, forward = fuzz_general_lobes(view[2], FUZZ_ALBEDO, FUZZ_DEPTH, asymmetry)
+    expected = (diffuse / math.pi + forward * beckmann_reflection(sun_direction, view, FUZZ_FORWARD_SLOPE)
+                ) * sun_direction[2] * tint
+    diffuse_alone = fuzz_albedo_at_view(view[2], FUZZ_ALBEDO, FUZZ_DEPTH, asymmetry) / math.pi * sun_direction[2]
+    exact = fuzz_brdf(sun_direction, view, FUZZ_ALBEDO, FUZZ_DEPTH, asymmetry) * sun_direction[2]
+    assert expected[1] < 0.7 * diffuse_alone and abs(expected[1] - exact) < 0.5 * abs(diffuse_alone - exact)
+    np.testing.assert_allclose(fuzz, expected, rtol=0.02)
+
+
+@pytest.mark.blender
 @pytest.mark.parametrize("view, sun_direction", [
     (unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])),  # the sun in front: yarn, fuzz and sheen
     (direction(30.0, 60.0), unit(ballistic.unscattered_paths(direction(30.0, 60.0), INDEX)[0][0])),  # behind

@@ -4,7 +4,7 @@ clothlight.validate`` report against the measurement it was run with, from its `
 Per material: the report's relative RMS per channel and pooled over RGB and its shape correlation in
 red (the 56 in-plane views of the paper's sweep the fabric has), the backscatter in red at the views of
 :data:`precompute.fit.figures.BACKSCATTER_VIEWS` and the off-specular B/R and G/R medians, model over
-measured, at the views :func:`precompute.fit.figures.off_specular_views` picks (θi ≤ 45°, |θv| ≥ 20°,
+measured, at the views :func:`precompute.fit.figures.off_specular` picks (θi ≤ 45°, |θv| ≥ 20°,
 20° from the mirror), the figures ``scripts/fabric_figures.py`` gives of the fit's forward model.
 
     python -m clothlight.validate --tables BAKE --material yarn \\
@@ -23,8 +23,7 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from precompute.fit.figures import (BACKSCATTER_VIEWS, OFF_SPECULAR_MAX_INCIDENCE_DEG,
-                                    OFF_SPECULAR_MIN_ANGLE_DEG)
+from precompute.fit.figures import BACKSCATTER_VIEWS, off_specular
 
 
 def rendered_figures(results: dict) -> dict[str, dict]:
@@ -35,8 +34,7 @@ def rendered_figures(results: dict) -> dict[str, dict]:
     for name, material in results["materials"].items():
         model = {(v["theta_i_deg"], v["theta_v_deg"]): np.array(v["brdf_rgb"]) for v in material["views"]}
         shared = [key for key in model if key in measured]
-        off = [(ti, tv) for ti, tv in shared if ti <= OFF_SPECULAR_MAX_INCIDENCE_DEG
-               and abs(tv) >= OFF_SPECULAR_MIN_ANGLE_DEG and abs(tv - ti) >= OFF_SPECULAR_MIN_ANGLE_DEG]
+        off = [(ti, tv) for ti, tv in shared if off_specular(ti, tv)]
 
         def median_ratio(channel: int) -> float:
             return float(np.median([model[k][channel] / model[k][0] for k in off])

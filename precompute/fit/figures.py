@@ -51,12 +51,16 @@ def in_plane(views: Views) -> np.ndarray:
 
 
 def off_specular_views(views: Views) -> np.ndarray:
-    """(M,) mask of the off-specular views: in the plane of incidence, θi ≤ 45°, |θv| ≥ 20° and at
-    least 20° from the mirror direction (θv = θi beyond the normal), where a cloth's colour is its
-    diffuse colour, not its sheen's."""
-    theta_i = views.angles_deg[:, 0]
-    signed = views.signed_view_deg
-    return (in_plane(views) & (theta_i <= OFF_SPECULAR_MAX_INCIDENCE_DEG + TOLERANCE_DEG)
+    """(M,) mask of the off-specular views: in the plane of incidence and :func:`off_specular`."""
+    return in_plane(views) & off_specular(views.angles_deg[:, 0], views.signed_view_deg)
+
+
+def off_specular(theta_i_deg, signed_view_deg) -> np.ndarray:
+    """(…) whether in-plane views at θi ``theta_i_deg`` and signed θv ``signed_view_deg`` (degrees, negative
+    on the light's side) are off-specular: θi ≤ 45°, |θv| ≥ 20° and at least 20° from the mirror
+    direction (θv = θi beyond the normal), where a cloth's colour is its diffuse colour, not its sheen's."""
+    theta_i, signed = np.asarray(theta_i_deg, float), np.asarray(signed_view_deg, float)
+    return ((theta_i <= OFF_SPECULAR_MAX_INCIDENCE_DEG + TOLERANCE_DEG)
             & (np.abs(signed) >= OFF_SPECULAR_MIN_ANGLE_DEG - TOLERANCE_DEG)
             & (np.abs(signed - theta_i) >= OFF_SPECULAR_MIN_ANGLE_DEG - TOLERANCE_DEG))
 

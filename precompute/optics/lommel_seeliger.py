@@ -70,6 +70,7 @@ b being 0), s held to [0, a / a_m].  An isotropic fuzz has b = 0: a diffuse lobe
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -154,22 +155,18 @@ def fuzz_albedo_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0, asymmetry
     """The directional albedo (…) of :func:`fuzz_brdf` at the view cosine ``mu_o`` (…): ∫ f_layer μi
     dω_i = (A/2) ∫₀¹ μi (1 − T) / (μi + μo) dμi, by ``nodes``-point Gauss–Legendre over μi;
     :func:`lommel_seeliger_albedo` for ``depth`` 0.  A fuzz of ``asymmetry`` g ≠ 0 weighs each μi by
-    the mean of :func:`fuzz_phase` over the light's azimuth, ``azimuths`` midpoints on (0, π) (the
-    semi-infinite law too, then: the closed form is the isotropic one's)."""
+    the mean of :func:`fuzz_phase` over the light's azimuth, ``azimuths`` midpoints on (0, π), the sum
+    of :func:`fuzz_albedo_sides_at_view` (the semi-infinite law too, then: the closed form is the
+    isotropic one's)."""
     if depth <= 0.0 and asymmetry == 0.0:
         return lommel_seeliger_albedo(mu_o, albedo)
+    if asymmetry != 0.0:
+        near, far = fuzz_albedo_sides_at_view(mu_o, albedo, depth, asymmetry, nodes, azimuths)
+        return near + far
     mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
     mu_i, weight = fuzz_quadrature(nodes)
-    shade = 1.0 - fuzz_transmittance(mu_i, mu_o[..., None], depth) if depth > 0.0 else 1.0
-    layer = shade * mu_i / (mu_i + mu_o[..., None])
-    if asymmetry != 0.0:
-        layer = layer * _azimuth_mean_phase(mu_i, mu_o, asymmetry, azimuths)
+    layer = (1.0 - fuzz_transmittance(mu_i, mu_o[..., None], depth)) * mu_i / (mu_i + mu_o[..., None])
     return 0.5 * albedo * np.sum(weight * layer, axis=-1)
-
-
-def _azimuth_mean_phase(mu_i: np.ndarray, mu_o: np.ndarray, asymmetry: float, azimuths: int) -> np.ndarray:
-    """(…, nodes) the mean of :func:`fuzz_phase` over the azimuth between light and view (:func:`_azimuth_phase`)."""
-    return _azimuth_phase(mu_i, mu_o, asymmetry, azimuths).mean(axis=-1)
 
 
 def _azimuth_phase(mu_i: np.ndarray, mu_o: np.ndarray, asymmetry: float, azimuths: int) -> np.ndarray:
@@ -215,8 +212,7 @@ def forward_lobe_albedos(mu_o, slope: float = FUZZ_FORWARD_SLOPE, nodes: int = 4
     its excess of light from lights on the far side of the normal over the view's side, by
     ``nodes``-point Gauss–Legendre over μi and ``azimuths`` midpoints over (0, π) (even in azimuth)."""
     mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
-    mu_i, weight = np.polynomial.legendre.leggauss(nodes)
-    mu_i, weight = 0.5 * (mu_i + 1.0), 0.5 * weight
+    mu_i, weight = fuzz_quadrature(nodes)
     phi = (np.arange(azimuths) + 0.5) * math.pi / azimuths
     sin_i = np.sqrt(1.0 - mu_i ** 2)
     light = np.stack([sin_i[:, None] * np.cos(phi), sin_i[:, None] * np.sin(phi),
@@ -238,8 +234,13 @@ def forward_lobe_table(slope: float = FUZZ_FORWARD_SLOPE,
     return (angles, *forward_lobe_albedos(np.cos(angles), slope))
 
 
+@functools.cache
+def _shader_forward_lobe_table() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return forward_lobe_table()  # on first use, not at import: a few tens of milliseconds
+
+
 def _forward_lobe_at(mu_o: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    angles, albedo, excess = _FORWARD_LOBE_TABLE
+    angles, albedo, excess = _shader_forward_lobe_table()
     angle = np.arccos(np.clip(mu_o, 0.0, 1.0))
     return np.interp(angle, angles, albedo), np.interp(angle, angles, excess)
 
@@ -272,8 +273,6 @@ def hemispherical_transmittance(depth: float, nodes: int = FUZZ_ALBEDO_NODES) ->
     mu, weight = fuzz_quadrature(nodes)
     return float(np.sum(2.0 * weight * mu * np.exp(-depth / mu)))
 
-
-_FORWARD_LOBE_TABLE = forward_lobe_table()
 
 __all__ = ["FUZZ_ALBEDO_AZIMUTHS", "FUZZ_ALBEDO_NODES", "FUZZ_FORWARD_POINTS", "FUZZ_FORWARD_SLOPE",
            "forward_lobe_albedos", "forward_lobe_table", "fuzz_albedo_at_view", "fuzz_albedo_sides_at_view",

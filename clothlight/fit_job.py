@@ -55,8 +55,8 @@ FREE_PARAMETERS = (
     ("specular_weight", "Sheen Weight", "", 0.0, 3.0, "the Cook–Torrance sheen's weight (the shader's SpecularWeight)"),
     ("specular_slope", "Sheen Slope", "", 0.05, 1.0,
      "the Cook–Torrance sheen's Beckmann rms slope m (the shader's Slope; the paper's 0.8)"),
-    ("fuzz_albedo", "Fuzz Albedo", "", 0.0, 0.5,
-     "the white first reflections of the cloth's surface fibres (the shader's FuzzAlbedo)"),
+    ("fuzz_albedo", "Fuzz Albedo", "", 0.0, 1.0,
+     "the single-scattering albedo of the cloth's surface fibres (the shader's FuzzAlbedo)"),
     ("fuzz_depth", "Fuzz Depth", "", 0.0, 2.0,
      "the optical depth of the surface fibres, which shade the yarn beneath them (the shader's FuzzDepth; 0: none)"),
     ("fuzz_asymmetry", "Fuzz Asymmetry", "", -0.5, 0.9,
@@ -65,6 +65,8 @@ FREE_PARAMETERS = (
      "the fuzz's red albedo over its green (the shader's FuzzTint)"),
     ("fuzz_tint_blue", "Fuzz Blue Tint", "", 0.1, 10.0,
      "the fuzz's blue albedo over its green (the shader's FuzzTint)"),
+    ("fuzz_flatness", "Fuzz Flatness", "", 0.0, 1.0,
+     "the share of the surface fibres lying in the cloth's plane (the shader's FuzzFlatness; 0: every direction)"),
 )
 
 #: precompute's command-line names of a fit's inputs → the request's (messages name what the user set).

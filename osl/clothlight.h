@@ -161,7 +161,10 @@ closure color cl_cloth_specular_closure(vector Nc, normal N, float weight, float
 // fuzz of the presets before it had a depth (a veneer over an unshaded cloth): each function below
 // then answers exactly what the shader did before.  Fibres scatter forward: the fuzz's phase function
 // is a Henyey-Greenstein one of asymmetry g (0: isotropic, the law itself), and dyed fibres colour
-// what they scatter (the shader's FuzzTint multiplies what these functions return).
+// what they scatter (the shader's FuzzTint multiplies what these functions return).  Fibres lie flat:
+// a fuzz whose fibres lie in the cloth's plane in the share `flatness` shows a direction at the cosine
+// mu the area s(mu) of what it shows the normal (cl_fuzz_projected_area), its slant optical depth
+// depth s(mu) / mu, and scatters in proportion to s_i s_o (0: every function as without it).
 
 // Gauss-Legendre nodes over mu_i in (0, 1) of the general mode's sums (FUZZ_ALBEDO_NODES): numpy's
 // leggauss(8) mapped by mu = (x + 1) / 2, weight w / 2 (tests/test_osl_twins.py holds them to it).
@@ -183,10 +186,32 @@ float cl_fuzz_phase(float cos_between, float g)
     return (1.0 - g * g) / pow(1.0 + g * g + 2.0 * g * cos_between, 1.5);
 }
 
-// T(mu_i, mu_o) = exp(-depth (1/|mu_i| + 1/|mu_o|)) (fuzz_transmittance): Beer-Lambert along both
+// s(mu) = 1 - flatness (1 - (2/pi) E(sqrt(1 - mu^2))) (fuzz_projected_area): the area the fuzz shows a
+// direction at the cosine mu with Nc over the area it shows Nc, E the complete elliptic integral of
+// the second kind by the arithmetic-geometric mean (six steps: within 3e-6 of SciPy's ellipe for
+// |mu| >= 1e-3, below which s has reached its grazing value).  1 for no flatness.
+float cl_fuzz_projected_area(float mu, float flatness)
+{
+    if (flatness == 0.0)
+        return 1.0;
+    float a = 1.0;
+    float b = max(abs(mu), 1e-3);
+    float sum = 0.5 * (1.0 - b * b);
+    float power = 0.5;
+    for (int n = 0; n < 6; n++) {
+        float c = 0.5 * (a - b);
+        b = sqrt(a * b);
+        a -= c;
+        power *= 2.0;
+        sum += power * c * c;
+    }
+    return 1.0 - flatness * (1.0 - (1.0 - sum) / a);
+}
+
+// T(mu_i, mu_o) = exp(-depth (s_i/|mu_i| + s_o/|mu_o|)) (fuzz_transmittance): Beer-Lambert along both
 // slant paths through the fuzz.  |mu|: light from behind the cloth crosses the fuzz on its back
 // face.  1 without a fuzz depth, 0 at a grazing cosine (an endless path).
-float cl_fuzz_transmittance(float mu_i, float mu_o, float depth)
+float cl_fuzz_transmittance(float mu_i, float mu_o, float depth, float flatness)
 {
     if (depth <= 0.0)
         return 1.0;
@@ -194,12 +219,12 @@ float cl_fuzz_transmittance(float mu_i, float mu_o, float depth)
     float b = abs(mu_o);
     if (a <= 0.0 || b <= 0.0)
         return 0.0;
-    return exp(-depth * (1.0 / a + 1.0 / b));
+    return exp(-depth * (cl_fuzz_projected_area(a, flatness) / a + cl_fuzz_projected_area(b, flatness) / b));
 }
 
-// The share of a uniform sky's light that crosses the fuzz one way, int_0^1 2 mu exp(-depth/mu) dmu
-// = 2 E3(depth) (hemispherical_transmittance), by the nodes above; 1 without a fuzz depth.
-float cl_fuzz_hemispherical_transmittance(float depth)
+// The share of a uniform sky's light that crosses the fuzz one way, int_0^1 2 mu exp(-depth s(mu)/mu) dmu
+// (= 2 E3(depth) for no flatness; hemispherical_transmittance), by the nodes above; 1 without a fuzz depth.
+float cl_fuzz_hemispherical_transmittance(float depth, float flatness)
 {
     if (depth <= 0.0)
         return 1.0;
@@ -207,37 +232,46 @@ float cl_fuzz_hemispherical_transmittance(float depth)
     float weight[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_WEIGHTS;
     float sum = 0.0;
     for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++)
-        sum += weight[k] * mu[k] * exp(-depth / mu[k]);
+        sum += weight[k] * mu[k] * exp(-depth * cl_fuzz_projected_area(mu[k], flatness) / mu[k]);
     return 2.0 * sum;
 }
 
 // The general modes' share of the yarns' light under the fuzz at the view cosine mu_o: they have no
 // light direction to take T at, so the light's way in is the sky's, the hemispherical
-// transmittance, and its way out the view's own path, exp(-depth / mu_o).  1 without a fuzz depth.
-float cl_fuzz_yarn_share(float mu_o, float depth)
+// transmittance, and its way out the view's own path, exp(-depth s(mu_o) / mu_o).  1 without a fuzz depth.
+float cl_fuzz_yarn_share(float mu_o, float depth, float flatness)
 {
     if (depth <= 0.0)
         return 1.0;
-    return exp(-depth / max(mu_o, 1e-6)) * cl_fuzz_hemispherical_transmittance(depth);
+    float b = max(mu_o, 1e-6);
+    return exp(-depth * cl_fuzz_projected_area(b, flatness) / b) * cl_fuzz_hemispherical_transmittance(depth, flatness);
+}
+
+// (1 - T) mu_i s_i s_o / (s_i mu_o + s_o mu_i), the layer's light from the light cosine mu_i toward
+// the view cosine mu_o per A/2, 1 - T being 1 without a fuzz depth (fuzz_albedo_at_view's integrand).
+float cl_fuzz_layer_at(float mu_i, float mu_o, float depth, float flatness)
+{
+    float s_i = cl_fuzz_projected_area(mu_i, flatness);
+    float s_o = cl_fuzz_projected_area(mu_o, flatness);
+    float shade = depth > 0.0 ? 1.0 - cl_fuzz_transmittance(mu_i, mu_o, depth, flatness) : 1.0;
+    return shade * mu_i * s_i * s_o / (s_i * mu_o + s_o * mu_i);
 }
 
 // The fuzz's directional albedo at the view cosine mu_o (> 0) in two parts (fuzz_albedo_sides_at_view):
 // the light from lights on the view's side of Nc (azimuth from the view's within 90 degrees: the first
-// half of the azimuths) and from the far side, each (A / 2) int_0^1 mu_i (1 - T) P / (mu_i + mu_o) dmu_i
-// over its side, P the phase function's mean over that side's azimuths.
-void cl_fuzz_albedo_sides_at_view(float mu_o, float albedo, float depth, float g, output float near,
-                                  output float far)
+// half of the azimuths) and from the far side, each (A / 2) int_0^1 cl_fuzz_layer_at P dmu_i over its
+// side, P the phase function's mean over that side's azimuths.
+void cl_fuzz_albedo_sides_at_view(float mu_o, float albedo, float depth, float g, float flatness,
+                                  output float near, output float far)
 {
     float mu[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_COSINES;
     float weight[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_WEIGHTS;
-    float view_path = depth > 0.0 ? exp(-depth / mu_o) : 0.0;
     float sin_o = sqrt(max(1.0 - mu_o * mu_o, 0.0));
     near = 0.0;
     far = 0.0;
     for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++) {
         float sin_i = sqrt(1.0 - mu[k] * mu[k]);
-        float shade = depth > 0.0 ? 1.0 - exp(-depth / mu[k]) * view_path : 1.0;
-        float layer = weight[k] * mu[k] * shade / (mu[k] + mu_o);
+        float layer = weight[k] * cl_fuzz_layer_at(mu[k], mu_o, depth, flatness);
         for (int j = 0; j < CL_FUZZ_AZIMUTHS; j++) {
             float phi = (j + 0.5) * M_PI / CL_FUZZ_AZIMUTHS;
             float term = layer * cl_fuzz_phase(mu[k] * mu_o + sin_i * sin_o * cos(phi), g);
@@ -251,25 +285,24 @@ void cl_fuzz_albedo_sides_at_view(float mu_o, float albedo, float depth, float g
     far *= 0.5 * albedo / CL_FUZZ_AZIMUTHS;
 }
 
-// The fuzz's directional albedo at the view cosine mu_o (> 0) (fuzz_albedo_at_view): isotropic and
-// without a depth the semi-infinite law's closed form (A / 2)(1 - mu_o ln(1 + 1/mu_o)); else
-// (A / 2) int_0^1 mu_i (1 - T(mu_i, mu_o)) P(mu_i) / (mu_i + mu_o) dmu_i by the nodes above, P the
-// phase function's mean over the azimuth between light and view (1 when isotropic).
-float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth, float g)
+// The fuzz's directional albedo at the view cosine mu_o (> 0) (fuzz_albedo_at_view): isotropic, flat
+// in no share and without a depth the semi-infinite law's closed form (A / 2)(1 - mu_o ln(1 + 1/mu_o));
+// else (A / 2) int_0^1 cl_fuzz_layer_at P(mu_i) dmu_i by the nodes above, P the phase function's mean
+// over the azimuth between light and view (1 when isotropic).
+float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth, float g, float flatness)
 {
-    if (depth <= 0.0 && g == 0.0)
+    if (depth <= 0.0 && g == 0.0 && flatness == 0.0)
         return 0.5 * albedo * (1.0 - mu_o * log(1.0 + 1.0 / mu_o));
     if (g != 0.0) {
         float near, far;
-        cl_fuzz_albedo_sides_at_view(mu_o, albedo, depth, g, near, far);
+        cl_fuzz_albedo_sides_at_view(mu_o, albedo, depth, g, flatness, near, far);
         return near + far;
     }
     float mu[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_COSINES;
     float weight[CL_FUZZ_ALBEDO_NODES] = CL_FUZZ_NODE_WEIGHTS;
-    float view_path = exp(-depth / mu_o);
     float sum = 0.0;
     for (int k = 0; k < CL_FUZZ_ALBEDO_NODES; k++)
-        sum += weight[k] * mu[k] * (1.0 - exp(-depth / mu[k]) * view_path) / (mu[k] + mu_o);
+        sum += weight[k] * cl_fuzz_layer_at(mu[k], mu_o, depth, flatness);
     return 0.5 * albedo * sum;
 }
 
@@ -292,16 +325,16 @@ float cl_fuzz_albedo_at_view(float mu_o, float albedo, float depth, float g)
 // The weights of the general modes' diffuse lobe and forward lobe of the fuzz at the view cosine mu_o
 // (fuzz_general_lobes): the lobe's share s = b / b_m held to [0, a / a_m], the diffuse d = a - s a_m (>= 0),
 // so that both the light the fuzz returns at this view and its excess from far-side lights are kept.
-void cl_fuzz_general_lobes(float mu_o, float albedo, float depth, float g, output float diffuse_weight,
-                           output float forward_weight)
+void cl_fuzz_general_lobes(float mu_o, float albedo, float depth, float g, float flatness,
+                           output float diffuse_weight, output float forward_weight)
 {
     forward_weight = 0.0;
     if (g == 0.0) {
-        diffuse_weight = cl_fuzz_albedo_at_view(mu_o, albedo, depth, g);
+        diffuse_weight = cl_fuzz_albedo_at_view(mu_o, albedo, depth, g, flatness);
         return;
     }
     float near, far;
-    cl_fuzz_albedo_sides_at_view(mu_o, albedo, depth, g, near, far);
+    cl_fuzz_albedo_sides_at_view(mu_o, albedo, depth, g, flatness, near, far);
     float lobe_albedo[CL_FUZZ_FORWARD_POINTS] = CL_FUZZ_FORWARD_ALBEDO;
     float lobe_excess[CL_FUZZ_FORWARD_POINTS] = CL_FUZZ_FORWARD_EXCESS;
     float x = acos(clamp(mu_o, 0.0, 1.0)) / M_PI_2 * (CL_FUZZ_FORWARD_POINTS - 1);
@@ -315,31 +348,31 @@ void cl_fuzz_general_lobes(float mu_o, float albedo, float depth, float g, outpu
     diffuse_weight = max(total - forward_weight * a_m, 0.0);
 }
 
-// The fuzz's radiance per irradiance (1/sr): the Lommel-Seeliger law A / (4 pi (mu_i + mu_o)) about
-// Nc times its phase function of asymmetry g (cl_fuzz_phase) times (n_c.l), cut on yarn faces turned
-// away from the light as cl_cloth_specular is; a fuzz of depth reflects (1 - T) of it, the light it
-// does not let through (fuzz_brdf).
-float cl_cloth_fuzz(vector Nc, vector N_out, vector L, vector V, float albedo, float depth, float g)
+// The fuzz's radiance per irradiance (1/sr): the Lommel-Seeliger law A s_i s_o / (4 pi (s_i mu_o +
+// s_o mu_i)) about Nc (s = 1 for no flatness) times its phase function of asymmetry g (cl_fuzz_phase)
+// times (n_c.l), cut on yarn faces turned away from the light as cl_cloth_specular is; a fuzz of depth
+// reflects (1 - T) of it, the light it does not let through (fuzz_brdf).
+float cl_cloth_fuzz(vector Nc, vector N_out, vector L, vector V, float albedo, float depth, float g, float flatness)
 {
     float mu_i = dot(Nc, L);
     float mu_o = dot(Nc, V);
     if (dot(N_out, L) <= 0.0 || mu_i <= 0.0 || mu_o <= 0.0)
         return 0.0;
-    float law = albedo * cl_fuzz_phase(dot(L, V), g) * mu_i / (4.0 * M_PI * (mu_i + mu_o));
-    return depth > 0.0 ? law * (1.0 - cl_fuzz_transmittance(mu_i, mu_o, depth)) : law;
+    return albedo * cl_fuzz_phase(dot(L, V), g) * cl_fuzz_layer_at(mu_i, mu_o, depth, flatness) / (4.0 * M_PI);
 }
 
 // The general modes' closures for the fuzz: a diffuse lobe about Nc and, for a fuzz that scatters
 // forward, a Beckmann lobe about Nc, of the weights cl_fuzz_general_lobes gives at this view (an
 // isotropic fuzz: the diffuse lobe of its directional albedo alone).  Faces turned below the cloth
 // plane get none, as for the sheen.
-closure color cl_cloth_fuzz_closure(vector Nc, normal N, vector V, float albedo, float depth, float g)
+closure color cl_cloth_fuzz_closure(vector Nc, normal N, vector V, float albedo, float depth, float g,
+                                    float flatness)
 {
     float mu_o = max(dot(Nc, V), 1e-6);
     closure color lobe = 0;
     if (albedo > 0.0 && dot(N, Nc) > 0.0) {
         float diffuse_weight, forward_weight;
-        cl_fuzz_general_lobes(mu_o, albedo, depth, g, diffuse_weight, forward_weight);
+        cl_fuzz_general_lobes(mu_o, albedo, depth, g, flatness, diffuse_weight, forward_weight);
         lobe = diffuse_weight * diffuse(Nc);
         if (forward_weight > 0.0)
             lobe += forward_weight * microfacet("beckmann", Nc, CL_FUZZ_FORWARD_SLOPE, 1.0, 0);

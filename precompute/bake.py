@@ -131,7 +131,8 @@ SPECULAR_BOUNDS = {"specular_weight": Bound(f"{FIT_TABLE}.specular_weight", 0.0,
                    "fuzz_depth": Bound(f"{FIT_TABLE}.fuzz_depth", 0.0, float("inf"), high_open=True),
                    "fuzz_asymmetry": Bound(f"{FIT_TABLE}.fuzz_asymmetry", -1.0, 1.0, low_open=True, high_open=True),
                    "fuzz_tint_red": Bound(f"{FIT_TABLE}.fuzz_tint_red", 0.0, float("inf"), high_open=True),
-                   "fuzz_tint_blue": Bound(f"{FIT_TABLE}.fuzz_tint_blue", 0.0, float("inf"), high_open=True)}
+                   "fuzz_tint_blue": Bound(f"{FIT_TABLE}.fuzz_tint_blue", 0.0, float("inf"), high_open=True),
+                   "fuzz_flatness": Bound(f"{FIT_TABLE}.fuzz_flatness", 0.0, 1.0)}
 #: Version of the spectral stage's file (spectral.npz); bump when its content changes meaning.
 SPECTRAL_FORMAT = "clothlight-spectral/2"
 #: Incidence samples per side of the sphere square that the closure fit uses in all (cells ×

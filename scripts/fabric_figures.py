@@ -28,7 +28,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 def bake_folder_brdf(model, folder: pathlib.Path):
     """The cloth BRDF (n_views + 2, 3) of a bake folder's tables through ``model``'s response, with
-    the specular term and the fuzz (albedo, depth, asymmetry, tint) its summary records."""
+    the specular term and the fuzz (albedo, depth, asymmetry, tint, flatness) its summary records."""
     from clothlight.validation.response import TableLayout
     from precompute.optics import ballistic
     from precompute.optics.cook_torrance import fuzz_tint
@@ -46,7 +46,8 @@ def bake_folder_brdf(model, folder: pathlib.Path):
                             fuzz_albedo=float(specular["fuzz_albedo"]),
                             fuzz_depth=float(specular.get("fuzz_depth", 0.0)),
                             fuzz_asymmetry=float(specular.get("fuzz_asymmetry", 0.0)),
-                            fuzz_tint=fuzz_tint(specular))
+                            fuzz_tint=fuzz_tint(specular),
+                            fuzz_flatness=float(specular.get("fuzz_flatness", 0.0)))
 
 
 def bake_folder_sample(config: dict, folder: pathlib.Path) -> dict:

@@ -225,7 +225,7 @@ def test_the_specular_term_is_profiled_when_the_model_splits_it_off(measured):
     assert result.specular == pytest.approx({"specular_weight": result.parameters["specular_weight"],
                                              "specular_slope": result.parameters["specular_slope"], "fuzz_albedo": 0.0,
                                              "fuzz_depth": 0.0, "fuzz_asymmetry": 0.0, "fuzz_tint_red": 1.0,
-                                             "fuzz_tint_blue": 1.0})
+                                             "fuzz_tint_blue": 1.0, "fuzz_flatness": 0.0})
     candidates = [e for e in result.history if e.kind == "candidate"]
     assert len({e.parameters["specular_slope"] for e in candidates}) > 1  # fitted per candidate
     assert len(model.calls) <= 150
@@ -286,16 +286,17 @@ class ShadedTerms:
                                            np.cos(a[:, t])], -1) for t, p in ((0, 1), (2, 3)))
         self.specular = specular
 
-    def __call__(self, weight, slope, fuzz_albedo=0.0, fuzz_depth=0.0, fuzz_asymmetry=0.0, fuzz_tint=(1.0, 1.0, 1.0)):
+    def __call__(self, weight, slope, fuzz_albedo=0.0, fuzz_depth=0.0, fuzz_asymmetry=0.0, fuzz_tint=(1.0, 1.0, 1.0),
+                 fuzz_flatness=0.0):
         from precompute.optics.lommel_seeliger import fuzz_brdf
 
-        fuzz = fuzz_brdf(self.light, self.view, fuzz_albedo, fuzz_depth, fuzz_asymmetry)
+        fuzz = fuzz_brdf(self.light, self.view, fuzz_albedo, fuzz_depth, fuzz_asymmetry, fuzz_flatness)
         return self.specular(weight, slope)[:, None] + fuzz[:, None] * np.asarray(fuzz_tint)
 
-    def transmittance(self, fuzz_depth):
+    def transmittance(self, fuzz_depth, fuzz_flatness=0.0):
         from precompute.optics.lommel_seeliger import fuzz_transmittance
 
-        return fuzz_transmittance(self.light[:, 2], self.view[:, 2], fuzz_depth)
+        return fuzz_transmittance(self.light[:, 2], self.view[:, 2], fuzz_depth, fuzz_flatness)
 
 
 class ShadedForward(SyntheticForward):
@@ -402,3 +403,25 @@ def test_the_profiled_sheen_is_the_best_in_its_box_not_the_nearest_basin():
     values = fit_profiled_specular(objective, np.zeros((2, 3)), terms, profiled, {})
     unit = np.array([p.to_unit(values[p.name]) for p in profiled])
     np.testing.assert_allclose(unit, narrow, atol=0.02)
+
+
+def test_a_fuzz_of_fibres_lying_flat_is_recovered_by_the_profile(tmp_path):
+    # at the true medium the profile finds the share of the fuzz's fibres that lie flat beside its
+    # albedo, its depth and the sheen; a fuzz of fibres in every direction cannot take its place
+    views = real_fabric_views()
+    truth = ShadedForward(views, noisy=False)
+    config, _ = truth_config()
+    sheen = {"specular_weight": TRUTH["specular_weight"], "specular_slope": TRUTH["specular_slope"]}
+    fuzz = {"fuzz_albedo": 0.7, "fuzz_depth": 0.3, "fuzz_flatness": 0.9}
+    rgb = truth(config, relative_error=0.0, seed=0, **sheen, **fuzz)
+    measurement = load_measurement(write_csv(tmp_path / "flat_fuzz.csv", views, rgb))
+    objective = Objective(measurement, split_views(measurement))
+    medium, terms = truth.parts(config, relative_error=0.0, seed=0)
+    start = {**SPECULAR_DEFAULTS, "fuzz_depth": 0.0}
+    profiled = [PARAMETERS[name] for name in (*sheen, *fuzz)]
+    values = fit_profiled_specular(objective, medium, terms, profiled, start)
+    for name, value in {**sheen, **fuzz}.items():
+        assert values[name] == pytest.approx(value, rel=0.02), name
+    every_way = fit_profiled_specular(objective, medium, terms, profiled[:4], start)
+    assert objective(cloth_from_parts(medium, terms, {**start, **every_way})) > 10 * objective(
+        cloth_from_parts(medium, terms, {**start, **values})) + 1e-3

@@ -90,7 +90,8 @@ def test_apply_sets_the_preset_paths_and_leaves_the_input_alone():
     assert scatterers["diameter_nm"] == 300.0
     assert new["dye"]["weight_percent"] == 4.0 and new["yarn"]["radius_mm"] == 0.2
     assert keywords == {"specular_weight": 1.0, "specular_slope": 0.3, "fuzz_albedo": 0.0, "fuzz_depth": 0.0,
-                        "fuzz_asymmetry": 0.0, "fuzz_tint_red": 1.0, "fuzz_tint_blue": 1.0}  # the shader's defaults
+                        "fuzz_asymmetry": 0.0, "fuzz_tint_red": 1.0, "fuzz_tint_blue": 1.0,
+                        "fuzz_flatness": 0.0}  # the shader's defaults
     assert next(t for t in config["particles"] if t["name"] == "voids")["volume_fraction"] == 0.02
     assert config["dye"]["weight_percent"] == 3.0
 

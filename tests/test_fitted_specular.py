@@ -52,7 +52,7 @@ def test_the_default_record_is_the_papers_from_the_cook_torrance_twin():
                                   "source": f"default (paper §6: m = {DEFAULT_SLOPE:g})"}
     assert bake_module.FIT_DEFAULTS == {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE,
                                         "fuzz_albedo": 0.0, "fuzz_depth": 0.0, "fuzz_asymmetry": 0.0,
-                                        "fuzz_tint_red": 1.0, "fuzz_tint_blue": 1.0}
+                                        "fuzz_tint_red": 1.0, "fuzz_tint_blue": 1.0, "fuzz_flatness": 0.0}
 
 
 def paper_medium():

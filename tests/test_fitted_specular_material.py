@@ -27,7 +27,7 @@ def test_the_yarn_material_takes_the_recorded_specular_or_the_defaults(tmp_path)
         material = build_yarn_material(tables, name="test fitted specular")
         node, inputs = shader_node(material), specular_inputs(material)
         assert inputs == {**{key: pytest.approx(expected[key], rel=1e-6) for key in ("weight", "slope")},
-                          "fuzz_albedo": 0.0, "fuzz_depth": 0.0, "fuzz_asymmetry": 0.0}
+                          "fuzz_albedo": 0.0, "fuzz_depth": 0.0, "fuzz_asymmetry": 0.0, "fuzz_flatness": 0.0}
         assert tuple(node.inputs["FuzzTint"].default_value)[:3] == (1.0, 1.0, 1.0)  # white: none recorded
         # the sheen's Fresnel index apart from the host's, which refracts the unscattered light
         assert node.inputs["SpecularIOR"].default_value == pytest.approx(expected["index"], rel=1e-6)

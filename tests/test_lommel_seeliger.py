@@ -1,6 +1,7 @@
 """The fuzz term (precompute.optics.lommel_seeliger): Hapke's single-scattering law of an isotropic
 layer, its closed-form directional albedo against a quadrature of its definition, a layer that
-scatters forward, the general modes' two lobes for it, and what the fit's cloth response adds with it."""
+scatters forward, the general modes' two lobes for it, a layer of fibres that lie flat, and what the
+fit's cloth response adds with it."""
 
 from __future__ import annotations
 
@@ -12,8 +13,8 @@ import pytest
 from precompute.optics.cook_torrance import beckmann_reflection, direction
 from precompute.optics.lommel_seeliger import (FUZZ_FORWARD_SLOPE, forward_lobe_albedos, fuzz_albedo_at_view,
                                               fuzz_albedo_sides_at_view, fuzz_brdf, fuzz_general_lobes, fuzz_phase,
-                                              fuzz_transmittance, hemispherical_transmittance, lommel_seeliger,
-                                              lommel_seeliger_albedo)
+                                              fuzz_projected_area, fuzz_transmittance, hemispherical_transmittance,
+                                              lommel_seeliger, lommel_seeliger_albedo)
 from precompute.optics.phase import henyey_greenstein_phase
 
 
@@ -167,3 +168,64 @@ def test_an_isotropic_fuzz_is_a_diffuse_lobe_alone_and_the_general_mode_as_befor
     np.testing.assert_array_equal(diffuse, fuzz_albedo_at_view(mu_o, 0.4, 0.3))
     # a fuzz that scatters back has less far-side light than near: no forward lobe either
     np.testing.assert_array_equal(fuzz_general_lobes(mu_o, 0.4, 0.3, -0.3)[1], 0.0)
+
+
+@pytest.mark.parametrize("theta_deg", [0.0, 20.0, 45.0, 60.0, 80.0, 90.0])
+def test_fibres_lying_flat_show_a_direction_the_mean_of_their_shadows_over_the_azimuth(theta_deg):
+    # The area a cylinder along t shows the direction ω is ∝ |ω × t|: its mean over fibres along every
+    # azimuth in the plane, by a midpoint rule, over its value along the normal (1), is s(μ) for F = 1.
+    count = 100_000
+    psi = (np.arange(count) + 0.5) * 2.0 * math.pi / count
+    fibres = np.stack([np.cos(psi), np.sin(psi), np.zeros(count)], axis=-1)
+    omega = direction(theta_deg, 30.0)
+    mean_shadow = np.mean(np.linalg.norm(np.cross(omega, fibres), axis=-1))
+    mu = math.cos(math.radians(theta_deg))
+    assert fuzz_projected_area(mu, 1.0) == pytest.approx(mean_shadow, rel=1e-6)
+    # a share F lying flat, the rest in every direction (which show every direction alike)
+    assert fuzz_projected_area(mu, 0.4) == pytest.approx(0.6 + 0.4 * mean_shadow, rel=1e-6)
+    assert fuzz_projected_area(-mu, 0.4) == fuzz_projected_area(mu, 0.4)
+    np.testing.assert_array_equal(fuzz_projected_area(np.array([mu, 0.2]), 0.0), 1.0)
+
+
+def test_a_flat_fuzz_is_reciprocal_returns_at_most_its_albedo_and_is_the_fuzz_before_at_no_flatness():
+    light, view = direction(np.array([10.0, 50.0, 80.0]), 0.0), direction(np.array([0.0, 40.0, 70.0]), 90.0)
+    for depth in (0.0, 0.3):
+        np.testing.assert_array_equal(fuzz_brdf(light, view, 0.3, depth, 0.4, 0.0),
+                                      fuzz_brdf(light, view, 0.3, depth, 0.4))
+        np.testing.assert_allclose(fuzz_brdf(light, view, 0.3, depth, 0.4, 0.8),
+                                   fuzz_brdf(view, light, 0.3, depth, 0.4, 0.8))
+    mu = np.linspace(0.02, 1.0, 25)
+    assert np.all(fuzz_albedo_at_view(mu, 1.0, 5.0, flatness=1.0) <= 1.0)
+    np.testing.assert_allclose(fuzz_transmittance(light[:, 2], view[:, 2], 0.3, 0.0), fuzz_transmittance(
+        light[:, 2], view[:, 2], 0.3))
+
+
+@pytest.mark.parametrize("depth", [0.0, 0.3])
+@pytest.mark.parametrize("asymmetry", [0.0, 0.5])
+def test_a_flat_fuzzs_sums_are_the_integrals_they_stand_for(depth, asymmetry):
+    from scipy.integrate import dblquad, quad
+
+    flatness = 0.8
+    assert hemispherical_transmittance(0.3, flatness) == pytest.approx(quad(
+        lambda mu: 2.0 * mu * math.exp(-0.3 * float(fuzz_projected_area(mu, flatness)) / mu), 0.0, 1.0)[0], rel=1e-3)
+    for mu_o in (0.1, 0.5, 0.9):
+        view = np.array([math.sqrt(1.0 - mu_o**2), 0.0, mu_o])
+
+        def integrand(phi, mu):
+            light = np.array([math.sqrt(1.0 - mu**2) * math.cos(phi), math.sqrt(1.0 - mu**2) * math.sin(phi), mu])
+            return 2.0 * mu * float(fuzz_brdf(light, view, 0.4, depth, asymmetry, flatness))
+
+        exact = dblquad(integrand, 0.0, 1.0, 0.0, math.pi, epsabs=1e-7)[0]
+        assert fuzz_albedo_at_view(mu_o, 0.4, depth, asymmetry, flatness) == pytest.approx(exact, rel=5e-3)
+
+
+def test_a_flat_fuzz_seen_and_lit_low_shows_less_of_itself_than_a_fuzz_of_fibres_in_every_direction():
+    # The same layer along the normal; at θi = θv = 60° toward the light it shows 0.77 of the area: its
+    # light there, over its light at normal light and view, is less; its slant paths are shorter, so it
+    # lets more of the yarn through.
+    normal, low_light, low_view = direction(0.0, 0.0), direction(60.0, 0.0), direction(60.0, 0.0)
+    ratios = [float(fuzz_brdf(low_light, low_view, 0.5, 0.2, 0.0, flatness)
+                    / fuzz_brdf(normal, normal, 0.5, 0.2, 0.0, flatness)) for flatness in (0.0, 1.0)]
+    assert ratios[1] < 0.85 * ratios[0]
+    assert fuzz_brdf(normal, normal, 0.5, 0.2, 0.0, 1.0) == pytest.approx(fuzz_brdf(normal, normal, 0.5, 0.2))
+    assert fuzz_transmittance(0.5, 0.5, 0.2, 1.0) > fuzz_transmittance(0.5, 0.5, 0.2)

@@ -22,6 +22,7 @@ from precompute.optics.lommel_seeliger import (
     fuzz_albedo_at_view,
     fuzz_brdf,
     fuzz_general_lobes,
+    fuzz_projected_area,
     fuzz_transmittance,
     hemispherical_transmittance,
     lommel_seeliger,
@@ -349,6 +350,8 @@ def test_the_fuzz_is_lommel_seeliger_in_sun_mode_and_its_albedo_in_the_general_m
 
 #: A fuzz of optical depth (the specular record's fuzz_depth) and its albedo, for the tests of its shading.
 FUZZ_DEPTH, FUZZ_ALBEDO = 0.3, 0.4
+#: The share of a fuzz's fibres that lie flat, for the tests of a fuzz of fibres lying flat.
+FLAT_FUZZ = 0.8
 #: A fuzz of dyed fibres that scatter forward: its asymmetry and tint (the record's keys).
 FORWARD_RED_FUZZ = {"fuzz_asymmetry": 0.6, "fuzz_tint_red": 2.0, "fuzz_tint_blue": 0.5}
 
@@ -421,46 +424,53 @@ def test_a_forward_fuzz_seen_from_the_lights_side_is_dimmer_than_a_diffuse_lobe_
     (unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])),  # the sun in front: yarn, fuzz and sheen
     (direction(30.0, 60.0), unit(ballistic.unscattered_paths(direction(30.0, 60.0), INDEX)[0][0])),  # behind
 ], ids=["front", "behind-unscattered"])
+@pytest.mark.parametrize("flatness", [0.0, FLAT_FUZZ], ids=["fibres-every-way", "fibres-lying-flat"])
 def test_a_fuzz_of_depth_lets_through_t_of_the_yarn_and_reflects_the_rest_in_sun_mode(tmp_path, synthetic_tables,
-                                                                                       view, sun_direction):
+                                                                                       view, sun_direction, flatness):
     # The fuzz stands between the yarns and the sun, and between them and the viewer: the yarn's ρ and
-    # its unscattered light are T(μi, μo) of what they were, T = exp(−τ (1/|μi| + 1/μo)) (the sun from
-    # behind crosses the fuzz of the back face), the fuzz reflects (1 − T) of its Lommel–Seeliger law,
-    # and the sheen, the top fibres' own reflection, is not shaded.
+    # its unscattered light are T(μi, μo) of what they were, T = exp(−τ (s_i/|μi| + s_o/μo)) (the sun
+    # from behind crosses the fuzz of the back face; s = 1 unless its fibres lie flat), the fuzz reflects
+    # (1 − T) of its Lommel–Seeliger law, and the sheen, the top fibres' own reflection, is not shaded.
     tables, atlas, _, attenuation = synthetic_tables
+    shape = {"fuzz_flatness": flatness} if flatness else {}
     measured = render_patch_mean(tmp_path, tables, SUN_MODE, view, sun_direction, specular_weight=1.0,
-                                 fuzz_albedo=FUZZ_ALBEDO, fuzz_depth=FUZZ_DEPTH) / SUN_IRRADIANCE
+                                 fuzz_albedo=FUZZ_ALBEDO, fuzz_depth=FUZZ_DEPTH, fuzz_shape=shape) / SUN_IRRADIANCE
     mu_i = sun_direction[2]
-    transmittance = fuzz_transmittance(mu_i, view[2], FUZZ_DEPTH)
+    transmittance = fuzz_transmittance(mu_i, view[2], FUZZ_DEPTH, flatness)
     assert 0.2 < transmittance < 0.7
     yarn = spec_sun_rho(atlas, attenuation, sun_direction, view)
     sheen = cook_torrance_between(sun_direction, view, 0.8, INDEX) * max(mu_i, 0.0)
-    expected = transmittance * yarn + fuzz_brdf(sun_direction, view, FUZZ_ALBEDO, FUZZ_DEPTH) * mu_i + sheen
+    fuzz = fuzz_brdf(sun_direction, view, FUZZ_ALBEDO, FUZZ_DEPTH, 0.0, flatness)
+    expected = transmittance * yarn + fuzz * mu_i + sheen
     np.testing.assert_allclose(measured, expected, rtol=1e-3, atol=1e-6)
     if mu_i < 0.0:  # light through the yarn: its unscattered part, shaded too, is most of it
         assert interpolate_unscattered_rho(attenuation, INDEX, sun_direction, view, SPREAD).max() > yarn.max() / 2
     else:
-        assert sheen > 1e-2 and fuzz_brdf(sun_direction, view, FUZZ_ALBEDO, FUZZ_DEPTH) > 1e-3
+        assert sheen > 1e-2 and fuzz > 1e-3
 
 
 @pytest.mark.blender
 @pytest.mark.parametrize("plain_nodes", [False, True], ids=["osl", "plain-nodes"])
+@pytest.mark.parametrize("flatness", [0.0, FLAT_FUZZ], ids=["fibres-every-way", "fibres-lying-flat"])
 def test_a_fuzz_of_depth_in_the_general_mode_is_its_albedo_at_the_view_over_the_shaded_yarn(
-        tmp_path, synthetic_tables, plain_nodes):
-    # No light direction: the yarn's lobes take exp(−τ/μo) times the hemispherical transmittance, the
-    # fuzz's diffuse lobe the directional albedo of a layer of depth τ at the view (Gauss–Legendre over
-    # μi), and the sheen is as without a fuzz.
+        tmp_path, synthetic_tables, plain_nodes, flatness):
+    # No light direction: the yarn's lobes take exp(−τ s(μo)/μo) times the hemispherical transmittance,
+    # the fuzz's diffuse lobe the directional albedo of a layer of depth τ at the view (Gauss–Legendre
+    # over μi; s = 1 unless its fibres lie flat), and the sheen is as without a fuzz.
     tables = without_unscattered_light(synthetic_tables[0], tmp_path)
     weights = synthetic_tables[2][0]  # every exit cell's lobe weights are the same
     view, sun_direction = unit([0.8, 0.1, 0.6]), unit([-0.5, 0.1, 0.86])
+    shape = {"fuzz_flatness": flatness} if flatness else {}
     measured = render_patch_mean(tmp_path, tables, GENERAL_MODE, view, sun_direction, specular_weight=1.0,
-                                 fuzz_albedo=FUZZ_ALBEDO, fuzz_depth=FUZZ_DEPTH, plain_nodes=plain_nodes)
+                                 fuzz_albedo=FUZZ_ALBEDO, fuzz_depth=FUZZ_DEPTH, plain_nodes=plain_nodes,
+                                 fuzz_shape=shape)
     assert (shader_node(bpy.context.active_object.active_material) is None) == plain_nodes
     mu_i, mu_o = sun_direction[2], view[2]
-    share = math.exp(-FUZZ_DEPTH / mu_o) * hemispherical_transmittance(FUZZ_DEPTH)
+    share = (math.exp(-FUZZ_DEPTH * float(fuzz_projected_area(mu_o, flatness)) / mu_o)
+             * hemispherical_transmittance(FUZZ_DEPTH, flatness))
     assert 0.2 < share < 0.7
     yarn = lobe_responses(view, sun_direction) @ weights
-    fuzz = fuzz_albedo_at_view(mu_o, FUZZ_ALBEDO, FUZZ_DEPTH) / math.pi * mu_i
+    fuzz = fuzz_albedo_at_view(mu_o, FUZZ_ALBEDO, FUZZ_DEPTH, flatness=flatness) / math.pi * mu_i
     assert fuzz < 0.8 * lommel_seeliger_albedo(mu_o, FUZZ_ALBEDO) / math.pi * mu_i
     sheen = cook_torrance_between(sun_direction, view, 0.8, INDEX) * mu_i
     np.testing.assert_allclose(measured, SUN_IRRADIANCE * (share * yarn + fuzz + sheen), rtol=0.01, atol=1e-4)

@@ -43,7 +43,7 @@ LOBE_SHAPE_SOCKETS = {
 #: ``fuzz_depth`` or ``fuzz_asymmetry`` (a bake from before them) has a fuzz of depth 0, the veneer it was
 #: rendered with, isotropic.
 SPECULAR_SOCKETS = {"SpecularWeight": "weight", "Slope": "slope", "FuzzAlbedo": "fuzz_albedo",
-                    "FuzzDepth": "fuzz_depth", "FuzzAsymmetry": "fuzz_asymmetry"}
+                    "FuzzDepth": "fuzz_depth", "FuzzAsymmetry": "fuzz_asymmetry", "FuzzFlatness": "fuzz_flatness"}
 
 #: cloth_yarn.osl's inputs for the closure-mixture weights, keyed by lobe in the order of the tiles
 #: of ``lobes.exr`` (precompute.tables.closure_fit.LOBES).

@@ -211,8 +211,9 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
     at the view (:func:`precompute.optics.lommel_seeliger.fuzz_albedo_at_view`), shared with a forward
     Glossy lobe where it scatters forward (:func:`precompute.optics.lommel_seeliger.fuzz_general_lobes`).
     Returns the list of their sockets and the socket of the share of the yarn's light that crosses a fuzz of optical
-    depth τ > 0 (the specular record's ``fuzz_depth``) both ways, exp(−τ/μo) times the hemispherical
-    transmittance (``cl_fuzz_yarn_share``), or None for τ = 0: no node for it."""
+    depth τ > 0 (the specular record's ``fuzz_depth``) both ways, exp(−τ s(μo)/μo) times the hemispherical
+    transmittance (``cl_fuzz_yarn_share``; s the fuzz's projected area, 1 unless its fibres lie flat), or None
+    for τ = 0: no node for it."""
     from precompute.optics.cook_torrance import fuzz_tint
     from precompute.optics.lommel_seeliger import FUZZ_FORWARD_SLOPE, hemispherical_transmittance
     from precompute.tables import folder as table_folder
@@ -221,6 +222,7 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
     fuzz = float(specular.get("fuzz_albedo", 0.0))
     depth = float(specular.get("fuzz_depth", 0.0))
     asymmetry = float(specular.get("fuzz_asymmetry", 0.0))
+    flatness = float(specular.get("fuzz_flatness", 0.0))
     if weight <= 0.0 and fuzz <= 0.0 and depth <= 0.0:
         return [], None
     cosine = nodes.vector_math("DOT_PRODUCT", cloth_normal, toward_view, location=(-1400, -700)).outputs["Value"]
@@ -243,14 +245,20 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
     mu = nodes.math("MAXIMUM", nodes.math("ABSOLUTE", cosine, location=(-1250, -1300)), 1e-6, location=(-1100, -1300))
     yarn_share = None
     if depth > 0.0:
-        through = nodes.math("EXPONENT", nodes.math("DIVIDE", -depth, mu, location=(-950, -1450)),
-                             location=(-800, -1450))  # exp(−τ/μo), the view's path through the fuzz
-        yarn_share = nodes.math("MULTIPLY", through, hemispherical_transmittance(depth), location=(-650, -1450))
+        # μo / s(μo): the view's slant path through the fuzz is τ over it
+        path = mu if flatness == 0.0 else nodes.math("DIVIDE", mu, _projected_area_curve(nodes, mu, flatness),
+                                                     location=(-1100, -1450))
+        through = nodes.math("EXPONENT", nodes.math("DIVIDE", -depth, path, location=(-950, -1450)),
+                             location=(-800, -1450))  # exp(−τ s/μo), the view's path through the fuzz
+        yarn_share = nodes.math("MULTIPLY", through, hemispherical_transmittance(depth, flatness),
+                                location=(-650, -1450))
     forward = None
-    if asymmetry != 0.0:
-        albedo, forward = _fuzz_lobe_curves(nodes, mu, fuzz, depth, asymmetry) if fuzz > 0.0 else (None, None)
+    if fuzz <= 0.0:
+        albedo = None
+    elif asymmetry != 0.0 or flatness != 0.0:
+        albedo, forward = _fuzz_lobe_curves(nodes, mu, fuzz, depth, asymmetry, flatness)
     elif depth > 0.0:
-        albedo = _fuzz_layer_albedo(nodes, mu, through, fuzz, depth) if fuzz > 0.0 else None
+        albedo = _fuzz_layer_albedo(nodes, mu, through, fuzz, depth)
     else:
         # a(μo) = (A/2)(1 − μo ln(1 + 1/μo)), the semi-infinite layer's
         log = nodes.math("LOGARITHM", nodes.math("ADD", 1.0, nodes.math("DIVIDE", 1.0, mu, location=(-950, -1300)),
@@ -280,18 +288,34 @@ def _cloth_sheen(nodes, tables, normal, toward_view, cloth_normal):
 FUZZ_CURVE_POINTS = 25
 
 
-def _fuzz_lobe_curves(nodes, mu, albedo: float, depth: float, asymmetry: float):
+def _fuzz_lobe_curves(nodes, mu, albedo: float, depth: float, asymmetry: float, flatness: float):
     """The sockets of the weights of the diffuse and the forward lobe at the view of a fuzz of albedo
-    A, optical depth τ and asymmetry g ≠ 0 (``cl_fuzz_general_lobes``;
-    :func:`precompute.optics.lommel_seeliger.fuzz_general_lobes`): the sums over light cosines and
-    azimuths have no few-node form, so two Float Curves hold them at :data:`FUZZ_CURVE_POINTS` cosines,
-    linear between them (vector handles), read at μo."""
-    import numpy as np
+    A, optical depth τ, asymmetry g and flatness F, one of them not 0 (``cl_fuzz_general_lobes``;
+    :func:`precompute.optics.lommel_seeliger.fuzz_general_lobes`; no forward lobe, None, for g = 0):
+    the sums over light cosines and azimuths have no few-node form, so Float Curves hold them at
+    :data:`FUZZ_CURVE_POINTS` cosines, linear between them (vector handles), read at μo."""
     from precompute.optics.lommel_seeliger import fuzz_general_lobes
 
-    cosines = np.linspace(0.0, 1.0, FUZZ_CURVE_POINTS) ** 2
-    return tuple(_float_curve(nodes, mu, cosines, values, (-650, y))
-                 for values, y in zip(fuzz_general_lobes(cosines, albedo, depth, asymmetry), (-1300, -1150)))
+    cosines = _curve_cosines()
+    diffuse, forward = fuzz_general_lobes(cosines, albedo, depth, asymmetry, flatness)
+    return (_float_curve(nodes, mu, cosines, diffuse, (-650, -1300)),
+            _float_curve(nodes, mu, cosines, forward, (-650, -1150)) if asymmetry != 0.0 else None)
+
+
+def _curve_cosines():
+    import numpy as np
+
+    return np.linspace(0.0, 1.0, FUZZ_CURVE_POINTS) ** 2
+
+
+def _projected_area_curve(nodes, mu, flatness: float):
+    """The socket of s(μo), the area a fuzz of flatness F shows the view over what it shows the normal
+    (``cl_fuzz_projected_area``; :func:`precompute.optics.lommel_seeliger.fuzz_projected_area`), a Float
+    Curve through it at :data:`FUZZ_CURVE_POINTS` cosines."""
+    from precompute.optics.lommel_seeliger import fuzz_projected_area
+
+    cosines = _curve_cosines()
+    return _float_curve(nodes, mu, cosines, fuzz_projected_area(cosines, flatness), (-1250, -1500))
 
 
 def _float_curve(nodes, x, points_x, points_y, location):

@@ -215,20 +215,21 @@ class ForwardModel:
 
 class ClothTerms:
     """The cloth-scale terms of one candidate at a forward model's views (:meth:`ForwardModel.parts`):
-    ``terms(weight, slope, fuzz_albedo=0, fuzz_depth=0, fuzz_asymmetry=0, fuzz_tint=(1, 1, 1))`` what the
-    sheen and the fuzz add (n_views, 3), 1/sr, RGB, and ``terms.transmittance(fuzz_depth)`` (n_views,)
-    the share of the yarn's light that crosses the fuzz (:mod:`precompute.optics.lommel_seeliger`)."""
+    ``terms(weight, slope, fuzz_albedo=0, fuzz_depth=0, fuzz_asymmetry=0, fuzz_tint=(1, 1, 1),
+    fuzz_flatness=0)`` what the sheen and the fuzz add (n_views, 3), 1/sr, RGB, and
+    ``terms.transmittance(fuzz_depth, fuzz_flatness)`` (n_views,) the share of the yarn's light that
+    crosses the fuzz (:mod:`precompute.optics.lommel_seeliger`)."""
 
     def __init__(self, model: ForwardModel, index: float):
         self.model, self.index = model, index
 
     def __call__(self, weight: float, slope: float, fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0,
-                 fuzz_asymmetry: float = 0.0, fuzz_tint=(1.0, 1.0, 1.0)) -> np.ndarray:
+                 fuzz_asymmetry: float = 0.0, fuzz_tint=(1.0, 1.0, 1.0), fuzz_flatness: float = 0.0) -> np.ndarray:
         return self.model._mean_over_azimuths(self.model.response.specular_brdf(
-            weight, slope, self.index, fuzz_albedo, fuzz_depth, fuzz_asymmetry, fuzz_tint))
+            weight, slope, self.index, fuzz_albedo, fuzz_depth, fuzz_asymmetry, fuzz_tint, fuzz_flatness))
 
-    def transmittance(self, fuzz_depth: float) -> np.ndarray:
-        return self.model._mean_over_azimuths(self.model.response.fuzz_transmittance(fuzz_depth))
+    def transmittance(self, fuzz_depth: float, fuzz_flatness: float = 0.0) -> np.ndarray:
+        return self.model._mean_over_azimuths(self.model.response.fuzz_transmittance(fuzz_depth, fuzz_flatness))
 
 
 def _yarn_and_grids(config: dict, medium, optics, seed: int, paths: int):

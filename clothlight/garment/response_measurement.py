@@ -51,8 +51,8 @@ class YarnLookup:
     (``brdf.exr``), the unscattered light's attenuation (M, C) (``unscattered.exr``), their layout
     (grids, host index, the sun mode's cone) and the specular term's ``weight``, ``slope`` (Beckmann
     rms slope m) and ``ior``, as the shader's sockets hold them (float32), and its fuzz albedo, depth,
-    asymmetry and tint (``FuzzAlbedo``, ``FuzzDepth``, ``FuzzAsymmetry``, ``FuzzTint`` RGB,
-    :mod:`precompute.optics.lommel_seeliger`), part of ρ as the sun mode emits it."""
+    asymmetry, tint and flatness (``FuzzAlbedo``, ``FuzzDepth``, ``FuzzAsymmetry``, ``FuzzTint`` RGB,
+    ``FuzzFlatness``, :mod:`precompute.optics.lommel_seeliger`), part of ρ as the sun mode emits it."""
 
     atlas: np.ndarray
     attenuation: np.ndarray
@@ -62,6 +62,7 @@ class YarnLookup:
     fuzz_depth: float = 0.0
     fuzz_asymmetry: float = 0.0
     fuzz_tint: tuple = (1.0, 1.0, 1.0)
+    fuzz_flatness: float = 0.0
 
 
 def yarn_lookup(tables) -> YarnLookup:
@@ -78,7 +79,7 @@ def yarn_lookup(tables) -> YarnLookup:
                        "slope": _socket(specular.get("slope", DEFAULT_SLOPE)), "ior": _socket(tables.specular_index)},
                       _socket(specular.get("fuzz_albedo", 0.0)), _socket(specular.get("fuzz_depth", 0.0)),
                       _socket(specular.get("fuzz_asymmetry", 0.0)),
-                      tuple(_socket(v) for v in fuzz_tint(specular)))
+                      tuple(_socket(v) for v in fuzz_tint(specular)), _socket(specular.get("fuzz_flatness", 0.0)))
 
 
 def _socket(value: float) -> float:
@@ -153,20 +154,24 @@ def response_specular(response: GarmentResponse, weight: float, slope: float, io
     return {side: f_cos * visibility[side] for side in SIDES}, visibility
 
 
-def response_fuzz(response: GarmentResponse, albedo: float, depth: float = 0.0, asymmetry: float = 0.0) -> dict:
+def response_fuzz(response: GarmentResponse, albedo: float, depth: float = 0.0, asymmetry: float = 0.0,
+                  flatness: float = 0.0) -> dict:
     """The fuzz term's part of ρ per side (N_i², N_o²), 1/sr: f_fuzz(ω_i, ω_o) cos θ_i about the cloth
-    normal on the viewer's side (``cl_cloth_fuzz``, a fuzz of optical depth ``depth`` and asymmetry
-    ``asymmetry``) on the share of the patch that is lit yarn facing the sun, as for the specular term."""
+    normal on the viewer's side (``cl_cloth_fuzz``, a fuzz of optical depth ``depth``, asymmetry
+    ``asymmetry`` and flatness ``flatness``) on the share of the patch that is lit yarn facing the sun,
+    as for the specular term."""
     facing, toward_sun, toward_camera = _lit_facing_cells(response)
-    f_cos = fuzz_brdf(toward_sun, toward_camera, albedo, depth, asymmetry) * np.maximum(toward_sun[..., 2], 0.0)
+    f_cos = (fuzz_brdf(toward_sun, toward_camera, albedo, depth, asymmetry, flatness)
+             * np.maximum(toward_sun[..., 2], 0.0))
     return {side: f_cos * facing[side] for side in SIDES}
 
 
-def response_fuzz_transmittance(response: GarmentResponse, depth: float) -> np.ndarray:
-    """(N_i², N_o²) the share of the yarn's light that crosses a fuzz of optical depth ``depth`` in
-    and out about the cloth normal, as the sun mode shades the yarn's tables (either side alike)."""
+def response_fuzz_transmittance(response: GarmentResponse, depth: float, flatness: float = 0.0) -> np.ndarray:
+    """(N_i², N_o²) the share of the yarn's light that crosses a fuzz of optical depth ``depth`` and
+    flatness ``flatness`` in and out about the cloth normal, as the sun mode shades the yarn's tables
+    (either side alike)."""
     _, toward_sun, toward_camera = _lit_facing_cells(response)
-    return fuzz_transmittance(toward_sun[..., 2], toward_camera[..., 2], depth)
+    return fuzz_transmittance(toward_sun[..., 2], toward_camera[..., 2], depth, flatness)
 
 
 def measurement_from_response(response: GarmentResponse, yarn: YarnLookup,
@@ -176,10 +181,10 @@ def measurement_from_response(response: GarmentResponse, yarn: YarnLookup,
     Its ``render_seconds`` are the response's renders, once for every yarn (none where it was traced)."""
     rho = response_rho(response, yarn, threads)
     if yarn.fuzz_depth > 0.0:
-        shade = response_fuzz_transmittance(response, yarn.fuzz_depth)[..., None]
+        shade = response_fuzz_transmittance(response, yarn.fuzz_depth, yarn.fuzz_flatness)[..., None]
         rho = {side: rho[side] * shade for side in SIDES}
     if yarn.fuzz_albedo > 0.0:
-        fuzz = response_fuzz(response, yarn.fuzz_albedo, yarn.fuzz_depth, yarn.fuzz_asymmetry)
+        fuzz = response_fuzz(response, yarn.fuzz_albedo, yarn.fuzz_depth, yarn.fuzz_asymmetry, yarn.fuzz_flatness)
         rho = {side: rho[side] + fuzz[side][..., None] * np.asarray(yarn.fuzz_tint) for side in SIDES}
     specular, visibility = response_specular(response, **yarn.specular)
     return ClothMeasurement({side: rho[side] + specular[side][..., None] for side in SIDES}, specular, visibility,

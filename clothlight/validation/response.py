@@ -132,29 +132,32 @@ class ClothResponse:
         return np.unique(rho_map.indices)
 
     def specular_brdf(self, weight: float, slope: float, index: float, fuzz_albedo: float = 0.0,
-                      fuzz_depth: float = 0.0, fuzz_asymmetry: float = 0.0, fuzz_tint=(1.0, 1.0, 1.0)) -> np.ndarray:
+                      fuzz_depth: float = 0.0, fuzz_asymmetry: float = 0.0, fuzz_tint=(1.0, 1.0, 1.0),
+                      fuzz_flatness: float = 0.0) -> np.ndarray:
         """The cloth-scale terms' share of each view's cloth BRDF (n_views, 3), 1/sr, RGB: (w f_CT + f_fuzz)
-        (n_c·l) s, the white Cook–Torrance sheen and the fuzz of optical depth ``fuzz_depth`` and asymmetry
-        ``fuzz_asymmetry`` (:func:`precompute.optics.lommel_seeliger.fuzz_brdf`) about the cloth normal,
-        of albedo ``fuzz_albedo`` times ``fuzz_tint`` per channel, on the lit yarn faces turned to the sun
-        (the shader's sun mode cuts both alike)."""
+        (n_c·l) s, the white Cook–Torrance sheen and the fuzz of optical depth ``fuzz_depth``, asymmetry
+        ``fuzz_asymmetry`` and flatness ``fuzz_flatness`` (:func:`precompute.optics.lommel_seeliger.fuzz_brdf`)
+        about the cloth normal, of albedo ``fuzz_albedo`` times ``fuzz_tint`` per channel, on the lit yarn
+        faces turned to the sun (the shader's sun mode cuts both alike)."""
         from precompute.optics.cook_torrance import cook_torrance
         from precompute.optics.lommel_seeliger import fuzz_brdf
 
         sheen = weight * cook_torrance(self._toward_sun, self._toward_camera, slope, index)
         terms = np.repeat(sheen[:, None], 3, axis=1)
         if fuzz_albedo:
-            fuzz = fuzz_brdf(self._toward_sun, self._toward_camera, fuzz_albedo, fuzz_depth, fuzz_asymmetry)
+            fuzz = fuzz_brdf(self._toward_sun, self._toward_camera, fuzz_albedo, fuzz_depth, fuzz_asymmetry,
+                             fuzz_flatness)
             terms = terms + fuzz[:, None] * np.asarray(fuzz_tint, float)
         return terms * (self._toward_sun[:, 2] * self._specular_share)[:, None]
 
-    def fuzz_transmittance(self, fuzz_depth: float) -> np.ndarray:
+    def fuzz_transmittance(self, fuzz_depth: float, fuzz_flatness: float = 0.0) -> np.ndarray:
         """(n_views,) the share of each view's yarn light that crosses a fuzz of optical depth
-        ``fuzz_depth`` in and out (:func:`precompute.optics.lommel_seeliger.fuzz_transmittance` about
-        the cloth normal, as the shader shades the yarn's tables); 1 for ``fuzz_depth`` 0."""
+        ``fuzz_depth`` and flatness ``fuzz_flatness`` in and out
+        (:func:`precompute.optics.lommel_seeliger.fuzz_transmittance` about the cloth normal, as the
+        shader shades the yarn's tables); 1 for ``fuzz_depth`` 0."""
         from precompute.optics.lommel_seeliger import fuzz_transmittance
 
-        return fuzz_transmittance(self._toward_sun[:, 2], self._toward_camera[:, 2], fuzz_depth)
+        return fuzz_transmittance(self._toward_sun[:, 2], self._toward_camera[:, 2], fuzz_depth, fuzz_flatness)
 
     @functools.cached_property
     def _toward_sun(self) -> np.ndarray:
@@ -172,7 +175,7 @@ class ClothResponse:
     def cloth_brdf(self, atlas: np.ndarray, attenuation: np.ndarray | None, layout: TableLayout, *,
                    specular_weight: float, specular_slope: float, specular_index: float | None = None,
                    fuzz_albedo: float = 0.0, fuzz_depth: float = 0.0, fuzz_asymmetry: float = 0.0,
-                   fuzz_tint=(1.0, 1.0, 1.0)) -> np.ndarray:
+                   fuzz_tint=(1.0, 1.0, 1.0), fuzz_flatness: float = 0.0) -> np.ndarray:
         """The cloth BRDF (n_views, C), 1/sr, that a sun-mode sweep of the yarn material measures.
 
         ``atlas``: the BRDF atlas image (N_i·N_o, N_i·N_o, C) (``brdf.exr``); ``attenuation``: the
@@ -180,8 +183,9 @@ class ClothResponse:
         without it; ``layout`` must describe both.  ``specular_weight``, ``specular_slope``,
         ``specular_index``: the shader's ``SpecularWeight``, ``Slope`` (Beckmann rms slope m) and
         ``SpecularIOR`` (None: the layout's host index); ``fuzz_albedo``, ``fuzz_depth``,
-        ``fuzz_asymmetry``, ``fuzz_tint``: its ``FuzzAlbedo``, ``FuzzDepth``, ``FuzzAsymmetry`` and
-        ``FuzzTint`` (the yarn's light shaded by :meth:`fuzz_transmittance`).
+        ``fuzz_asymmetry``, ``fuzz_tint``, ``fuzz_flatness``: its ``FuzzAlbedo``, ``FuzzDepth``,
+        ``FuzzAsymmetry``, ``FuzzTint`` and ``FuzzFlatness`` (the yarn's light shaded by
+        :meth:`fuzz_transmittance`).
         """
         atlas = np.asarray(atlas, float)
         side = layout.incidence_resolution * layout.exit_resolution
@@ -197,9 +201,9 @@ class ClothResponse:
             brdf = brdf + unscattered_map @ attenuation
         index = layout.index if specular_index is None else specular_index
         if fuzz_depth:
-            brdf = brdf * self.fuzz_transmittance(fuzz_depth)[:, None]
+            brdf = brdf * self.fuzz_transmittance(fuzz_depth, fuzz_flatness)[:, None]
         return brdf + self.specular_brdf(specular_weight, specular_slope, index, fuzz_albedo, fuzz_depth,
-                                         fuzz_asymmetry, fuzz_tint)[:, :brdf.shape[1]]
+                                         fuzz_asymmetry, fuzz_tint, fuzz_flatness)[:, :brdf.shape[1]]
 
     def save(self, path) -> pathlib.Path:
         """Write the response to ``path`` (``.npz``, compressed)."""

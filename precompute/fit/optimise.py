@@ -633,14 +633,16 @@ def cloth_from_parts(medium_part: np.ndarray, specular_part: Callable, keywords:
     """The cloth BRDF (n, 3), 1/sr, of a forward model's ``parts``: the medium's part, shaded by a fuzz
     of depth where ``keywords`` holds one (``specular_part.transmittance``), plus what the sheen and
     the fuzz add (n, 3), ``specular_part`` at the sheen's weight and slope of ``keywords`` and at its
-    fuzz albedo, depth, asymmetry and tint where it holds them
+    fuzz albedo, depth, asymmetry, flatness and tint where it holds them
     (:func:`precompute.optics.cook_torrance.fuzz_tint`)."""
-    fuzz = {key: keywords[key] for key in ("fuzz_albedo", "fuzz_depth", "fuzz_asymmetry") if keywords.get(key)}
+    fuzz = {key: keywords[key] for key in ("fuzz_albedo", "fuzz_depth", "fuzz_asymmetry", "fuzz_flatness")
+            if keywords.get(key)}
     if fuzz.get("fuzz_albedo"):
         fuzz["fuzz_tint"] = fuzz_tint(keywords)
     terms = specular_part(keywords["specular_weight"], keywords["specular_slope"], **fuzz)
     if fuzz.get("fuzz_depth"):
-        medium_part = medium_part * specular_part.transmittance(fuzz["fuzz_depth"])[:, None]
+        flatness = {"fuzz_flatness": fuzz["fuzz_flatness"]} if "fuzz_flatness" in fuzz else {}
+        medium_part = medium_part * specular_part.transmittance(fuzz["fuzz_depth"], **flatness)[:, None]
     return medium_part + terms
 
 

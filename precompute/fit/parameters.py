@@ -253,10 +253,11 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
     FitParameter("specular_slope", "specular_slope", "", 0.05, 1.0, log=True,
                  note="the Beckmann rms slope m (the paper's 0.8): below 0.05 the lobe falls between the "
                       "measured views; 1.0 is the garment closure fit's largest gloss roughness"),
-    FitParameter("fuzz_albedo", "fuzz_albedo", "", 0.0, 0.5, log=False,
-                 note="the white Lommel–Seeliger term of the surface fibres' first reflections (the shader's "
-                      "FuzzAlbedo, precompute.optics.lommel_seeliger): 0 is none; a fibre reflects 4–10 % "
-                      "undyed, so half of all light is far more than any fuzz returns"),
+    FitParameter("fuzz_albedo", "fuzz_albedo", "", 0.0, 1.0, log=False,
+                 note="the single-scattering albedo of the surface fibres' layer (the shader's FuzzAlbedo, "
+                      "precompute.optics.lommel_seeliger; its green where it is tinted): 0 is none, 1 fibres "
+                      "that absorb nothing (a layer of white fibres deep enough scatters most of its light "
+                      "more than once, which one scattering at a higher albedo stands for)"),
     FitParameter("fuzz_depth", "fuzz_depth", "", 0.0, 2.0, log=False,
                  note="the optical depth of the surface fibres along the cloth normal (the shader's FuzzDepth, "
                       "precompute.optics.lommel_seeliger): they reflect as a layer that deep and shade the yarn "
@@ -271,6 +272,11 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
                       "fibres colour what they scatter, a red cotton's 3–5 times"),
     FitParameter("fuzz_tint_blue", "fuzz_tint_blue", "", 0.1, 10.0, log=True,
                  note="the fuzz's blue albedo over its green (the shader's FuzzTint): 1 is white"),
+    FitParameter("fuzz_flatness", "fuzz_flatness", "", 0.0, 1.0, log=False,
+                 note="the share of the surface fibres that lie in the cloth's plane (the shader's FuzzFlatness, "
+                      "precompute.optics.lommel_seeliger.fuzz_projected_area), the rest in every direction: "
+                      "0 is a layer that shows every direction the same area, 1 one that shows a grazing "
+                      "direction 2/π of what it shows the normal (a felt, a brushed cloth)"),
 )}
 
 

@@ -38,21 +38,24 @@ DEFAULT_FUZZ_ALBEDO = 0.0
 DEFAULT_FUZZ_DEPTH = 0.0
 #: ... its asymmetry (``FuzzAsymmetry``, the Henyey–Greenstein g): 0, isotropic, the Lommel–Seeliger law.
 DEFAULT_FUZZ_ASYMMETRY = 0.0
-#: ... and its red and blue albedo relative to its green (``FuzzTint``): 1, white.
+#: ... its red and blue albedo relative to its green (``FuzzTint``): 1, white.
 DEFAULT_FUZZ_TINT = 1.0
+#: ... and the share of its fibres that lie flat (``FuzzFlatness``): 0, fibres in every direction.
+DEFAULT_FUZZ_FLATNESS = 0.0
 #: The preset table holding the fitted cloth-scale terms (``[fit]``, keys ``specular_weight``,
-#: ``specular_slope``, ``fuzz_albedo``, ``fuzz_depth``, ``fuzz_asymmetry``, ``fuzz_tint_red`` and
-#: ``fuzz_tint_blue``, the shader's SpecularWeight, Slope, FuzzAlbedo, FuzzDepth, FuzzAsymmetry and
-#: FuzzTint; ``python -m clothlight.fit`` writes it); the medium's loader ignores it.
+#: ``specular_slope``, ``fuzz_albedo``, ``fuzz_depth``, ``fuzz_asymmetry``, ``fuzz_tint_red``,
+#: ``fuzz_tint_blue`` and ``fuzz_flatness``, the shader's SpecularWeight, Slope, FuzzAlbedo, FuzzDepth,
+#: FuzzAsymmetry, FuzzTint and FuzzFlatness; ``python -m clothlight.fit`` writes it); the medium's
+#: loader ignores it.
 FIT_TABLE = "fit"
 #: The ``[fit]`` table's keys and the shader's defaults for them.
 SPECULAR_DEFAULTS = {"specular_weight": DEFAULT_WEIGHT, "specular_slope": DEFAULT_SLOPE,
                      "fuzz_albedo": DEFAULT_FUZZ_ALBEDO, "fuzz_depth": DEFAULT_FUZZ_DEPTH,
                      "fuzz_asymmetry": DEFAULT_FUZZ_ASYMMETRY, "fuzz_tint_red": DEFAULT_FUZZ_TINT,
-                     "fuzz_tint_blue": DEFAULT_FUZZ_TINT}
-#: The keys of the fuzz's phase function and colour: a record holds them only where they are not the
-#: defaults, so that the tables of the presets before them keep their keys.
-FUZZ_SHAPE_KEYS = ("fuzz_asymmetry", "fuzz_tint_red", "fuzz_tint_blue")
+                     "fuzz_tint_blue": DEFAULT_FUZZ_TINT, "fuzz_flatness": DEFAULT_FUZZ_FLATNESS}
+#: The keys of the fuzz's phase function, colour and fibre orientation: a record holds them only where
+#: they are not the defaults, so that the tables of the presets before them keep their keys.
+FUZZ_SHAPE_KEYS = ("fuzz_asymmetry", "fuzz_tint_red", "fuzz_tint_blue", "fuzz_flatness")
 
 
 def cook_torrance_between(light, view, m=DEFAULT_SLOPE, n=DEFAULT_IOR) -> float:

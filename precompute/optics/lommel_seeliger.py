@@ -66,6 +66,27 @@ side of the view than from lights on its own side are the fuzz's:
 
 (:func:`fuzz_general_lobes`; a_m, b_m the lobe's, :func:`forward_lobe_albedos`, a diffuse lobe's
 b being 0), s held to [0, a / a_m].  An isotropic fuzz has b = 0: a diffuse lobe alone, as before.
+
+**Fibres that lie flat.**  The fibres of a fuzz (and all of a felt) lie mostly in the cloth's plane,
+not in every direction: a fibre shows a light the area of its shadow, in proportion to |ω × t| for a
+fibre along t, and fibres lying in the plane at every azimuth show a light at the cosine μ with the
+normal the mean of that over t,
+
+    s(μ) = (2/π) E(√(1 − μ²))                                                   (fuzz_projected_area)
+
+(E the complete elliptic integral of the second kind, :func:`scipy.special.ellipe`): 1 along the
+normal, 2/π at grazing, where a layer of fibres in every direction shows the same area in each.  A
+fuzz whose fibres lie flat in the share F (``fuzz_flatness``, the rest in every direction) shows
+s_F(μ) = 1 − F (1 − s(μ)) relative to its area along the normal, so its slant optical depth is
+τ s_F(μ)/μ, and a fibre scatters in proportion to the area it shows both the light and the view
+(reciprocal, and at most A of the light it meets for A ≤ 1):
+
+    T(μi, μo) = exp(−τ (s_i/|μi| + s_o/|μo|)),
+    f_layer(l, v) = A 4π p_HG (1 − T) s_i s_o / (4π (s_i μo + s_o μi))
+
+with s_i = s_F(μi), s_o = s_F(μo); F = 0 is the layer above.  Lit and seen low the layer shows less
+of itself than a layer of fibres in every direction: measured white-fabric and pink felt are darker
+seen from a low light than the isotropic layer (docs/fitting.md, "Fibres that lie flat").
 """
 
 from __future__ import annotations
@@ -74,19 +95,33 @@ import functools
 import math
 
 import numpy as np
+from scipy.special import ellipe
 
 from precompute.optics.cook_torrance import beckmann_reflection
 from precompute.optics.phase import henyey_greenstein_phase
 
 
-def lommel_seeliger(light, view, albedo: float = 1.0) -> np.ndarray:
+def fuzz_projected_area(mu, flatness: float = 0.0) -> np.ndarray:
+    """s_F(μ) (…) of the module docstring: the area a fuzz whose fibres lie flat in the share
+    ``flatness`` F shows a direction at the cosine ``mu`` (…) with the normal (its sign ignored), over
+    the area it shows along the normal: 1 − F (1 − (2/π) E(√(1 − μ²))); 1 everywhere for F = 0, from 1
+    along the normal to 1 − F (1 − 2/π) at grazing."""
+    mu = np.clip(np.abs(np.asarray(mu, float)), 0.0, 1.0)
+    if flatness == 0.0:
+        return np.ones_like(mu)
+    return 1.0 - flatness * (1.0 - (2.0 / math.pi) * ellipe(1.0 - mu * mu))
+
+
+def lommel_seeliger(light, view, albedo: float = 1.0, flatness: float = 0.0) -> np.ndarray:
     """The fuzz term f_LS (…), 1/sr, about +z between unit directions ``light`` and ``view`` (…, 3)
     (broadcast together) toward the light and the viewer: ``albedo`` / (4π (μi + μo)), 0 unless both
-    are above the plane."""
+    are above the plane; ``albedo`` s_i s_o / (4π (s_i μo + s_o μi)) for fibres that lie flat in the
+    share ``flatness`` (:func:`fuzz_projected_area`)."""
     light, view = np.broadcast_arrays(np.asarray(light, float), np.asarray(view, float))
     mu_i, mu_o = light[..., 2], view[..., 2]
     above = (mu_i > 0.0) & (mu_o > 0.0)
-    return np.where(above, albedo / (4.0 * math.pi * np.where(above, mu_i + mu_o, 1.0)), 0.0)
+    s_i, s_o = fuzz_projected_area(mu_i, flatness), fuzz_projected_area(mu_o, flatness)
+    return np.where(above, albedo * s_i * s_o / (4.0 * math.pi * np.where(above, s_i * mu_o + s_o * mu_i, 1.0)), 0.0)
 
 
 def lommel_seeliger_albedo(mu, albedo: float = 1.0) -> np.ndarray:
@@ -110,16 +145,18 @@ def fuzz_quadrature(nodes: int = FUZZ_ALBEDO_NODES) -> tuple[np.ndarray, np.ndar
     return 0.5 * (x + 1.0), 0.5 * w
 
 
-def fuzz_transmittance(mu_i, mu_o, depth: float) -> np.ndarray:
-    """T(μi, μo) (…) of the module docstring: exp(−``depth`` (1/|μi| + 1/|μo|)), the share of the
-    light that crosses a fuzz of optical depth ``depth`` to the cloth beneath and back; 1 where
+def fuzz_transmittance(mu_i, mu_o, depth: float, flatness: float = 0.0) -> np.ndarray:
+    """T(μi, μo) (…) of the module docstring: exp(−``depth`` (s_i/|μi| + s_o/|μo|)), the share of the
+    light that crosses a fuzz of optical depth ``depth`` whose fibres lie flat in the share
+    ``flatness`` (s: :func:`fuzz_projected_area`; 1 for none) to the cloth beneath and back; 1 where
     ``depth`` is 0, 0 at a grazing cosine."""
     mu_i, mu_o = np.abs(np.asarray(mu_i, float)), np.abs(np.asarray(mu_o, float))
     if depth <= 0.0:
         return np.ones(np.broadcast(mu_i, mu_o).shape)
     grazing = (mu_i <= 0.0) | (mu_o <= 0.0)
+    s_i, s_o = fuzz_projected_area(mu_i, flatness), fuzz_projected_area(mu_o, flatness)
     with np.errstate(divide="ignore"):
-        path = np.where(grazing, np.inf, 1.0 / np.where(grazing, 1.0, mu_i) + 1.0 / np.where(grazing, 1.0, mu_o))
+        path = np.where(grazing, np.inf, s_i / np.where(grazing, 1.0, mu_i) + s_o / np.where(grazing, 1.0, mu_o))
     return np.exp(-depth * path)
 
 
@@ -133,16 +170,17 @@ def fuzz_phase(light, view, asymmetry: float = 0.0) -> np.ndarray:
     return 4.0 * math.pi * henyey_greenstein_phase(-np.sum(light * view, axis=-1), asymmetry)
 
 
-def fuzz_brdf(light, view, albedo: float = 1.0, depth: float = 0.0, asymmetry: float = 0.0) -> np.ndarray:
+def fuzz_brdf(light, view, albedo: float = 1.0, depth: float = 0.0, asymmetry: float = 0.0,
+              flatness: float = 0.0) -> np.ndarray:
     """The fuzz's own BRDF (…), 1/sr, about +z (module docstring): :func:`lommel_seeliger` times
     (1 − :func:`fuzz_transmittance`) for a fuzz of optical depth ``depth`` > 0, the semi-infinite
     law itself for ``depth`` 0 (the veneer of the presets before it), times :func:`fuzz_phase` of
-    asymmetry ``asymmetry``."""
+    asymmetry ``asymmetry``, its fibres lying flat in the share ``flatness``."""
     light, view = np.broadcast_arrays(np.asarray(light, float), np.asarray(view, float))
-    law = lommel_seeliger(light, view, albedo) * fuzz_phase(light, view, asymmetry)
+    law = lommel_seeliger(light, view, albedo, flatness) * fuzz_phase(light, view, asymmetry)
     if depth <= 0.0:
         return law
-    return law * (1.0 - fuzz_transmittance(light[..., 2], view[..., 2], depth))
+    return law * (1.0 - fuzz_transmittance(light[..., 2], view[..., 2], depth, flatness))
 
 
 #: Azimuths of :func:`fuzz_albedo_at_view`'s sum where the fuzz scatters forward (midpoints on
@@ -151,22 +189,31 @@ FUZZ_ALBEDO_AZIMUTHS = 16
 
 
 def fuzz_albedo_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0, asymmetry: float = 0.0,
-                        nodes: int = FUZZ_ALBEDO_NODES, azimuths: int = FUZZ_ALBEDO_AZIMUTHS) -> np.ndarray:
+                        flatness: float = 0.0, nodes: int = FUZZ_ALBEDO_NODES,
+                        azimuths: int = FUZZ_ALBEDO_AZIMUTHS) -> np.ndarray:
     """The directional albedo (…) of :func:`fuzz_brdf` at the view cosine ``mu_o`` (…): ∫ f_layer μi
-    dω_i = (A/2) ∫₀¹ μi (1 − T) / (μi + μo) dμi, by ``nodes``-point Gauss–Legendre over μi;
-    :func:`lommel_seeliger_albedo` for ``depth`` 0.  A fuzz of ``asymmetry`` g ≠ 0 weighs each μi by
-    the mean of :func:`fuzz_phase` over the light's azimuth, ``azimuths`` midpoints on (0, π), the sum
-    of :func:`fuzz_albedo_sides_at_view` (the semi-infinite law too, then: the closed form is the
-    isotropic one's)."""
-    if depth <= 0.0 and asymmetry == 0.0:
+    dω_i = (A/2) ∫₀¹ μi (1 − T) s_i s_o / (s_i μo + s_o μi) dμi, by ``nodes``-point Gauss–Legendre
+    over μi; :func:`lommel_seeliger_albedo` for ``depth`` 0 and no ``flatness``.  A fuzz of
+    ``asymmetry`` g ≠ 0 weighs each μi by the mean of :func:`fuzz_phase` over the light's azimuth,
+    ``azimuths`` midpoints on (0, π), the sum of :func:`fuzz_albedo_sides_at_view` (the semi-infinite
+    law too, then: the closed form is the isotropic one's)."""
+    if depth <= 0.0 and asymmetry == 0.0 and flatness == 0.0:
         return lommel_seeliger_albedo(mu_o, albedo)
     if asymmetry != 0.0:
-        near, far = fuzz_albedo_sides_at_view(mu_o, albedo, depth, asymmetry, nodes, azimuths)
+        near, far = fuzz_albedo_sides_at_view(mu_o, albedo, depth, asymmetry, flatness, nodes, azimuths)
         return near + far
     mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
     mu_i, weight = fuzz_quadrature(nodes)
-    layer = (1.0 - fuzz_transmittance(mu_i, mu_o[..., None], depth)) * mu_i / (mu_i + mu_o[..., None])
+    layer = _layer_at_nodes(mu_i, mu_o, depth, flatness)
     return 0.5 * albedo * np.sum(weight * layer, axis=-1)
+
+
+def _layer_at_nodes(mu_i: np.ndarray, mu_o: np.ndarray, depth: float, flatness: float) -> np.ndarray:
+    """(…, nodes) (1 − T) μi s_i s_o / (s_i μo + s_o μi) at the light cosines ``mu_i`` (nodes,) and the
+    views ``mu_o`` (…): the layer's light toward the view per unit of A/2, 1 − T being 1 for ``depth`` 0."""
+    s_i, s_o = fuzz_projected_area(mu_i, flatness), fuzz_projected_area(mu_o, flatness)[..., None]
+    shade = 1.0 - fuzz_transmittance(mu_i, mu_o[..., None], depth, flatness) if depth > 0.0 else 1.0
+    return shade * mu_i * s_i * s_o / (s_i * mu_o[..., None] + s_o * mu_i)
 
 
 def _azimuth_phase(mu_i: np.ndarray, mu_o: np.ndarray, asymmetry: float, azimuths: int) -> np.ndarray:
@@ -180,7 +227,7 @@ def _azimuth_phase(mu_i: np.ndarray, mu_o: np.ndarray, asymmetry: float, azimuth
 
 
 def fuzz_albedo_sides_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0, asymmetry: float = 0.0,
-                              nodes: int = FUZZ_ALBEDO_NODES,
+                              flatness: float = 0.0, nodes: int = FUZZ_ALBEDO_NODES,
                               azimuths: int = FUZZ_ALBEDO_AZIMUTHS) -> tuple[np.ndarray, np.ndarray]:
     """:func:`fuzz_albedo_at_view` (…) in two parts, (a_near, a_far): the light from lights on the view's
     side of the cloth normal (azimuth from the view's within 90°) and from those on the far side, by the
@@ -189,8 +236,7 @@ def fuzz_albedo_sides_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0, asy
         raise ValueError(f"azimuths must be even to split at 90°, not {azimuths}")
     mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
     mu_i, weight = fuzz_quadrature(nodes)
-    shade = 1.0 - fuzz_transmittance(mu_i, mu_o[..., None], depth) if depth > 0.0 else 1.0
-    layer = (shade * mu_i / (mu_i + mu_o[..., None]))[..., None]
+    layer = _layer_at_nodes(mu_i, mu_o, depth, flatness)[..., None]
     phase = _azimuth_phase(mu_i, mu_o, asymmetry, azimuths)
     half = azimuths // 2
     sides = [np.sum(weight * np.mean(layer * part, axis=-1), axis=-1) * albedo / 4.0
@@ -245,16 +291,16 @@ def _forward_lobe_at(mu_o: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.interp(angle, angles, albedo), np.interp(angle, angles, excess)
 
 
-def fuzz_general_lobes(mu_o, albedo: float = 1.0, depth: float = 0.0,
-                       asymmetry: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def fuzz_general_lobes(mu_o, albedo: float = 1.0, depth: float = 0.0, asymmetry: float = 0.0,
+                       flatness: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """The general modes' weights (d, s) (…) at the view cosine ``mu_o`` (…) of the fuzz's diffuse lobe
     and of its forward lobe (module docstring): s = b / b_m held to [0, a / a_m], d = a − s a_m (≥ 0), with
     (a_m, b_m) interpolated linearly in θo from :func:`forward_lobe_table`, as the shader does;
     (:func:`fuzz_albedo_at_view`, 0) for an isotropic fuzz."""
     if asymmetry == 0.0:
-        total = fuzz_albedo_at_view(mu_o, albedo, depth)
+        total = fuzz_albedo_at_view(mu_o, albedo, depth, flatness=flatness)
         return total, np.zeros_like(total)
-    near, far = fuzz_albedo_sides_at_view(mu_o, albedo, depth, asymmetry)
+    near, far = fuzz_albedo_sides_at_view(mu_o, albedo, depth, asymmetry, flatness)
     lobe_albedo, lobe_excess = _forward_lobe_at(np.clip(np.asarray(mu_o, float), 1e-6, 1.0))
     total = near + far
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -263,18 +309,18 @@ def fuzz_general_lobes(mu_o, albedo: float = 1.0, depth: float = 0.0,
     return np.maximum(total - forward * lobe_albedo, 0.0), forward
 
 
-def hemispherical_transmittance(depth: float, nodes: int = FUZZ_ALBEDO_NODES) -> float:
+def hemispherical_transmittance(depth: float, flatness: float = 0.0, nodes: int = FUZZ_ALBEDO_NODES) -> float:
     """The share of light from a uniform sky that crosses a fuzz of optical depth ``depth`` one way:
-    ∫₀¹ 2 μ exp(−depth/μ) dμ = 2 E₃(depth) (the exponential integral), by ``nodes``-point
-    Gauss–Legendre; 1 for ``depth`` 0.  The general mode shades the yarn's closures by it times
-    exp(−depth/μo), the view's own path."""
+    ∫₀¹ 2 μ exp(−depth s(μ)/μ) dμ (= 2 E₃(depth), the exponential integral, for no ``flatness``;
+    s: :func:`fuzz_projected_area`), by ``nodes``-point Gauss–Legendre; 1 for ``depth`` 0.  The
+    general mode shades the yarn's closures by it times exp(−depth s(μo)/μo), the view's own path."""
     if depth <= 0.0:
         return 1.0
     mu, weight = fuzz_quadrature(nodes)
-    return float(np.sum(2.0 * weight * mu * np.exp(-depth / mu)))
+    return float(np.sum(2.0 * weight * mu * np.exp(-depth * fuzz_projected_area(mu, flatness) / mu)))
 
 
 __all__ = ["FUZZ_ALBEDO_AZIMUTHS", "FUZZ_ALBEDO_NODES", "FUZZ_FORWARD_POINTS", "FUZZ_FORWARD_SLOPE",
            "forward_lobe_albedos", "forward_lobe_table", "fuzz_albedo_at_view", "fuzz_albedo_sides_at_view",
-           "fuzz_brdf", "fuzz_general_lobes", "fuzz_phase", "fuzz_quadrature", "fuzz_transmittance",
-           "hemispherical_transmittance", "lommel_seeliger", "lommel_seeliger_albedo"]
+           "fuzz_brdf", "fuzz_general_lobes", "fuzz_phase", "fuzz_projected_area", "fuzz_quadrature",
+           "fuzz_transmittance", "hemispherical_transmittance", "lommel_seeliger", "lommel_seeliger_albedo"]

@@ -192,8 +192,9 @@ def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
     """The specular record of a yarn bake's summary (:data:`SPECULAR_KEY`): ``weight`` (a finite number
     ≥ 0), ``slope`` (finite, > 0), ``index`` (finite, ≥ 1), ``fuzz_albedo`` (in [0, 1]), ``source``
     and, where the fuzz has a depth, ``fuzz_depth`` (finite, > 0; none: 0, the fuzz a veneer), where it
-    scatters forward or back ``fuzz_asymmetry`` (in (−1, 1); none: 0) and where it is coloured
-    ``fuzz_tint_red`` and ``fuzz_tint_blue`` (≥ 0; none: 1);
+    scatters forward or back ``fuzz_asymmetry`` (in (−1, 1); none: 0), where it is coloured
+    ``fuzz_tint_red`` and ``fuzz_tint_blue`` (≥ 0; none: 1) and where its fibres lie flat
+    ``fuzz_flatness`` (in [0, 1]; none: 0);
     :func:`default_specular` where the summary has none (a folder baked before bakes recorded it), the
     summary's ``host_index`` where it has no ``index`` and no fuzz (0) where it has no ``fuzz_albedo``
     (baked before bakes recorded those).  :class:`TableError` naming the
@@ -214,13 +215,16 @@ def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:
                 and ("fuzz_asymmetry" not in value or (number("fuzz_asymmetry", -1.0, False)
                                                        and value["fuzz_asymmetry"] < 1.0))
                 and all(key not in value or number(key, 0.0, True) for key in ("fuzz_tint_red", "fuzz_tint_blue"))
+                and ("fuzz_flatness" not in value or (number("fuzz_flatness", 0.0, True)
+                                                      and value["fuzz_flatness"] <= 1.0))
                 and isinstance(value.get("source"), str)):
             raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SPECULAR_KEY} {value!r} is not an object of "
                              "weight (≥ 0), slope (> 0), index (≥ 1), fuzz_albedo (in [0, 1]), source and "
                              "perhaps fuzz_depth (> 0), fuzz_asymmetry (in (−1, 1)), fuzz_tint_red and "
-                             "fuzz_tint_blue (≥ 0)")
+                             "fuzz_tint_blue (≥ 0) and fuzz_flatness (in [0, 1])")
         record = {key: float(value[key]) for key in ("weight", "slope", "index", "fuzz_albedo", "fuzz_depth",
-                                                     "fuzz_asymmetry", "fuzz_tint_red", "fuzz_tint_blue")
+                                                     "fuzz_asymmetry", "fuzz_tint_red", "fuzz_tint_blue",
+                                                     "fuzz_flatness")
                   if key in value}
         record.setdefault("fuzz_albedo", 0.0)
         record["source"] = value["source"]

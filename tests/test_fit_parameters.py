@@ -141,7 +141,7 @@ def test_start_values_are_clipped_into_the_fit_range_and_specular_read_from_fit_
     assert initial_values(parse_free("dye_weight_percent"), config)["dye_weight_percent"] == 0.1
     assert specular_from_config(config) == {"specular_weight": 0.4, "specular_slope": 0.8, "fuzz_albedo": 0.0,
                                             "fuzz_depth": 0.0, "fuzz_asymmetry": 0.0, "fuzz_tint_red": 1.0,
-                                            "fuzz_tint_blue": 1.0}
+                                            "fuzz_tint_blue": 1.0, "fuzz_flatness": 0.0}
 
 
 class Measured:

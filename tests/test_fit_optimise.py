@@ -332,20 +332,27 @@ def test_a_fuzz_of_depth_is_profiled_with_the_sheen_and_recovered(tmp_path):
     assert veneer.objective > 2 * result.objective
 
 
-def test_a_dyed_fuzz_that_scatters_forward_is_recovered_by_the_profile(tmp_path):
-    # seven cloth-scale parameters, too many for the full grid: the profile scans a Sobol' set, then
-    # polishes; at the true medium it finds the sheen and the fuzz that made the cloth
+def shaded_cloth_profile(tmp_path, fuzz: dict):
+    """The profile's problem for a synthetic cloth of the true medium, the true sheen and ``fuzz``: the
+    truth, its config, the sheen, the objective on its measurement, the medium's part and the cloth-scale
+    terms, the profile's start (no fuzz) and the parameters profiled (the sheen's, then the fuzz's)."""
     views = real_fabric_views()
     truth = ShadedForward(views, noisy=False)
     config, _ = truth_config()
     sheen = {"specular_weight": TRUTH["specular_weight"], "specular_slope": TRUTH["specular_slope"]}
-    fuzz = {"fuzz_albedo": 0.2, "fuzz_depth": 0.3, "fuzz_asymmetry": 0.6, "fuzz_tint_red": 3.0, "fuzz_tint_blue": 0.5}
     rgb = truth(config, relative_error=0.0, seed=0, **sheen, **fuzz)
-    measurement = load_measurement(write_csv(tmp_path / "forward_fuzz.csv", views, rgb))
+    measurement = load_measurement(write_csv(tmp_path / "shaded.csv", views, rgb))
     objective = Objective(measurement, split_views(measurement))
     medium, terms = truth.parts(config, relative_error=0.0, seed=0)
     start = {**SPECULAR_DEFAULTS, "fuzz_depth": 0.0}
-    profiled = [PARAMETERS[name] for name in (*sheen, *fuzz)]
+    return truth, config, sheen, objective, medium, terms, start, [PARAMETERS[name] for name in (*sheen, *fuzz)]
+
+
+def test_a_dyed_fuzz_that_scatters_forward_is_recovered_by_the_profile(tmp_path):
+    # seven cloth-scale parameters, too many for the full grid: the profile scans a Sobol' set, then
+    # polishes; at the true medium it finds the sheen and the fuzz that made the cloth
+    fuzz = {"fuzz_albedo": 0.2, "fuzz_depth": 0.3, "fuzz_asymmetry": 0.6, "fuzz_tint_red": 3.0, "fuzz_tint_blue": 0.5}
+    truth, config, sheen, objective, medium, terms, start, profiled = shaded_cloth_profile(tmp_path, fuzz)
     assert PROFILE_MIN_POINTS ** len(profiled) > PROFILE_MAX_SCANNED
     values = fit_profiled_specular(objective, medium, terms, profiled, start)
     for name, value in {**sheen, **fuzz}.items():
@@ -408,17 +415,8 @@ def test_the_profiled_sheen_is_the_best_in_its_box_not_the_nearest_basin():
 def test_a_fuzz_of_fibres_lying_flat_is_recovered_by_the_profile(tmp_path):
     # at the true medium the profile finds the share of the fuzz's fibres that lie flat beside its
     # albedo, its depth and the sheen; a fuzz of fibres in every direction cannot take its place
-    views = real_fabric_views()
-    truth = ShadedForward(views, noisy=False)
-    config, _ = truth_config()
-    sheen = {"specular_weight": TRUTH["specular_weight"], "specular_slope": TRUTH["specular_slope"]}
     fuzz = {"fuzz_albedo": 0.7, "fuzz_depth": 0.3, "fuzz_flatness": 0.9}
-    rgb = truth(config, relative_error=0.0, seed=0, **sheen, **fuzz)
-    measurement = load_measurement(write_csv(tmp_path / "flat_fuzz.csv", views, rgb))
-    objective = Objective(measurement, split_views(measurement))
-    medium, terms = truth.parts(config, relative_error=0.0, seed=0)
-    start = {**SPECULAR_DEFAULTS, "fuzz_depth": 0.0}
-    profiled = [PARAMETERS[name] for name in (*sheen, *fuzz)]
+    _, _, sheen, objective, medium, terms, start, profiled = shaded_cloth_profile(tmp_path, fuzz)
     values = fit_profiled_specular(objective, medium, terms, profiled, start)
     for name, value in {**sheen, **fuzz}.items():
         assert values[name] == pytest.approx(value, rel=0.02), name

@@ -423,3 +423,20 @@ def test_a_fuzz_of_fibres_lying_flat_is_recovered_by_the_profile(tmp_path):
     every_way = fit_profiled_specular(objective, medium, terms, profiled[:4], start)
     assert objective(cloth_from_parts(medium, terms, {**start, **every_way})) > 10 * objective(
         cloth_from_parts(medium, terms, {**start, **values})) + 1e-3
+
+
+def test_the_profile_ends_no_worse_than_the_values_it_is_given(tmp_path):
+    # a misfit flat but for one narrow well at the values the profile starts from, between the grid's
+    # points: no polish from a grid point reaches it, the polish from those values stays in it
+    fuzz = {"fuzz_albedo": 0.37, "fuzz_depth": 0.23}
+    _, _, sheen, _, medium, terms, start, profiled = shaded_cloth_profile(tmp_path, fuzz)
+    given = {**start, **sheen, **fuzz}
+    target = cloth_from_parts(medium, terms, given)
+
+    def well(model) -> float:
+        return 1.0 - math.exp(-float(np.mean((model / target - 1.0) ** 2)) / 1e-8)
+
+    values = fit_profiled_specular(well, medium, terms, profiled, given)
+    for name in (*sheen, *fuzz):
+        assert values[name] == pytest.approx(given[name], rel=1e-6), name
+    assert well(cloth_from_parts(medium, terms, {**given, **values})) < 1e-9

@@ -653,9 +653,10 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
     slope, **fuzz)`` (n, 3) (:func:`cloth_from_parts`).  A grid of about
     :data:`PROFILE_GRID_SIZE` points over their [0, 1] box (a Sobol' set beyond
     :data:`PROFILE_MAX_SCANNED`; log where they say; the fuzz's albedo at most 1 in every channel,
-    :func:`fuzz_within_unit_albedo`), then bounded L-BFGS-B from its :data:`PROFILE_POLISHED` best points; no forward
-    evaluation.  Variable projection: the optimiser outside searches only the medium, whose every
-    candidate gets its best sheen."""
+    :func:`fuzz_within_unit_albedo`), then bounded L-BFGS-B from its :data:`PROFILE_POLISHED` best points
+    and from ``keywords``' own values (where it holds them all), so that the profile never ends worse
+    than where it was started; no forward evaluation.  Variable projection: the optimiser outside
+    searches only the medium, whose every candidate gets its best sheen."""
     from scipy.optimize import minimize
 
     def values_at(u) -> dict:
@@ -673,8 +674,11 @@ def fit_profiled_specular(objective: Callable[[np.ndarray], float], medium_part:
 
         grid = qmc.Sobol(len(profiled), seed=0).random_base2(int(math.log2(PROFILE_MAX_SCANNED)))
     scanned = np.array([misfit(u) for u in grid])
+    starts = list(grid[np.argsort(scanned, kind="stable")[:PROFILE_POLISHED]])
+    if all(p.path in keywords for p in profiled):  # a narrow well between the grid's points is not lost
+        starts.append(np.array([p.to_unit(float(keywords[p.path])) for p in profiled]))
     best = None
-    for start in grid[np.argsort(scanned, kind="stable")[:PROFILE_POLISHED]]:
+    for start in starts:
         result = minimize(misfit, start, method="L-BFGS-B", bounds=[(0.0, 1.0)] * len(profiled))
         if best is None or result.fun < best.fun:
             best = result

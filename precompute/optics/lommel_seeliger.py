@@ -117,11 +117,25 @@ def lommel_seeliger(light, view, albedo: float = 1.0, flatness: float = 0.0) -> 
     (broadcast together) toward the light and the viewer: ``albedo`` / (4π (μi + μo)), 0 unless both
     are above the plane; ``albedo`` s_i s_o / (4π (s_i μo + s_o μi)) for fibres that lie flat in the
     share ``flatness`` (:func:`fuzz_projected_area`)."""
+    mu_i, mu_o, above = _cosines_above(light, view)
+    return np.where(above, albedo * _layer_share(mu_i, mu_o, 0.0, flatness) / (4.0 * math.pi), 0.0)
+
+
+def _cosines_above(light, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """μi, μo of unit directions ``light`` and ``view`` (…, 3) (broadcast together), 1 where either is
+    not above the plane, and where both are."""
     light, view = np.broadcast_arrays(np.asarray(light, float), np.asarray(view, float))
     mu_i, mu_o = light[..., 2], view[..., 2]
     above = (mu_i > 0.0) & (mu_o > 0.0)
+    return np.where(above, mu_i, 1.0), np.where(above, mu_o, 1.0), above
+
+
+def _layer_share(mu_i, mu_o, depth: float, flatness: float) -> np.ndarray:
+    """(1 − T) s_i s_o / (s_i μo + s_o μi) at the cosines ``mu_i``, ``mu_o`` > 0 (…, broadcast together):
+    the fuzz's single scattering over A p / (4π) (module docstring), 1 − T being 1 for ``depth`` 0."""
     s_i, s_o = fuzz_projected_area(mu_i, flatness), fuzz_projected_area(mu_o, flatness)
-    return np.where(above, albedo * s_i * s_o / (4.0 * math.pi * np.where(above, s_i * mu_o + s_o * mu_i, 1.0)), 0.0)
+    share = s_i * s_o / (s_i * mu_o + s_o * mu_i)
+    return share if depth <= 0.0 else share * (1.0 - fuzz_transmittance(mu_i, mu_o, depth, flatness))
 
 
 def lommel_seeliger_albedo(mu, albedo: float = 1.0) -> np.ndarray:
@@ -176,11 +190,9 @@ def fuzz_brdf(light, view, albedo: float = 1.0, depth: float = 0.0, asymmetry: f
     (1 − :func:`fuzz_transmittance`) for a fuzz of optical depth ``depth`` > 0, the semi-infinite
     law itself for ``depth`` 0 (the veneer of the presets before it), times :func:`fuzz_phase` of
     asymmetry ``asymmetry``, its fibres lying flat in the share ``flatness``."""
-    light, view = np.broadcast_arrays(np.asarray(light, float), np.asarray(view, float))
-    law = lommel_seeliger(light, view, albedo, flatness) * fuzz_phase(light, view, asymmetry)
-    if depth <= 0.0:
-        return law
-    return law * (1.0 - fuzz_transmittance(light[..., 2], view[..., 2], depth, flatness))
+    mu_i, mu_o, above = _cosines_above(light, view)
+    law = np.where(above, albedo * _layer_share(mu_i, mu_o, depth, flatness) / (4.0 * math.pi), 0.0)
+    return law * fuzz_phase(light, view, asymmetry)
 
 
 #: Azimuths of :func:`fuzz_albedo_at_view`'s sum where the fuzz scatters forward (midpoints on
@@ -204,16 +216,8 @@ def fuzz_albedo_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0, asymmetry
         return near + far
     mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
     mu_i, weight = fuzz_quadrature(nodes)
-    layer = _layer_at_nodes(mu_i, mu_o, depth, flatness)
+    layer = mu_i * _layer_share(mu_i, mu_o[..., None], depth, flatness)
     return 0.5 * albedo * np.sum(weight * layer, axis=-1)
-
-
-def _layer_at_nodes(mu_i: np.ndarray, mu_o: np.ndarray, depth: float, flatness: float) -> np.ndarray:
-    """(…, nodes) (1 − T) μi s_i s_o / (s_i μo + s_o μi) at the light cosines ``mu_i`` (nodes,) and the
-    views ``mu_o`` (…): the layer's light toward the view per unit of A/2, 1 − T being 1 for ``depth`` 0."""
-    s_i, s_o = fuzz_projected_area(mu_i, flatness), fuzz_projected_area(mu_o, flatness)[..., None]
-    shade = 1.0 - fuzz_transmittance(mu_i, mu_o[..., None], depth, flatness) if depth > 0.0 else 1.0
-    return shade * mu_i * s_i * s_o / (s_i * mu_o[..., None] + s_o * mu_i)
 
 
 def _azimuth_phase(mu_i: np.ndarray, mu_o: np.ndarray, asymmetry: float, azimuths: int) -> np.ndarray:
@@ -236,7 +240,7 @@ def fuzz_albedo_sides_at_view(mu_o, albedo: float = 1.0, depth: float = 0.0, asy
         raise ValueError(f"azimuths must be even to split at 90°, not {azimuths}")
     mu_o = np.clip(np.asarray(mu_o, float), 1e-6, 1.0)
     mu_i, weight = fuzz_quadrature(nodes)
-    layer = _layer_at_nodes(mu_i, mu_o, depth, flatness)[..., None]
+    layer = (mu_i * _layer_share(mu_i, mu_o[..., None], depth, flatness))[..., None]
     phase = _azimuth_phase(mu_i, mu_o, asymmetry, azimuths)
     half = azimuths // 2
     sides = [np.sum(weight * np.mean(layer * part, axis=-1), axis=-1) * albedo / 4.0

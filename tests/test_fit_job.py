@@ -100,7 +100,7 @@ def test_a_fit_request_round_trips_through_json(tmp_path):
     ({"free": ()}, ["free", "one or more of"]),
     ({"free": ("void_fraction",), "dye_series": True}, ["dye_series", "dye_weight_percent"]),
     ({"target_ratios": "B/R=-1"}, ["target_ratios", "B/R=-1"]),
-    ({"budget": 5}, ["budget", "at least 7"]),
+    ({"budget": 5}, ["budget", "at least 8"]),
     ({"budget": 2}, ["budget", "≥ 3"]),
     ({"budget_seconds": -1.0}, ["budget_seconds"]),
     ({"seed": -1}, ["seed"]),

@@ -18,13 +18,13 @@ import pytest
 from precompute.optics.cook_torrance import cloth_specular
 from precompute.errors import ParameterError
 from precompute.fit.objective import load_measurement, split_views
-from precompute.fit.optimise import Budget, cloth_from_parts, fit_medium
+from precompute.fit.optimise import Budget, cloth_from_parts, fit_medium, minimise
 from precompute.fit.baseline import baseline_brdf, fit_baseline
 from precompute.fit.objective import Objective
 from precompute.fit.optimise import (PROFILE_MAX_SCANNED, PROFILE_MIN_POINTS, FitCancelled,
                                      fit_profiled_specular)
 from precompute.optics.cook_torrance import SPECULAR_DEFAULTS, fuzz_colour
-from precompute.fit.parameters import PARAMETERS
+from precompute.fit.parameters import PARAMETERS, parse_free
 from precompute.fit.parameters import VOIDS, species_table
 from precompute.fit.report import preset_toml
 from precompute.optics.medium import load_preset_config
@@ -440,3 +440,23 @@ def test_the_profile_ends_no_worse_than_the_values_it_is_given(tmp_path):
     for name in (*sheen, *fuzz):
         assert values[name] == pytest.approx(given[name], rel=1e-6), name
     assert well(cloth_from_parts(medium, terms, {**given, **values})) < 1e-9
+
+
+def test_a_fit_started_in_a_narrow_well_returns_its_start():
+    # a well far narrower than CMA-ES's first step (σ₀ 0.2 of each range) about the start, inside a broad
+    # bowl whose floor is higher: the samples about the start miss the well, and only the start is in it
+    free = parse_free("dye_weight_percent,specular_slope")
+    start = {"dye_weight_percent": 2.0, "specular_slope": 0.3}
+    centre = np.array([p.to_unit(start[p.name]) for p in free])
+
+    def evaluate(parameters, relative_error, seed):
+        u = np.array([p.to_unit(parameters[p.name]) for p in free])
+        distance = float(np.linalg.norm(u - centre))
+        return 0.5 + (distance - 0.3) ** 2 - 0.5 * math.exp(-(distance / 1e-3) ** 2)
+
+    search = minimise(evaluate, free, start, seed=3, budget=Budget(evaluations=40))
+    assert search["best"] == pytest.approx(start)
+    assert search["estimate"] == pytest.approx(0.09)
+    firsts = [e for e in search["history"] if e.generation == 0]
+    assert [e.kind for e in firsts].count("start") == 1
+    assert all(e.objective > 0.09 for e in search["history"] if e.kind == "candidate")

@@ -17,6 +17,9 @@ honest about it.
 
 * **Common random numbers**: every candidate of one generation is evaluated with the same forward
   seed, so their ranking, which is all CMA-ES uses, is not scrambled by independent noise.
+* **The start is a candidate**: the first generation evaluates the start itself beside CMA-ES's
+  samples about it, so a fit started from a fitted preset returns that preset unless it finds a
+  better point (CMA-ES's samples need not come near a narrow well the start sits in).
 * **Re-evaluation of the incumbent**: each generation the best point so far is evaluated again (at
   the generation's seed and accuracy), and a point's estimate is the inverse-variance weighted mean
   of all its evaluations (variance ∝ relative_error²).  A candidate that looked best by a lucky draw
@@ -29,7 +32,7 @@ honest about it.
 
 Budget
 ------
-``Budget(evaluations=80, seconds=None)``: forward-model calls (candidates, incumbent
+``Budget(evaluations=80, seconds=None)``: forward-model calls (candidates, the start, incumbent
 re-evaluations and the final one; a candidate the medium refuses costs none) and, optionally, wall
 seconds (a generation is not started when it and the final evaluation would not fit).  CMA-ES's own
 stopping rules (``tolx`` = 1e-3 of the range) end it earlier.
@@ -120,9 +123,10 @@ class AccuracySchedule:
 
 @dataclass(frozen=True)
 class Evaluation:
-    """One entry of a fit's history.  ``kind``: ``"candidate"`` (asked by CMA-ES), ``"incumbent"``
-    (the best so far, evaluated again), ``"final"`` (the winner at the final accuracy) or
-    ``"refused"`` (a medium the loader refuses: no forward call, :data:`INFEASIBLE_OBJECTIVE`)."""
+    """One entry of a fit's history.  ``kind``: ``"candidate"`` (asked by CMA-ES), ``"start"`` (the
+    start, evaluated in the first generation), ``"incumbent"`` (the best so far, evaluated again),
+    ``"final"`` (the winner at the final accuracy) or ``"refused"`` (a medium the loader refuses: no
+    forward call, :data:`INFEASIBLE_OBJECTIVE`)."""
 
     index: int
     generation: int
@@ -282,10 +286,10 @@ def check_budget(budget: Budget, n_free: int, popsize: int | None = None) -> int
     hold one generation and the final evaluation."""
     population = popsize or population_size(n_free)
     bounds.FIT_EVALUATIONS.check(budget.evaluations)
-    if budget.evaluations < population + 1:
+    if budget.evaluations < population + 2:
         raise ParameterError("--budget-evaluations", budget.evaluations,
-                             f"at least {population + 1} for {n_free} free parameters (one generation of "
-                             f"{population} candidates and the final evaluation)")
+                             f"at least {population + 2} for {n_free} free parameters (one generation of "
+                             f"{population} candidates and the start, and the final evaluation)")
     return population
 
 
@@ -334,13 +338,19 @@ def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], fr
     spent = 0  # forward evaluations
     reserve = 1  # the final evaluation
     generation = 0
-    incumbent: _Point | None = None
-    stop_reason = ""
-    generation_seconds = 0.0
 
     def to_parameters(u) -> tuple[tuple, dict]:
         key = tuple(round(float(v), 12) for v in u)
         return key, {p.name: p.from_unit(v) for p, v in zip(free, key)}
+
+    # The start is evaluated beside the first generation's candidates, in the incumbent's place: CMA-ES
+    # samples about it and may never land on it, and a fit started from a fitted preset must not end
+    # further from the measurement than that preset.
+    start_key, start_parameters = to_parameters([p.to_unit(start[p.name]) for p in free])
+    start_point = _Point(start_key, start_parameters)
+    incumbent: _Point | None = None
+    stop_reason = ""
+    generation_seconds = 0.0
 
     def record(point: _Point, kind: str, accuracy: float, forward_seed: int, value, seconds: float) -> float:
         nonlocal spent
@@ -362,7 +372,7 @@ def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], fr
 
     while True:
         accuracy = schedule.relative_error(float(es.sigma))
-        needed = population + (1 if incumbent is not None else 0)
+        needed = population + 1  # the candidates and the incumbent's re-evaluation (the start's, at first)
         if spent + needed + reserve > budget.evaluations:
             stop_reason = f"budget: {budget.evaluations} forward evaluations"
             break
@@ -386,6 +396,8 @@ def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], fr
                  for key, parameters in map(to_parameters, solutions)]
         if incumbent is not None:
             batch.append((incumbent, "incumbent"))
+        else:
+            batch.append((points.setdefault(start_key, start_point), "start"))
         requests = [(dict(point.parameters), accuracy, forward_seed) for point, _ in batch]
         values = [record(point, kind, accuracy, forward_seed, value, seconds)
                   for (point, kind), (value, seconds) in zip(batch, evaluate_many(evaluate, requests, cancel))]

@@ -21,8 +21,10 @@ def test_a_fit_on_two_local_workers_is_the_fit_made_here(measured):  # noqa: F81
     assert spread.parameters == here.parameters
     assert [(e.kind, e.parameters, e.objective, e.relative_error, e.seed) for e in spread.history] == \
         [(e.kind, e.parameters, e.objective, e.relative_error, e.seed) for e in here.history]
-    # the candidates ran on the workers: this process's copy of the model made only the final evaluation
-    assert len(model.calls) == 1 and model.calls[0]["relative_error"] == pytest.approx(0.01)
+    # the candidates ran on the workers: this process's copy of the model made only the final evaluations
+    finals = [e for e in here.history if e.kind == "final"]
+    assert len(model.calls) == len(finals) >= 1
+    assert all(call["relative_error"] == pytest.approx(0.01) for call in model.calls)
 
 
 def test_cancel_stops_a_fit_on_a_cluster(measured):  # noqa: F811

@@ -55,7 +55,7 @@ def response_cache(tmp_path_factory) -> pathlib.Path:
 
 def small_request(measured, out, **changes) -> FitRequest:
     fields = dict(measured=str(measured), out=str(out), free=("dye_weight_percent", "specular_weight"),
-                  medium=TINY_MEDIUM, budget=8, dye_series=True)
+                  medium=TINY_MEDIUM, budget=9, dye_series=True)
     return FitRequest(**{**fields, **changes})
 
 
@@ -100,7 +100,7 @@ def test_a_fit_request_round_trips_through_json(tmp_path):
     ({"free": ()}, ["free", "one or more of"]),
     ({"free": ("void_fraction",), "dye_series": True}, ["dye_series", "dye_weight_percent"]),
     ({"target_ratios": "B/R=-1"}, ["target_ratios", "B/R=-1"]),
-    ({"budget": 5}, ["budget", "at least 8"]),
+    ({"budget": 5}, ["budget", "at least 9"]),
     ({"budget": 2}, ["budget", "≥ 3"]),
     ({"budget_seconds": -1.0}, ["budget_seconds"]),
     ({"seed": -1}, ["seed"]),
@@ -222,7 +222,7 @@ def test_a_fit_in_its_child_shows_progress_and_writes_the_fit_folder(fitted):
     assert fractions == sorted(fractions) and fractions[-1] == 1.0 and 0.0 <= fractions[0] < 0.2
     stages = [stage for _, stage in seen]
     assert any(stage.startswith("cloth response: ") for stage in stages)  # the session's first fit renders it
-    assert any(stage.startswith("evaluation 7/8") for stage in stages) and "writing the report" in stages
+    assert any(stage.startswith("evaluation 7/9") for stage in stages) and "writing the report" in stages
     outcome = job.outcome
     assert sorted(p.name for p in outcome.folder.iterdir()) == sorted(FIT_FOLDER_FILES) and outcome.figures
     assert outcome.preset == outcome.folder / "preset.toml" and outcome.folder == pathlib.Path(job.request.out)
@@ -257,7 +257,7 @@ def test_the_childs_fit_is_the_command_lines(fitted, measured, response_cache, t
     preset = tmp_path / "start.toml"  # its dye spectrum resolves in precompute/data
     preset.write_text(to_toml(config))
     code = fit_cli.main(["--measured", str(measured), "--config", str(preset), "--free",
-                         "dye_weight_percent,specular_weight", "--dye-series", "--budget-evaluations", "8",
+                         "dye_weight_percent,specular_weight", "--dye-series", "--budget-evaluations", "9",
                          "--seed", "0", "--cache-dir", str(response_cache), "--out", str(tmp_path / "cli"), "--json"])
     assert code == 0, capsys.readouterr().err[-2000:]
     mine, theirs = (json.loads((folder / "fit.json").read_text()) for folder in (job.outcome.folder, tmp_path / "cli"))
@@ -326,7 +326,7 @@ def set_up_small_fit(scene, measured) -> None:
     fit.measured_path = str(measured)
     fit.free = {"dye_weight_percent", "specular_weight"}
     fit.dye_series = True
-    fit.budget = 8
+    fit.budget = 9
 
 
 @pytest.mark.render

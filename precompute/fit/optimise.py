@@ -27,14 +27,16 @@ honest about it.
 * **Cheap candidates, accurate winner**: the accuracy asked of the forward model follows CMA-ES's
   step size σ: ``relative_error = loose · (tight/loose)^t``, t = log₁₀(σ₀/σ) clipped to [0, 1], from
   ``loose`` (0.08) while the search is wide to ``tight`` (0.02) once σ has shrunk tenfold; the
-  winner is evaluated once more at ``final`` (0.01), and that evaluation is what the report shows.
+  winner is evaluated once more at ``final`` (0.01), and so is the start, with the same seed: the
+  closer of the two is the fit, and its evaluation is what the report shows (the lowest of many
+  noisy estimates is low by luck, so a winner may be further than the start it was found from).
   (A forward evaluation costs ∝ 1/relative_error².)
 
 Budget
 ------
 ``Budget(evaluations=80, seconds=None)``: forward-model calls (candidates, the start, incumbent
-re-evaluations and the final one; a candidate the medium refuses costs none) and, optionally, wall
-seconds (a generation is not started when it and the final evaluation would not fit).  CMA-ES's own
+re-evaluations and the two final ones; a candidate the medium refuses costs none) and, optionally, wall
+seconds (a generation is not started when it and the final evaluations would not fit).  CMA-ES's own
 stopping rules (``tolx`` = 1e-3 of the range) end it earlier.
 
 Progress and cancel
@@ -276,6 +278,10 @@ class Refused:
         return INFEASIBLE_OBJECTIVE + 100.0 * max(0.0, self.excess)
 
 
+#: Accurate evaluations after the search: the winner's and the start's (:func:`fit_medium`).
+FINAL_EVALUATIONS = 2
+
+
 def population_size(n: int) -> int:
     """CMA-ES's population for ``n`` free parameters: max(6, 4 + ⌊3 ln n⌋)."""
     return max(6, 4 + int(3 * math.log(n)))
@@ -283,13 +289,14 @@ def population_size(n: int) -> int:
 
 def check_budget(budget: Budget, n_free: int, popsize: int | None = None) -> int:
     """The population size; ParameterError naming ``--budget-evaluations`` when the budget does not
-    hold one generation and the final evaluation."""
+    hold one generation and the final evaluations."""
     population = popsize or population_size(n_free)
     bounds.FIT_EVALUATIONS.check(budget.evaluations)
-    if budget.evaluations < population + 2:
+    least = population + 1 + FINAL_EVALUATIONS
+    if budget.evaluations < least:
         raise ParameterError("--budget-evaluations", budget.evaluations,
-                             f"at least {population + 2} for {n_free} free parameters (one generation of "
-                             f"{population} candidates and the start, and the final evaluation)")
+                             f"at least {least} for {n_free} free parameters (one generation of {population} "
+                             f"candidates and the start, and the final evaluations of the winner and the start)")
     return population
 
 
@@ -321,8 +328,8 @@ def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], fr
     the same either way.
 
     Returns ``{"best": parameters, "estimate": objective, "history": [Evaluation], "stop_reason",
-    "generations", "seconds", "sigma"}``; the final, accurate evaluation is left to the caller (it
-    reserves one evaluation of the budget for it)."""
+    "generations", "seconds", "sigma"}``; the final, accurate evaluations are left to the caller (it
+    reserves :data:`FINAL_EVALUATIONS` of the budget for them)."""
     import cma
 
     n = len(free)
@@ -336,7 +343,7 @@ def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], fr
     history: list[Evaluation] = []
     points: dict[tuple, _Point] = {}
     spent = 0  # forward evaluations
-    reserve = 1  # the final evaluation
+    reserve = FINAL_EVALUATIONS
     generation = 0
 
     def to_parameters(u) -> tuple[tuple, dict]:
@@ -378,7 +385,7 @@ def minimise(evaluate: Callable[[dict, float, int], float | tuple | Refused], fr
             break
         if budget.seconds is not None and history:
             per_evaluation = generation_seconds / max(needed, 1)
-            final_cost = per_evaluation * (accuracy / schedule.final) ** 2
+            final_cost = FINAL_EVALUATIONS * per_evaluation * (accuracy / schedule.final) ** 2
             if time.perf_counter() - began + generation_seconds + final_cost > budget.seconds:
                 stop_reason = f"budget: {budget.seconds:g} s"
                 break
@@ -502,25 +509,33 @@ def fit_medium(measurement, preset_config: Mapping, base_dir: str | pathlib.Path
         search = minimise(evaluate, searched, {p.name: start[p.name] for p in searched}, seed=seed, budget=budget,
                           schedule=schedule, popsize=population, progress=progress, cancel=cancel,
                           evaluate_many=evaluate_many)
-    best = search["best"]
     history = search["history"]
-    fitted_config, keywords = apply(config, specular, best)
-    if cancel is not None and cancel():
-        raise FitCancelled("fit cancelled")
+    # The winner's estimate comes from loose evaluations, and the lowest of many noisy estimates is low by
+    # luck: the start is evaluated again beside it at the final accuracy, with the same seed, and the closer
+    # of the two is the fit (a fit from a fitted preset never returns a medium further than the preset).
+    finalists = [search["best"]]
+    if any(abs(p.to_unit(search["best"][p.name]) - p.to_unit(start[p.name])) > 1e-9 for p in searched):
+        finalists.append(dict(start))
     final_seed = _derived_seed(seed, _FINAL_TAG)
-    t0 = time.perf_counter()
-    all_rgb, values = evaluate.model_and_values(fitted_config, keywords, schedule.final, final_seed)
-    if values:  # the specular term refitted to the accurate evaluation
-        best = {**best, **values}
-        fitted_config, keywords = apply(config, specular, best)
-    final_objective = evaluate.score(all_rgb)
+    finals = []
+    for parameters in finalists:
+        if cancel is not None and cancel():
+            raise FitCancelled("fit cancelled")
+        if evaluate.refusal(parameters) is not None:
+            continue
+        t0 = time.perf_counter()
+        all_rgb, values = evaluate.model_and_values(*apply(config, specular, parameters), schedule.final, final_seed)
+        parameters = {**parameters, **values}  # the specular term refitted to the accurate evaluation
+        finals.append((evaluate.score(all_rgb), parameters, all_rgb))
+        history.append(Evaluation(len(history), search["generations"], "final", dict(parameters), finals[-1][0],
+                                  schedule.final, final_seed, time.perf_counter() - t0))
+        if progress is not None:
+            progress(FitProgress(search["spent"] + len(finals), budget.evaluations, min(f[0] for f in finals),
+                                 dict(parameters), schedule.final, search["sigma"], search["generations"]))
+    final_objective, best, all_rgb = min(finals, key=lambda final: final[0])
+    fitted_config, keywords = apply(config, specular, best)
     model_rgb = objective.check(all_rgb[:len(all_rgb) - swatches])
     swatch_rgb = all_rgb[len(all_rgb) - swatches:] if swatches else None
-    history.append(Evaluation(len(history), search["generations"], "final", dict(best), final_objective,
-                              schedule.final, final_seed, time.perf_counter() - t0))
-    if progress is not None:
-        progress(FitProgress(search["spent"] + 1, budget.evaluations, final_objective, dict(best), schedule.final,
-                             search["sigma"], search["generations"]))
     baseline = fit_baseline(objective)
     baseline_rgb = baseline.brdf(views.angles_deg)
     metrics = {"model": objective.terms(model_rgb), "baseline": objective.terms(baseline_rgb)}
@@ -574,8 +589,9 @@ class CandidateEvaluator:
         keywords = {**keywords, **{p.path: values[p.name] for p in self.profiled}}
         return cloth_from_parts(medium_part, specular_part, keywords), values
 
-    def __call__(self, parameters: dict, relative_error: float, forward_seed: int) -> float | tuple | Refused:
-        candidate, keywords = apply(self.config, self.specular, parameters)
+    def refusal(self, parameters: dict) -> Refused | None:
+        """:class:`Refused` where the medium at ``parameters`` is one the loader refuses, else None."""
+        candidate, _ = apply(self.config, self.specular, parameters)
         total = total_volume_fraction(candidate)
         if total >= MAX_VOLUME_FRACTION:
             return Refused(f"particle volume fractions sum to {total:.3g} (≥ {MAX_VOLUME_FRACTION})",
@@ -584,6 +600,13 @@ class CandidateEvaluator:
             medium_from_dict(candidate, self.base_dir)
         except ParameterError as error:
             return Refused(str(error))
+        return None
+
+    def __call__(self, parameters: dict, relative_error: float, forward_seed: int) -> float | tuple | Refused:
+        refused = self.refusal(parameters)
+        if refused is not None:
+            return refused
+        candidate, keywords = apply(self.config, self.specular, parameters)
         rgb, values = self.model_and_values(candidate, keywords, relative_error, forward_seed)
         return (self.score(rgb), values) if self.profiled else self.score(rgb)
 

@@ -361,7 +361,7 @@ def write_plots(result: FitResult, folder: pathlib.Path) -> dict[str, pathlib.Pa
         figure.colorbar(points, ax=ax, label="relative error asked of the forward model")
         finals = [e for e in forward if e.kind == "final"]
         ax.scatter([e.index for e in finals], [e.objective for e in finals], marker="*", s=140, facecolors="none",
-                   edgecolors="k", label="final (accurate) evaluation of the winner")
+                   edgecolors="k", label="final (accurate) evaluations: the winner's and the start's")
         best, running = math.inf, []
         for e in forward:
             best = min(best, e.objective)

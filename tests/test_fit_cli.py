@@ -86,6 +86,18 @@ def test_a_fit_writes_its_folder_and_a_preset_the_bake_accepts(inputs, tmp_path,
     assert "fit" not in call["config"]
 
 
+def test_the_search_asks_the_forward_model_for_the_errors_given(inputs, tmp_path, fake_forward):
+    assert fit(inputs, tmp_path / "fit", "--search-error", "0.03,0.015") == 0
+    fitted = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    assert fitted["schedule"] == {"loose": 0.03, "tight": 0.015, "final": 0.01}
+    searched = [e["relative_error"] for e in fitted["history"] if e["kind"] != "final"]
+    assert searched[0] == pytest.approx(0.03) and all(0.015 <= error <= 0.03 for error in searched)
+    assert all(e["relative_error"] == pytest.approx(0.01) for e in fitted["history"] if e["kind"] == "final")
+    assert fit(inputs, tmp_path / "fine", "--search-error", "0.005,0.005") == 0
+    fine = json.loads((tmp_path / "fine" / "fit.json").read_text())
+    assert fine["schedule"]["final"] == 0.005  # never looser than the search
+
+
 def test_unknown_parameter_is_bad_input(inputs, tmp_path, fake_forward, capsys):
     code = fit_cli.main(["--measured", str(inputs["measured"]), "--free", "void_fraction,sheen",
                                 "--out", str(tmp_path / "fit")])
@@ -102,6 +114,8 @@ def test_unknown_parameter_is_bad_input(inputs, tmp_path, fake_forward, capsys):
     (["--target-ratios", "B/R=-1"], ["--target-ratios"]),
     (["--budget-evaluations", "4"], ["--budget-evaluations"]),
     (["--hold-bands", "1.15,0.85"], ["--hold-bands", "0 < LOW < 1 < HIGH"]),
+    (["--search-error", "0.01,0.05"], ["--search-error", "TIGHT ≤ LOOSE"]),
+    (["--search-error", "0.05"], ["--search-error"]),
     (["--out", "{tmp}/synthetic.csv"], ["--out", "is a file"]),
 ])
 def test_bad_inputs_exit_with_2_before_any_work(inputs, tmp_path, fake_forward, capsys, args, words):

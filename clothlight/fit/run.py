@@ -27,7 +27,8 @@ from precompute.optics.medium import load_preset_config, medium_from_dict
 from precompute.outputs import check_writable_folder
 from precompute.fit.figures import parse_band
 from precompute.fit.objective import Objective, Views, load_measurement, parse_target_ratios, split_views
-from precompute.fit.optimise import FIT_CODE, Budget, FitProgress, FitResult, check_budget, fit_medium
+from precompute.fit.optimise import (FIT_CODE, AccuracySchedule, Budget, FitProgress, FitResult, check_budget,
+                                     fit_medium, parse_search_error)
 from precompute.fit.parameters import FitParameter, initial_values, parse_free
 from precompute.optics.measured_sample import sample_weave_name
 from precompute.optics.cook_torrance import FIT_TABLE, specular_from_config
@@ -53,6 +54,7 @@ class FitInputs:
     budget: Budget
     max_back_front: float | None
     hold_bands: tuple[float, float] | None
+    schedule: AccuracySchedule
     dye_range: tuple[float, float] | None
     out: pathlib.Path
     cache_dir: pathlib.Path | None
@@ -62,14 +64,15 @@ def check_fit_inputs(measured: str | pathlib.Path, preset: str | pathlib.Path, f
                      out: str | pathlib.Path, overrides: Mapping[str, object] | Sequence[str] = (),
                      target_ratios: str | Mapping[str, float] | None = None, max_back_front: float | None = None,
                      hold_bands: str | Sequence[float] | None = None, budget_evaluations: int = 150,
-                     budget_seconds: float | None = None, dye_series: bool = False,
-                     cache_dir: str | pathlib.Path | None = None) -> FitInputs:
+                     budget_seconds: float | None = None, search_error: str | Sequence[float] | None = None,
+                     dye_series: bool = False, cache_dir: str | pathlib.Path | None = None) -> FitInputs:
     """Every input of a fit, checked before any work: the free parameters (and whether a dye series
     can serve them), the measurement, the starting medium (a shipped preset's name or a preset TOML
     file, with ``overrides`` as ``precompute.bake.apply_overrides`` takes them: ``{"dye.weight_percent":
     2.0}``), its sample weave (``[sample]``, :mod:`precompute.optics.measured_sample`) and the species
-    the free parameters need, the colour targets, the budget, the back-lit limit, the band held, the output folder
-    and the cache folder.  ParameterError (an InputError) naming the first bad one."""
+    the free parameters need, the colour targets, the budget, the back-lit limit, the band held, the search's
+    relative errors (:func:`precompute.fit.optimise.parse_search_error`), the output folder and the cache
+    folder.  ParameterError (an InputError) naming the first bad one."""
     free_parameters = parse_free(free)
     dye_range = None
     if dye_series:
@@ -98,11 +101,12 @@ def check_fit_inputs(measured: str | pathlib.Path, preset: str | pathlib.Path, f
                                            and max_back_front > 0):
         raise ParameterError("--max-back-front", max_back_front, "a ratio > 0")
     bands = None if hold_bands is None else parse_band(hold_bands)
+    schedule = AccuracySchedule() if search_error is None else parse_search_error(search_error)
     out = check_fit_folder(out)
     if cache_dir is not None:
         check_writable_folder(cache_dir, "--cache-dir", what="a cache folder")
     return FitInputs(measurement, pathlib.Path(measured).name, config, medium_config, base_dir, free_parameters,
-                     ratios, views, budget, max_back_front, bands, dye_range, out,
+                     ratios, views, budget, max_back_front, bands, schedule, dye_range, out,
                      None if cache_dir is None else pathlib.Path(cache_dir))
 
 
@@ -145,7 +149,7 @@ def run_fit(inputs: FitInputs, *, seed: int, scheduler: str | None = None, threa
                           forward_model=forward_model, seed=seed, budget=inputs.budget,
                           target_ratios=inputs.target_ratios, progress=searching, cancel=cancel,
                           max_back_front=inputs.max_back_front, hold_bands=inputs.hold_bands,
-                          scheduler=executor)
+                          schedule=inputs.schedule, scheduler=executor)
 
 
 __all__ = ["FitInputs", "build_forward", "check_fit_inputs", "run_fit"]

@@ -26,11 +26,13 @@ honest about it.
   is pulled back to its mean before it can be returned.
 * **Cheap candidates, accurate winner**: the accuracy asked of the forward model follows CMA-ES's
   step size σ: ``relative_error = loose · (tight/loose)^t``, t = log₁₀(σ₀/σ) clipped to [0, 1], from
-  ``loose`` (0.08) while the search is wide to ``tight`` (0.02) once σ has shrunk tenfold; the
+  ``loose`` (0.08) while the search is wide to ``tight`` (0.02) once σ has shrunk tenfold (both set by
+  ``--search-error``, :func:`parse_search_error`); the
   winner is evaluated once more at ``final`` (0.01), and so is the start, with the same seed: the
   closer of the two is the fit, and its evaluation is what the report shows (the lowest of many
   noisy estimates is low by luck, so a winner may be further than the start it was found from).
-  (A forward evaluation costs ∝ 1/relative_error².)
+  (A forward evaluation's paths cost ∝ 1/relative_error²; its optics and tables, the same at every
+  accuracy, can cost more.)
 
 Budget
 ------
@@ -121,6 +123,20 @@ class AccuracySchedule:
 
     def to_dict(self) -> dict:
         return {"loose": self.loose, "tight": self.tight, "final": self.final}
+
+
+def parse_search_error(text: str | Sequence[float]) -> AccuracySchedule:
+    """``"0.08,0.02"`` (or a pair) → the :class:`AccuracySchedule` whose search asks the forward model for
+    that relative error while it is wide and once it has narrowed (``--search-error``); the final
+    evaluations ask for 0.01, or the tight error where that is smaller.  ParameterError otherwise."""
+    allowed = "LOOSE,TIGHT relative errors with 0 < TIGHT ≤ LOOSE < 1, e.g. 0.08,0.02 (the default)"
+    try:
+        values = [float(v) for v in (text.split(",") if isinstance(text, str) else text)]
+    except (TypeError, ValueError):
+        raise ParameterError("--search-error", text, allowed) from None
+    if len(values) != 2 or not all(math.isfinite(v) for v in values) or not 0.0 < values[1] <= values[0] < 1.0:
+        raise ParameterError("--search-error", text, allowed)
+    return AccuracySchedule(values[0], values[1], min(AccuracySchedule.final, values[1]))
 
 
 @dataclass(frozen=True)

@@ -143,7 +143,7 @@ def parse_search_error(text: str | Sequence[float]) -> AccuracySchedule:
 class Evaluation:
     """One entry of a fit's history.  ``kind``: ``"candidate"`` (asked by CMA-ES), ``"start"`` (the
     start, evaluated in the first generation), ``"incumbent"`` (the best so far, evaluated again),
-    ``"final"`` (the winner at the final accuracy) or ``"refused"`` (a medium the loader refuses: no
+    ``"final"`` (the winner, then the start, at the final accuracy) or ``"refused"`` (a medium the loader refuses: no
     forward call, :data:`INFEASIBLE_OBJECTIVE`)."""
 
     index: int

@@ -196,13 +196,22 @@ HOST_REFRACTIVE_INDEX = Bound("host.refractive_index.n", 1.0, 10.0)
 #: Wavelengths of the simulation: every table grows with their number.
 WAVELENGTH_COUNT = Bound("wavelengths (count)", 1, 1001, integer=True)
 
+def parse_pair(value, name: str, allowed: str) -> tuple[float, float]:
+    """Two finite numbers, given as a pair or typed ``"A,B"``.  ParameterError naming ``name`` with
+    ``allowed`` (what the caller takes) otherwise; the caller checks their order and range."""
+    try:
+        values = [float(part) for part in (value.split(",") if isinstance(value, str) else value)]
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, allowed) from None
+    if len(values) != 2 or not all(math.isfinite(v) for v in values):
+        raise ParameterError(name, value, allowed)
+    return values[0], values[1]
+
+
 def check_dye_range(value, name: str = "dye_series") -> tuple[float, float]:
     """A dye range (low, high), % of fibre weight, as a pair of numbers or typed ``"LOW,HIGH"``:
     0 ≤ low < high < 100.  ParameterError naming ``name`` otherwise."""
-    try:
-        low, high = (float(part) for part in (value.split(",") if isinstance(value, str) else value))
-    except (TypeError, ValueError):
-        raise ParameterError(name, value, "two dye amounts LOW,HIGH in % of fibre weight, e.g. 0.5,5") from None
+    low, high = parse_pair(value, name, "two dye amounts LOW,HIGH in % of fibre weight, e.g. 0.5,5")
     if not (0.0 <= low < high < 100.0):
         raise ParameterError(name, value, "0 ≤ LOW < HIGH < 100 (% of fibre weight)")
     return low, high

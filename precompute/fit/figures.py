@@ -31,6 +31,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from precompute.bounds import parse_pair
 from precompute.errors import ParameterError
 from precompute.fit.measured_data import relative_rms_error
 from precompute.fit.objective import CHANNELS, TOLERANCE_DEG, Views, channel_relative_rms, combined
@@ -120,13 +121,10 @@ def parse_band(text: str | Sequence[float]) -> tuple[float, float]:
     """``"0.9,1.1"`` (or a pair) → (low, high), with 0 < low < 1 < high: the band a ratio model /
     measured is held within (``--hold-bands``).  ParameterError otherwise."""
     allowed = "LOW,HIGH with 0 < LOW < 1 < HIGH, e.g. 0.85,1.15 (issue 43's band)"
-    try:
-        values = [float(v) for v in (text.split(",") if isinstance(text, str) else text)]
-    except (TypeError, ValueError):
-        raise ParameterError("--hold-bands", text, allowed) from None
-    if len(values) != 2 or not all(math.isfinite(v) for v in values) or not 0.0 < values[0] < 1.0 < values[1]:
+    low, high = parse_pair(text, "--hold-bands", allowed)
+    if not 0.0 < low < 1.0 < high:
         raise ParameterError("--hold-bands", text, allowed)
-    return values[0], values[1]
+    return low, high
 
 
 def band_penalty(model: np.ndarray, measured: np.ndarray, views: Views, band: tuple[float, float]) -> float:

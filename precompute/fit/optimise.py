@@ -130,13 +130,10 @@ def parse_search_error(text: str | Sequence[float]) -> AccuracySchedule:
     that relative error while it is wide and once it has narrowed (``--search-error``); the final
     evaluations ask for 0.01, or the tight error where that is smaller.  ParameterError otherwise."""
     allowed = "LOOSE,TIGHT relative errors with 0 < TIGHT ≤ LOOSE < 1, e.g. 0.08,0.02 (the default)"
-    try:
-        values = [float(v) for v in (text.split(",") if isinstance(text, str) else text)]
-    except (TypeError, ValueError):
-        raise ParameterError("--search-error", text, allowed) from None
-    if len(values) != 2 or not all(math.isfinite(v) for v in values) or not 0.0 < values[1] <= values[0] < 1.0:
+    loose, tight = bounds.parse_pair(text, "--search-error", allowed)
+    if not 0.0 < tight <= loose < 1.0:
         raise ParameterError("--search-error", text, allowed)
-    return AccuracySchedule(values[0], values[1], min(AccuracySchedule.final, values[1]))
+    return AccuracySchedule(loose, tight, min(AccuracySchedule.final, tight))
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ yarn sample's").
         [--samples 16] [--pixels-per-patch 12] [--threads-per-cm 20] [--cache-dir DIR]
 
 For each yarn (a preset's name, baked with ``python -m precompute bake``'s defaults and cached, or a
-yarn bake folder; default ``voided_red_cotton`` and ``white_cotton``), on the validation weave at
+yarn bake folder; default ``voided_red_cotton`` and ``ecru_cotton``), on the validation weave at
 ``--threads-per-cm`` (default 20, the validation weave itself):
 
 1. **The path-traced sample** (``clothlight.blender.garment.path_traced``): the cloth
@@ -38,7 +38,7 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 from subject_medium import SUBJECT_PRESET
 
-DEFAULT_YARNS = (SUBJECT_PRESET, "white_cotton")
+DEFAULT_YARNS = (SUBJECT_PRESET, "ecru_cotton")
 #: Below this broad-light albedo a channel's gain is too small to measure q from.
 LEAST_ALBEDO_FOR_Q = 0.2
 

@@ -1,6 +1,6 @@
 """example_blends/closeup_denim_twill.blend (scripts/make_example_blends.py --denim-only): the denim
 close-up, a warp-faced 3/1 twill of an indigo warp (the fitted blue_cotton yarn) and an ecru weft
-(white_cotton, fitted to MERL's warm white-fabric) with their fibres, each yarn in its own material, in
+(ecru_cotton, fitted to MERL's warm white-fabric) with their fibres, each yarn in its own material, in
 ClothLight's general mode and in Principled+sheen on the same geometry, front-lit and back-lit.  The file
 is opened, not rendered (test_example_blends.py renders every example)."""
 
@@ -15,7 +15,7 @@ from mathutils import Vector  # noqa: E402
 from precompute.optics.medium import load_preset_config  # noqa: E402
 
 BLEND = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "closeup_denim_twill.blend"
-PRESET, WEFT_PRESET = "blue_cotton", "white_cotton"
+PRESET, WEFT_PRESET = "blue_cotton", "ecru_cotton"
 YARN_MATERIAL = "ClothLight Denim Warp (Blue Cotton)"
 WEFT_MATERIAL = "ClothLight Denim Weft (White Cotton)"
 #: The 3/1 Z twill's drawdown (clothlight.weave.patterns.twill(3, 1)): pick i, end j, True where the
@@ -64,7 +64,7 @@ def _face_materials(mesh) -> np.ndarray:
 
 
 def test_warp_faces_wear_the_blue_yarn_and_weft_faces_the_ecru_one(blend):
-    """Slot 0 the warp's blue_cotton material, slot 1 the weft's white_cotton (ecru); every face takes its
+    """Slot 0 the warp's blue_cotton material, slot 1 the weft's ecru_cotton; every face takes its
     yarn's (a face's vertices are all of one yarn), half of the faces each (8 warps, 8 wefts)."""
     sample = blend.objects["ClothLight Sample"]
     assert [slot.material.name for slot in sample.material_slots] == [YARN_MATERIAL, WEFT_MATERIAL]
@@ -132,9 +132,9 @@ def _packed_lobes(material):
     return lobes, pixels[:, : width // 5, :3].mean(axis=(0, 1))
 
 
-def test_the_clothlight_materials_read_blue_cotton_and_white_cotton_packed(blend):
+def test_the_clothlight_materials_read_blue_cotton_and_ecru_cotton_packed(blend):
     """The warp's material is blue_cotton's: its lobe table is blue and packed, its sheen is the
-    preset's fitted [fit] specular term; the weft's is white_cotton's, its own packed table, much
+    preset's fitted [fit] specular term; the weft's is ecru_cotton's, its own packed table, much
     paler; nothing in either names a folder of this machine."""
     yarn, weft = blend.materials[YARN_MATERIAL], blend.materials[WEFT_MATERIAL]
     lobes, diffuse = _packed_lobes(yarn)
@@ -226,7 +226,7 @@ def test_a_sun_in_front_and_a_window_behind(blend):
 
 @pytest.mark.slow
 def test_the_packed_lobe_table_is_blue_cottons_bake(blend):
-    """The packed images hold blue_cotton's and white_cotton's lobes.exr to the last bit (the bake, or
+    """The packed images hold blue_cotton's and ecru_cotton's lobes.exr to the last bit (the bake, or
     the cache's copy)."""
     from clothlight.jobs import BakeJob
     from clothlight.medium_settings import preset_request

@@ -25,11 +25,11 @@ from subject_medium import SUBJECT_PRESET
 out = pathlib.Path(tempfile.mkdtemp(prefix="clothlight-bench-material-"))
 grids = ["transport.angular_resolution=8", "transport.incidence_resolution=9"]
 # The particle red the figures were measured on (a scattering medium: almost no light crosses a yarn
-# unscattered), the default and blue_cotton, yarns of fibres in air (their unscattered light, straight
+# unscattered), the default and indigo_cotton, yarns of fibres in air (their unscattered light, straight
 # through the yarn's thin edges, one more closure in plain nodes; the default's fuzz scatters forward,
 # one more again, and its weights are read from Float Curves) and the paper's literal medium (a tinted
 # glass rod: the unscattered light is most of its red, and its closures cost).
-PRESETS = (SUBJECT_PRESET, DEFAULT_PRESET, "blue_cotton", "paper_2008")
+PRESETS = (SUBJECT_PRESET, DEFAULT_PRESET, "indigo_cotton", "paper_2008")
 tables = {name: yarn_tables_from_bake(bake(name, grids, paths_per_cell=500, cache_dir=out / "cache").folder)
           for name in PRESETS}
 

@@ -141,7 +141,7 @@ CUSTOM_BASE = "CUSTOM"
 BASE_MEDIUM_NUMBERS = {name: number for number, name in enumerate((
     "beige_cotton", "blue_cotton", "dark_dyed_cotton", "delustred_polyester", "paper_2008", "paper_red_cotton",
     "pink_felt", "red_cotton", "undyed_cotton", "white_cotton",
-    "voided_red_cotton", "ecru_cotton",
+    "voided_red_cotton", "ecru_cotton", "indigo_cotton",
 ))} | {CUSTOM_BASE: 999}
 
 

@@ -18,8 +18,8 @@
   nodes, its lobe table packed), beside a Principled BSDF with sheen on the same geometry; scene
   "Front-Lit" (sun and sky from the front) and scene "Back-Lit" (a window-sized area light behind
   the cloth), sharing the cloth's collection.  8 × 8 yarns, so that the file stays small.
-* ``closeup_denim_twill.blend`` — the same close-up as denim: ``sheeting_weave("blue_cotton",
-  interlacing="twill_3_1")``, a warp-faced 3/1 twill of an indigo warp, the fitted ``blue_cotton``
+* ``closeup_denim_twill.blend`` — the same close-up as denim: ``sheeting_weave("indigo_cotton",
+  interlacing="twill_3_1")``, a warp-faced 3/1 twill of an indigo warp, the fitted ``indigo_cotton``
   yarn (MERL's blue-fabric), and an ecru weft, ``ecru_cotton`` (MERL's white-fabric): plies, twist, irregularity and
   fibres, each face in its own yarn's material (slot 0 the warp's, 1 the weft's; both lobe tables
   packed; the fibres all in the warp's hair BSDF), beside Principled+sheen of each yarn's own albedo;
@@ -30,7 +30,7 @@
 from ``example_blends/tables/paper_2008/`` through ``//``-relative paths, so the folder can be moved as
 a whole; the OSL shaders are embedded with their compiled bytecode.  The tables are the untouched
 preset's bake (``python -m precompute bake --preset paper_2008``; cached, so a re-run bakes nothing
-new).  The others use the fitted presets (``voided_red_cotton``, ``blue_cotton``, ``ecru_cotton``), their
+new).  The others use the fitted presets (``voided_red_cotton``, ``indigo_cotton``, ``ecru_cotton``), their
 lobe tables packed in the file.  The garment example, the fitted presets draped, is
 ``scripts/make_garment_example.py``'s.  Scenes are in millimetres
 (``unit_settings.scale_length = 0.001``): one Blender unit is one millimetre of cloth.
@@ -231,14 +231,14 @@ class CloseupExample:
 
 RED_COTTON_CLOSEUP = CloseupExample(CLOSEUP_PRESET, "closeup_red_cotton", "ClothLight Red Cotton",
                                     principled_colour=(0.5, 0.02, 0.03))  # benchmarks/render_cost.py's reference
-#: Denim: a warp-faced 3/1 twill (Z, the diagonal rising to the right) of an indigo warp, the blue_cotton preset's
+#: Denim: a warp-faced 3/1 twill (Z, the diagonal rising to the right) of an indigo warp, the indigo_cotton preset's
 #: yarn fitted to MERL's blue-fabric, and an ecru weft, ecru_cotton (fitted to MERL's warm white-fabric the
 #: same way): blue face, pale back; its Principled copy gets each yarn's own albedo.  A dark face: both scenes a
 #: stop up.  (undyed_cotton, the paper's medium without dye, is nearly clear: its unscattered light needs the OSL
 #: shader, which reads its tables by path, not packed, and not under SVM.)
-DENIM_TWILL_CLOSEUP = CloseupExample("blue_cotton", "closeup_denim_twill", "ClothLight Denim Warp (Blue Cotton)",
+DENIM_TWILL_CLOSEUP = CloseupExample("indigo_cotton", "closeup_denim_twill", "ClothLight Denim Warp (Indigo Cotton)",
                                      interlacing="twill_3_1", exposure=1.0, weft_preset="ecru_cotton",
-                                     weft_material_name="ClothLight Denim Weft (White Cotton)")
+                                     weft_material_name="ClothLight Denim Weft (Ecru Cotton)")
 #: The Principled+sheen twin's material(s): one, or the warp's and the weft's for a weft of another yarn.
 PRINCIPLED_NAME = "Principled BSDF + Sheen"
 
@@ -389,7 +389,7 @@ def closeup_red_cotton(out_dir: pathlib.Path) -> pathlib.Path:
 
 
 def closeup_denim_twill(out_dir: pathlib.Path) -> pathlib.Path:
-    """The denim close-up: a warp-faced 3/1 twill of an indigo warp (the fitted blue_cotton yarn) and an
+    """The denim close-up: a warp-faced 3/1 twill of an indigo warp (the fitted indigo_cotton yarn) and an
     ecru weft (ecru_cotton), beside Principled+sheen."""
     return closeup_example(out_dir, DENIM_TWILL_CLOSEUP)
 

@@ -1,5 +1,5 @@
 """example_blends/closeup_denim_twill.blend (scripts/make_example_blends.py --denim-only): the denim
-close-up, a warp-faced 3/1 twill of an indigo warp (the fitted blue_cotton yarn) and an ecru weft
+close-up, a warp-faced 3/1 twill of an indigo warp (the fitted indigo_cotton yarn) and an ecru weft
 (ecru_cotton, fitted to MERL's warm white-fabric) with their fibres, each yarn in its own material, in
 ClothLight's general mode and in Principled+sheen on the same geometry, front-lit and back-lit.  The file
 is opened, not rendered (test_example_blends.py renders every example)."""
@@ -15,9 +15,9 @@ from mathutils import Vector  # noqa: E402
 from precompute.optics.medium import load_preset_config  # noqa: E402
 
 BLEND = pathlib.Path(__file__).resolve().parents[1] / "example_blends" / "closeup_denim_twill.blend"
-PRESET, WEFT_PRESET = "blue_cotton", "ecru_cotton"
-YARN_MATERIAL = "ClothLight Denim Warp (Blue Cotton)"
-WEFT_MATERIAL = "ClothLight Denim Weft (White Cotton)"
+PRESET, WEFT_PRESET = "indigo_cotton", "ecru_cotton"
+YARN_MATERIAL = "ClothLight Denim Warp (Indigo Cotton)"
+WEFT_MATERIAL = "ClothLight Denim Weft (Ecru Cotton)"
 #: The 3/1 Z twill's drawdown (clothlight.weave.patterns.twill(3, 1)): pick i, end j, True where the
 #: warp end is over the pick; three of four crossings show the warp.
 TWILL_3_1 = [[True, True, True, False], [False, True, True, True], [True, False, True, True], [True, True, False, True]]
@@ -51,7 +51,7 @@ def test_both_materials_dress_the_same_twill_sample_and_fibres(blend):
     assert meshes[0].location.x < 0 < meshes[1].location.x  # ClothLight left, Principled right
     weave = meshes[0]["clothlight_weave"]
     assert [[bool(v) for v in row] for row in weave["interlacing"]] == TWILL_3_1
-    assert weave["ply_count"] == 2 and weave["twist_angle_deg"] == 24.0  # blue_cotton's [yarn]
+    assert weave["ply_count"] == 2 and weave["twist_angle_deg"] == 24.0  # indigo_cotton's [yarn]
     assert weave["spacing_jitter"] > 0 and weave["height_jitter"] > 0 and weave["ply_radius_jitter"] > 0
     assert weave["warp_count"] == weave["weft_count"] == 8
     assert len(meshes[0].data.polygons) > 10_000
@@ -64,7 +64,7 @@ def _face_materials(mesh) -> np.ndarray:
 
 
 def test_warp_faces_wear_the_blue_yarn_and_weft_faces_the_ecru_one(blend):
-    """Slot 0 the warp's blue_cotton material, slot 1 the weft's ecru_cotton; every face takes its
+    """Slot 0 the warp's indigo_cotton material, slot 1 the weft's ecru_cotton; every face takes its
     yarn's (a face's vertices are all of one yarn), half of the faces each (8 warps, 8 wefts)."""
     sample = blend.objects["ClothLight Sample"]
     assert [slot.material.name for slot in sample.material_slots] == [YARN_MATERIAL, WEFT_MATERIAL]
@@ -132,8 +132,8 @@ def _packed_lobes(material):
     return lobes, pixels[:, : width // 5, :3].mean(axis=(0, 1))
 
 
-def test_the_clothlight_materials_read_blue_cotton_and_ecru_cotton_packed(blend):
-    """The warp's material is blue_cotton's: its lobe table is blue and packed, its sheen is the
+def test_the_clothlight_materials_read_indigo_cotton_and_ecru_cotton_packed(blend):
+    """The warp's material is indigo_cotton's: its lobe table is blue and packed, its sheen is the
     preset's fitted [fit] specular term; the weft's is ecru_cotton's, its own packed table, much
     paler; nothing in either names a folder of this machine."""
     yarn, weft = blend.materials[YARN_MATERIAL], blend.materials[WEFT_MATERIAL]
@@ -196,7 +196,7 @@ def test_principled_copy_has_each_yarns_colour(blend):
 
 
 def test_the_fibres_are_the_warps_blue(blend):
-    """The fibres, all in blue_cotton's hair BSDF (Evans blue: red absorbed most), the warp's; the
+    """The fibres, all in indigo_cotton's hair BSDF (Evans blue: red absorbed most), the warp's; the
     Principled copy's in the warp's Principled material."""
     hair = blend.materials[f"ClothLight Fibres {PRESET}"]
     assert [slot.material for slot in blend.objects["ClothLight Sample Flyaways"].material_slots] == [hair]
@@ -225,8 +225,8 @@ def test_a_sun_in_front_and_a_window_behind(blend):
 
 
 @pytest.mark.slow
-def test_the_packed_lobe_table_is_blue_cottons_bake(blend):
-    """The packed images hold blue_cotton's and ecru_cotton's lobes.exr to the last bit (the bake, or
+def test_the_packed_lobe_table_is_indigo_cottons_bake(blend):
+    """The packed images hold indigo_cotton's and ecru_cotton's lobes.exr to the last bit (the bake, or
     the cache's copy)."""
     from clothlight.jobs import BakeJob
     from clothlight.medium_settings import preset_request

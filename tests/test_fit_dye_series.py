@@ -36,7 +36,7 @@ def series_model():
     ("voided_red_cotton", (0.1, 3.0), (0.1, 0.8, 3.0), 0.015),
     # dye in fibres along the yarn axis, their absorption reweighted: at 0.015 two fresh transports of
     # these small grids differ by up to 6 % in red, at 0.007 by 3 %
-    ("blue_cotton", (0.5, 8.0), (0.5, 2.0, 8.0), 0.007),
+    ("indigo_cotton", (0.5, 8.0), (0.5, 2.0, 8.0), 0.007),
 ])
 def test_candidates_read_from_one_series_agree_with_their_own_transport(name, dye_range, dyes, error):
     series_model = DyeSeriesForwardModel(None, 0, PRESET_DIR, dye_range, relative_error=error, seed=2)

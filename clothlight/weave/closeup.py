@@ -44,7 +44,7 @@ Between crossings nothing presses a yarn, and it relaxes towards its round secti
 (:mod:`.section`).  Fully relaxed (``section_relaxation`` 1) a yarn of the sheeting's section,
 rounder and so thicker midway, no longer clears the yarns it crosses at the sheeting's spacing and
 crimp (the regular repeat allows at most 0.81); with the presets' jitters (``voided_red_cotton`` and
-``blue_cotton``, seed 0) 0.75 and 0.5 fail too, and the largest that clears depends on the
+``indigo_cotton``, seed 0) 0.75 and 0.5 fail too, and the largest that clears depends on the
 sample's size, since a larger sample draws more jitters: 0.448 in the plain weave and 3/1 twill and
 0.39 in the 2/2 twill at 16 × 16, 0.368 at 12 × 12, 0.36 at 24 × 24.  The default is 0.25, which
 clears plain, 2/2 and 3/1 twill of both presets at every size from 3 × 3 to 48 × 48

@@ -85,7 +85,7 @@ from precompute.tables.color import (
 from precompute.distributed import LOCAL, check_scheduler, open_executor
 from precompute.errors import ParameterError
 from precompute.optics.cook_torrance import FIT_TABLE, FUZZ_SHAPE_KEYS, fuzz_colour, sheen_index, specular_from_config
-from precompute.optics.measured_sample import SAMPLE_TABLE, sample_weave_name
+from precompute.optics.measured_sample import SAMPLE_AZIMUTHS_KEY, SAMPLE_TABLE, sample_azimuths_deg, sample_weave_name
 from precompute.tables.grids import AngularGrid
 from precompute.optics.medium import DEFAULT_PRESET, PRESET_DIR, MediumParameters, load_preset_config, medium_from_dict
 from precompute.optics.coefficients import medium_optics, planned_phase_grid
@@ -94,6 +94,7 @@ from precompute.cache.sources import stage_digest
 from precompute.tables.layout import brdf_atlas, interpolate_attenuation, interpolate_rho, lobe_atlas
 from precompute.tables.folder import (
     FILE_HASHES_KEY,
+    SAMPLE_AZIMUTHS_RECORD_KEY,
     SAMPLE_WEAVE_KEY,
     SPECULAR_FROM_PRESET,
     SPECULAR_KEY,
@@ -180,13 +181,14 @@ class BakeConfiguration:
     """Everything a bake is made from: the medium, the ``[transport]`` and the ``[bake]`` settings,
     the specular term the tables record (:func:`specular_settings`) and the sample weave the preset
     was fitted on where its ``[sample]`` table names one (:mod:`precompute.optics.measured_sample`),
-    else None."""
+    else None, and the sample azimuths it was fitted at where the table names them, else None."""
 
     medium: MediumParameters
     transport: dict
     colour: dict
     specular: dict
     sample_weave: str | None = None
+    sample_azimuths_deg: tuple[float, ...] | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -431,7 +433,8 @@ def bake_configuration(
     # before any simulation.
     spectral_weights(medium.wavelengths.values, colour["illuminant"], colour["observer"])
     sample_weave = sample_weave_name(config) if SAMPLE_TABLE in config else None
-    return BakeConfiguration(medium, settings, colour, specular_settings(config, medium), sample_weave)
+    azimuths = sample_azimuths_deg(config) if SAMPLE_AZIMUTHS_KEY in config.get(SAMPLE_TABLE, {}) else None
+    return BakeConfiguration(medium, settings, colour, specular_settings(config, medium), sample_weave, azimuths)
 
 
 # ---- the two stages -----------------------------------------------------------------------------
@@ -465,8 +468,11 @@ def table_inputs(spectral_key: str, configuration: BakeConfiguration) -> dict:
 
 
 def _sample_weave_record(configuration: BakeConfiguration) -> dict:
-    # Only where the preset names one, so that the tables of every other preset keep their keys.
-    return {} if configuration.sample_weave is None else {SAMPLE_WEAVE_KEY: configuration.sample_weave}
+    # Only where the preset names them, so that the tables of every other preset keep their keys.
+    record = {} if configuration.sample_weave is None else {SAMPLE_WEAVE_KEY: configuration.sample_weave}
+    if configuration.sample_azimuths_deg is not None:
+        record[SAMPLE_AZIMUTHS_RECORD_KEY] = list(configuration.sample_azimuths_deg)
+    return record
 
 
 def _simulation_record(inputs: dict, key: str, optics, transport, brdf, checks, seconds: dict) -> dict:

@@ -51,15 +51,14 @@ def bake_folder_brdf(model, folder: pathlib.Path):
 
 
 def bake_folder_sample(config: dict, folder: pathlib.Path) -> dict:
-    """``config`` with the yarn radius and the sample weave (``[sample]``) of a bake folder's summary,
-    which decide the weave its response renders."""
-    from precompute.optics.measured_sample import SAMPLE_TABLE, SAMPLE_WEAVE_KEY
+    """``config`` with the yarn radius and the sample (``[sample]``: its weave and azimuths) of a bake
+    folder's summary, which decide the weave its response renders and the azimuths it averages."""
+    from precompute.optics.measured_sample import SAMPLE_TABLE
     from precompute.tables import folder as table_folder
 
     summary = table_folder.check_yarn_table_folder(folder.resolve()).summary
     yarn = {**config["yarn"], "radius_mm": summary["medium"]["yarn"]["radius_mm"]}
-    weave = table_folder.summary_sample_weave(summary, folder)
-    return {**config, "yarn": yarn, SAMPLE_TABLE: {SAMPLE_WEAVE_KEY: weave}}
+    return {**config, "yarn": yarn, SAMPLE_TABLE: table_folder.summary_sample_table(summary, folder)}
 
 
 def fit_folder_brdf(folder: pathlib.Path, measured):

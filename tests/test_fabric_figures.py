@@ -4,7 +4,8 @@ views in the fit (held-out diagonals) and in the forward model's renders (clothl
 import numpy as np
 import pytest
 
-from clothlight.fit.forward import SAMPLE_AZIMUTHS_DEG, rig_views, sample_azimuths
+from clothlight.fit.forward import rig_views, sample_azimuths
+from precompute.optics.measured_sample import DEFAULT_SAMPLE_AZIMUTHS_DEG
 from precompute.errors import ParameterError
 from precompute.fit.figures import (band_penalty, band_ratios, fabric_figures, main_channel, off_specular_views,
                                     parse_band, view_index)
@@ -118,7 +119,7 @@ def test_views_at_any_azimuth_reach_the_rig_square_to_the_weave():
         camera_on_sample = sorted((phi_v + alpha) % 180.0 for alpha in sample_azimuths(phi_v))
         assert camera_on_sample == [0.0, 90.0]
     # views in the plane or across it are rendered as before
-    assert sample_azimuths(0.0) == SAMPLE_AZIMUTHS_DEG == sample_azimuths(90.0)
+    assert sample_azimuths(0.0) == DEFAULT_SAMPLE_AZIMUTHS_DEG == sample_azimuths(90.0)
 
 
 def test_a_dye_series_is_refused_for_fibres_whose_dye_changes_their_scattering(tmp_path):

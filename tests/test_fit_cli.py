@@ -223,5 +223,17 @@ def test_a_sample_weave_the_fit_cannot_render_exits_2_before_any_work_and_a_know
     inputs["config"].write_text(fit_report.to_toml({**config, "sample": {"weave": "sheeting"}}))
     assert fit(inputs, tmp_path / "fit") == 0
     assert tomllib.loads((tmp_path / "fit" / "preset.toml").read_text())["sample"] == {"weave": "sheeting"}
-    assert "sample weave (the cloth the forward model renders, `[sample]`): sheeting" in (
-        tmp_path / "fit" / "report.md").read_text()
+    assert "sample weave (the cloth the forward model renders, `[sample]`): sheeting, averaged over the warp at " \
+           "0°, 90° from the plane of incidence" in (tmp_path / "fit" / "report.md").read_text()
+
+    unsorted = {"weave": "sheeting", "azimuths_deg": [90, 0]}
+    inputs["config"].write_text(fit_report.to_toml({**config, "sample": unsorted}))
+    calls = len(fake_forward.calls)
+    assert fit(inputs, tmp_path / "refused azimuths") == 2
+    assert "sample.azimuths_deg" in capsys.readouterr().err and len(fake_forward.calls) == calls
+    turned = {"weave": "sheeting", "azimuths_deg": [0.0, 45.0, 90.0, 135.0]}
+    inputs["config"].write_text(fit_report.to_toml({**config, "sample": turned}))
+    assert fit(inputs, tmp_path / "turned") == 0
+    assert tomllib.loads((tmp_path / "turned" / "preset.toml").read_text())["sample"] == turned
+    assert "averaged over the warp at 0°, 45°, 90°, 135° from the plane of incidence" in (
+        tmp_path / "turned" / "report.md").read_text()

@@ -13,10 +13,12 @@ from clothlight.weave.record import weave_record
 from clothlight.weave.sample_weaves import SAMPLE_SIDE_MM, sample_weave
 from precompute import bake as bake_module
 from precompute.errors import ParameterError
-from precompute.optics.measured_sample import SAMPLE_WEAVES, sample_weave_name
+from precompute.optics.measured_sample import (DEFAULT_SAMPLE_AZIMUTHS_DEG, SAMPLE_WEAVES, sample_azimuths_deg,
+                                              sample_weave_name)
 from precompute.optics.medium import load_preset_config, medium_from_dict
 from precompute.tables.exr import TableError
-from precompute.tables.folder import SAMPLE_WEAVE_KEY, summary_sample_weave
+from precompute.tables.folder import (SAMPLE_AZIMUTHS_RECORD_KEY, SAMPLE_WEAVE_KEY, summary_sample_table,
+                                      summary_sample_weave)
 from tests.helpers import write_yarn_table_folder
 
 #: The raw-data curves' widest view and light (views to 80°, light to 75°), which need the wide sample.
@@ -148,3 +150,65 @@ def test_the_validation_of_a_bake_renders_the_sample_weave_it_records(tmp_path):
     summary["medium"] = {"yarn": {"radius_mm": 0.12}}
     summary_file.write_text(json.dumps({**summary, SAMPLE_WEAVE_KEY: "sheeting"}))
     assert weave_record(tables_sample_weave(folder)) == weave_record(sample_weave("sheeting", 0.12))
+
+
+def test_a_preset_names_the_sample_azimuths_or_gets_the_warp_square_and_across():
+    assert sample_azimuths_deg({}) == DEFAULT_SAMPLE_AZIMUTHS_DEG == (0.0, 90.0)
+    assert sample_azimuths_deg({"sample": {"weave": "pressed"}}) == (0.0, 90.0)
+    named = {"sample": {"weave": "pressed", "azimuths_deg": [0, 45, 90, 135]}}
+    assert sample_azimuths_deg(named) == (0.0, 45.0, 90.0, 135.0)
+    assert sample_weave_name(named) == "pressed"  # the weave's reader takes the azimuths' key
+    for bad in ([], [0, 180], [-45, 0], [90, 0], [0, 0], "0, 90", [True], [0, float("nan")]):
+        with pytest.raises(ParameterError, match=r"sample\.azimuths_deg"):
+            sample_azimuths_deg({"sample": {"azimuths_deg": bad}})
+
+
+def test_the_bake_records_named_sample_azimuths_and_a_summary_gives_them_back(tmp_path):
+    config, _ = load_preset_config("red_cotton")
+    plain = bake_module.bake_configuration(config)
+    four = {**config, "sample": {**config["sample"], "azimuths_deg": [0, 45, 90, 135]}}
+    turned = bake_module.bake_configuration(four)
+    assert plain.sample_azimuths_deg is None and turned.sample_azimuths_deg == (0.0, 45.0, 90.0, 135.0)
+    # a preset that names none keeps its tables' key
+    assert SAMPLE_AZIMUTHS_RECORD_KEY not in bake_module.table_inputs("k", plain)
+    summary = bake_module.table_inputs("k", turned)
+    assert summary[SAMPLE_AZIMUTHS_RECORD_KEY] == [0.0, 45.0, 90.0, 135.0]
+    table = summary_sample_table(summary, tmp_path)
+    assert sample_azimuths_deg({"sample": table}) == (0.0, 45.0, 90.0, 135.0)
+    assert sample_weave_name({"sample": table}) == "pressed"
+    assert summary_sample_table({}, tmp_path) == {"weave": "open"}
+    with pytest.raises(TableError, match="summary.json.*sample_azimuths_deg"):
+        summary_sample_table({SAMPLE_AZIMUTHS_RECORD_KEY: [90, 0]}, tmp_path)
+
+
+def test_every_view_is_rendered_at_each_named_azimuth_turned_as_the_default_ones(response_inputs):
+    azimuths = (0.0, 45.0, 90.0, 135.0)
+    views = response_inputs(azimuths_deg=azimuths)["views"]
+    default = response_inputs()["views"]
+    assert len(views) == 2 * len(default)
+    # the views in the plane of incidence and across it at every azimuth, a diagonal view's turned by 45°
+    plane, across = [v[3] for v in views if v[2] == 0.0], [v[3] for v in views if v[2] == 90.0]
+    assert plane[:4] == list(azimuths) and across == list(azimuths)
+    assert forward.sample_azimuths(45.0, azimuths) == (-45.0, 0.0, 45.0, 90.0)
+    # the default's renders are among them, at the same angles (the weave at the same angles to the light)
+    assert set(default) <= set(views)
+
+
+def test_the_forward_model_averages_the_cloth_over_the_named_azimuths(monkeypatch):
+    calls = {}
+
+    def cloth_response(views, *, azimuths_deg, **kwargs):
+        calls["azimuths"] = azimuths_deg
+        return object()
+
+    monkeypatch.setattr(forward, "cloth_response", cloth_response)
+    config, base = load_preset_config("red_cotton")
+    named = {**config, "sample": {**config["sample"], "azimuths_deg": [0, 45, 90, 135]}}
+    model = forward.build_forward_model(WIDE_VIEWS, named, base)
+    assert calls["azimuths"] == (0.0, 45.0, 90.0, 135.0) and model.azimuth_count == 4
+    rows = model.view_count * 4  # views, then the swatches, each at the four azimuths in turn
+    per_render = np.arange(rows * 3, dtype=float).reshape(rows, 3)
+    expected = per_render.reshape(model.view_count, 4, 3).mean(axis=1)
+    assert np.allclose(model._mean_over_azimuths(per_render), expected)
+    assert np.allclose(expected[0], per_render[:4].mean(axis=0))
+    assert forward.build_forward_model(WIDE_VIEWS, config, base).azimuth_count == 2

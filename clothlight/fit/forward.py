@@ -5,9 +5,10 @@ cache: optics → transport (a path budget set by the accuracy asked for) → eq
 incidence grid → RGB atlas and unscattered attenuation, clipped to the gamut as the tables are.
 The sweep itself is the cloth response (:mod:`clothlight.validation.response`), rendered once per
 weave, rig and view set and kept in the cache, then applied to each candidate's tables in
-milliseconds.  The validation weave is measured at sample azimuths 0° and 90° and averaged, as an
-instrument that measures cloth as an isotropic BRDF sees the warp and the weft alike
-(``../shared/data/real_fabrics/README.md``: MERL's samples were wrapped round a cylinder).
+milliseconds.  The sample is measured at the azimuths its preset's ``[sample] azimuths_deg`` names
+(0° and 90° by default) and averaged, as an instrument that measures cloth as an isotropic BRDF
+averages the weave over its azimuth (``../shared/data/real_fabrics/README.md``: MERL's samples were
+wrapped round a cylinder; :mod:`precompute.optics.measured_sample`).
 
 Views are the measured-data CSV's ``(θi, φi, θo, φo)`` (``Measurement.angles_deg``): light at
 φi = 180°, φo = 180° on the light's side, 0° beyond the normal, 90° the perpendicular plane, and any
@@ -31,7 +32,7 @@ from precompute.tables.color import clip_to_gamut, spectral_to_rgb
 from precompute.errors import ParameterError
 from precompute.fit.optimise import cloth_from_parts
 from precompute.optics.medium import medium_from_dict
-from precompute.optics.measured_sample import sample_weave_name
+from precompute.optics.measured_sample import DEFAULT_SAMPLE_AZIMUTHS_DEG, sample_azimuths_deg, sample_weave_name
 from precompute.optics.coefficients import medium_optics
 from precompute.optics.cook_torrance import sheen_index
 from precompute.cache.sources import stage_digest
@@ -50,9 +51,6 @@ PATHS_AT_FIVE_PERCENT = 1000
 #: The §6.1 colour swatches the model also gives, after the measured views: normal view, lit from the
 #: front and from straight behind, (θi, θv, φv) in degrees (clothlight.blender.validation.run's swatches).
 SWATCH_VIEWS = ((0.0, 0.0, 0.0), (180.0, 0.0, 0.0))
-#: Sample azimuths the response averages over, degrees (module docstring), for a view in the plane
-#: of incidence or across it; a view at another azimuth turns them (:func:`sample_azimuths`).
-SAMPLE_AZIMUTHS_DEG = (0.0, 90.0)
 #: The response's sweep resolution (pixels along the patch side) and camera samples per pixel
 #: along each axis: 16 samples per pixel, as a default validation sweep.
 RESPONSE_RESOLUTION = 64
@@ -93,13 +91,15 @@ def rig_views(measured_views: Sequence[tuple[float, float, float, float]]) -> li
     return views
 
 
-def sample_azimuths(phi_v_deg: float) -> tuple[float, ...]:
+def sample_azimuths(phi_v_deg: float, azimuths_deg=DEFAULT_SAMPLE_AZIMUTHS_DEG) -> tuple[float, ...]:
     """The sample azimuths α (degrees) a view at azimuth ``phi_v_deg`` is rendered and averaged at:
-    :data:`SAMPLE_AZIMUTHS_DEG` less the view's azimuth modulo 90°, which put the camera at 0° or 90°
-    on the sample (the response's renders turn sun and camera by α), where the framed patch holds
-    whole weave repeats; the weave then lies at the same two angles to the camera in every view."""
+    ``azimuths_deg`` (the preset's ``[sample] azimuths_deg``) less the view's azimuth modulo 90°, so
+    that at the default 0° and 90° the camera lies at 0° or 90° on the sample (the response's renders
+    turn sun and camera by α), where the framed patch holds whole weave repeats; the weave then lies
+    at the same angles to the light in every view.  At a diagonal α the camera frames the weave
+    turned by 45°, its patch holding part repeats at its edges."""
     turn = float(phi_v_deg) % 90.0
-    return tuple(azimuth - turn for azimuth in SAMPLE_AZIMUTHS_DEG)
+    return tuple(azimuth - turn for azimuth in azimuths_deg)
 
 
 def lookup_tables_folder(root: pathlib.Path = PROJECT_ROOT) -> pathlib.Path:
@@ -115,14 +115,15 @@ def lookup_tables_folder(root: pathlib.Path = PROJECT_ROOT) -> pathlib.Path:
 
 
 def cloth_response(measured_views, *, weave: WeaveParameters | None = None, seed: int = 0, cache_dir=None,
-                   progress: Callable[[int, int], None] | None = None):
-    """The cloth response at ``measured_views`` and :data:`SAMPLE_AZIMUTHS_DEG`, from the cache or
+                   progress: Callable[[int, int], None] | None = None, azimuths_deg=DEFAULT_SAMPLE_AZIMUTHS_DEG):
+    """The cloth response at ``measured_views``, each at the sample azimuths of ``azimuths_deg``
+    (:func:`sample_azimuths`), from the cache or
     rendered (Blender as the ``bpy`` module; a minute or two) with Cycles' ``seed``, on ``weave``
     (None: the validation weave, or :data:`WIDE_VIEW_WEAVE` where the views need it)."""
     from ..validation.response import ClothResponse
 
     views = [(*view, azimuth) for view in (*rig_views(measured_views), *SWATCH_VIEWS)
-             for azimuth in sample_azimuths(view[2])]
+             for azimuth in sample_azimuths(view[2], azimuths_deg)]
     inputs = {
         "schema": "clothlight-response-entry/1",
         "views": views,
@@ -168,9 +169,11 @@ class ForwardModel:
 
     swatch_count = len(SWATCH_VIEWS)
 
-    def __init__(self, response, view_count: int, base_dir: pathlib.Path, threads: int | None = None):
+    def __init__(self, response, view_count: int, base_dir: pathlib.Path, threads: int | None = None,
+                 azimuth_count: int = len(DEFAULT_SAMPLE_AZIMUTHS_DEG)):
         self.response = response
         self.view_count = view_count + self.swatch_count
+        self.azimuth_count = azimuth_count
         self.base_dir = pathlib.Path(base_dir)
         self.threads = threads
 
@@ -186,7 +189,7 @@ class ForwardModel:
         return _candidate_tables(config, optics, geometry, yarn_brdf(transport, FIT_INCIDENCE_RESOLUTION).rho)
 
     def _mean_over_azimuths(self, per_view: np.ndarray) -> np.ndarray:
-        return per_view.reshape(self.view_count, len(SAMPLE_AZIMUTHS_DEG), *per_view.shape[1:]).mean(axis=1)
+        return per_view.reshape(self.view_count, self.azimuth_count, *per_view.shape[1:]).mean(axis=1)
 
     def cloth_brdf(self, atlas, attenuation, layout, *, specular_weight: float, specular_slope: float,
                    specular_index: float | None = None, **fuzz) -> np.ndarray:
@@ -292,8 +295,9 @@ class DyeSeriesForwardModel(ForwardModel):
     new series."""
 
     def __init__(self, response, view_count: int, base_dir: pathlib.Path, dye_range: tuple[float, float],
-                 threads: int | None = None, relative_error: float = 0.02, seed: int = 0):
-        super().__init__(response, view_count, base_dir, threads)
+                 threads: int | None = None, relative_error: float = 0.02, seed: int = 0,
+                 azimuth_count: int = len(DEFAULT_SAMPLE_AZIMUTHS_DEG)):
+        super().__init__(response, view_count, base_dir, threads, azimuth_count)
         self.dye_range = (float(dye_range[0]), float(dye_range[1]))
         self.relative_error = relative_error
         self.seed = seed
@@ -333,9 +337,10 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
                         dye_range: tuple[float, float] | None = None) -> ForwardModel:
     """The forward model at ``measured_views`` ((θi, φi, θo, φo) in degrees, the CSV's convention)
     for media written like ``preset_config`` (checked here, before any render; relative files
-    resolve against ``base_dir``), on the sample weave its ``[sample]`` table names
-    (:mod:`precompute.optics.measured_sample`).  ``progress(done, total)`` follows the response's renders when it
-    is not cached yet; ``seed`` is Cycles' for those renders (candidates take theirs per call).  With
+    resolve against ``base_dir``), on the sample weave its ``[sample]`` table names, averaged over
+    the azimuths it names (:mod:`precompute.optics.measured_sample`).  ``progress(done, total)``
+    follows the response's renders when it is not cached yet; ``seed`` is Cycles' for those renders
+    (candidates take theirs per call).  With
     ``dye_range`` (% of fibre weight), a :class:`DyeSeriesForwardModel` for fits of the dye alone."""
     medium = medium_from_dict(preset_config, pathlib.Path(base_dir))
     if dye_range is not None and not medium.dye_only_absorbs:
@@ -343,8 +348,11 @@ def build_forward_model(measured_views, preset_config: dict, base_dir, *, seed: 
         raise ParameterError("--dye-series", "a medium of randomly oriented fibres",
                              "a medium whose dye only absorbs (no [fibres], or fibres along the yarn axis)")
     weave = sample_weave(sample_weave_name(preset_config), medium.yarn.radius_mm)
+    azimuths = sample_azimuths_deg(preset_config)
     measured_views = [tuple(float(a) for a in view) for view in measured_views]
-    response = cloth_response(measured_views, weave=weave, seed=seed, cache_dir=cache_dir, progress=progress)
+    response = cloth_response(measured_views, weave=weave, seed=seed, cache_dir=cache_dir, progress=progress,
+                              azimuths_deg=azimuths)
     if dye_range is not None:
-        return DyeSeriesForwardModel(response, len(measured_views), base_dir, dye_range, threads, seed=seed)
-    return ForwardModel(response, len(measured_views), base_dir, threads)
+        return DyeSeriesForwardModel(response, len(measured_views), base_dir, dye_range, threads, seed=seed,
+                                     azimuth_count=len(azimuths))
+    return ForwardModel(response, len(measured_views), base_dir, threads, len(azimuths))

@@ -30,7 +30,7 @@ from precompute.fit.objective import Objective, Views, load_measurement, parse_t
 from precompute.fit.optimise import (FIT_CODE, AccuracySchedule, Budget, FitProgress, FitResult, check_budget,
                                      fit_medium, parse_search_error)
 from precompute.fit.parameters import FitParameter, initial_values, parse_free
-from precompute.optics.measured_sample import sample_weave_name
+from precompute.optics.measured_sample import sample_azimuths_deg, sample_weave_name
 from precompute.optics.cook_torrance import FIT_TABLE, specular_from_config
 from precompute.fit.report import check_fit_folder
 
@@ -91,6 +91,7 @@ def check_fit_inputs(measured: str | pathlib.Path, preset: str | pathlib.Path, f
     medium_config = {key: value for key, value in config.items() if key != FIT_TABLE}
     medium_from_dict(medium_config, base_dir)
     sample_weave_name(config)
+    sample_azimuths_deg(config)
     initial_values(free_parameters, config, specular_from_config(config))  # the species the free parameters need
     ratios = parse_target_ratios(target_ratios)
     views = split_views(measurement)

@@ -34,7 +34,7 @@ import numpy as np
 from precompute.optics import medium as medium_module
 from precompute.outputs import json_ready
 from precompute.tables.folder import check_output_folder, replace_folder
-from precompute.optics.measured_sample import sample_weave_name
+from precompute.optics.measured_sample import sample_azimuths_deg, sample_weave_name
 from precompute.fit.objective import CHANNELS
 from precompute.fit.optimise import FitResult
 from precompute.optics.cook_torrance import FIT_TABLE
@@ -208,7 +208,9 @@ def report_markdown(result: FitResult, measured_name: str = "", figures: bool = 
              f"{result.seconds:.1f} s; stopped by {result.stop_reason}",
              f"- seed {result.seed}; accuracy schedule {result.schedule.loose:g} → {result.schedule.tight:g} "
              f"(final {result.schedule.final:g})",
-             f"- sample weave (the cloth the forward model renders, `[sample]`): {sample_weave_name(result.config)}"]
+             f"- sample weave (the cloth the forward model renders, `[sample]`): {sample_weave_name(result.config)}, "
+             f"averaged over the warp at {', '.join(f'{a:g}°' for a in sample_azimuths_deg(result.config))} "
+             "from the plane of incidence"]
     if result.swatches:
         limit = result.swatches["max_back_front"]
         lines.append(f"- §6.1 swatches at normal view: lit from behind / from the front, luminance "

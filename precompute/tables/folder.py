@@ -44,6 +44,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 import numpy as np
 
 from precompute.errors import ParameterError
+from precompute.optics import measured_sample
 from precompute.optics.measured_sample import DEFAULT_SAMPLE_WEAVE, SAMPLE_WEAVES
 from precompute.outputs import can_create_in, existing_place
 from precompute.tables.exr import SCHEMA, Table, TableError, table_from_bytes
@@ -76,6 +77,9 @@ SPECULAR_FROM_PRESET = "preset [fit]"
 #: The key of a yarn bake's summary naming the sample weave its preset was fitted on
 #: (:mod:`precompute.optics.measured_sample`), where the preset names one.
 SAMPLE_WEAVE_KEY = "sample_weave"
+#: The key of a yarn bake's summary naming the sample azimuths its preset was fitted at, where the
+#: preset names them (``[sample] azimuths_deg``, :mod:`precompute.optics.measured_sample`).
+SAMPLE_AZIMUTHS_RECORD_KEY = "sample_azimuths_deg"
 #: Staging folders of :func:`replace_folder` whose process has died, or older than this (written by
 #: another machine, which this one cannot ask), are left by a run that was killed; a later one removes them.
 STALE_STAGING_SECONDS = 24 * 3600
@@ -186,6 +190,21 @@ def summary_sample_weave(summary: dict, folder: str | pathlib.Path) -> str:
         raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SAMPLE_WEAVE_KEY} {name!r} is not one of "
                          f"{', '.join(SAMPLE_WEAVES)}")
     return name
+
+
+def summary_sample_table(summary: dict, folder: str | pathlib.Path) -> dict:
+    """The ``[sample]`` table (:mod:`precompute.optics.measured_sample`) of the preset a yarn bake's
+    summary records: its weave (:func:`summary_sample_weave`) and, where the preset named them, its
+    azimuths (:data:`SAMPLE_AZIMUTHS_RECORD_KEY`); :class:`TableError` naming the summary when they
+    are not valid."""
+    table = {measured_sample.SAMPLE_WEAVE_KEY: summary_sample_weave(summary, folder)}
+    if SAMPLE_AZIMUTHS_RECORD_KEY in summary:
+        table[measured_sample.SAMPLE_AZIMUTHS_KEY] = summary[SAMPLE_AZIMUTHS_RECORD_KEY]
+        try:
+            measured_sample.sample_azimuths_deg({measured_sample.SAMPLE_TABLE: table})
+        except ParameterError as error:
+            raise TableError(f"{pathlib.Path(folder) / SUMMARY_FILE}: {SAMPLE_AZIMUTHS_RECORD_KEY}: {error}") from None
+    return table
 
 
 def summary_specular(summary: dict, folder: str | pathlib.Path) -> dict:

@@ -7,6 +7,7 @@ Examples::
 
     python -m clothlight.validate --out out/validation                        # the paper's baseline
     python -m clothlight.validate --tables out/bake --measured cloth.csv --out out/validation
+    python -m clothlight.validate --tables out/bake --sample-azimuths 0 45 90 135 --out out/validation
 
 Exit codes (``precompute/exit_codes.py``, the same for every ClothLight command): 0 done, 2 bad
 input (the message names the option or file and what is allowed), 130 interrupted, 1 an internal
@@ -82,6 +83,11 @@ def build_parser():
                              "renders here). The results are the same wherever they rendered")
     parser.add_argument("--patch-mm", type=VALIDATION_PATCH_MM.argument("--patch-mm"),
                         help=f"side of the framed patch, {VALIDATION_PATCH_MM.allowed()} (default: largest that fits)")
+    parser.add_argument("--sample-azimuths", type=float, nargs="+", metavar="DEG",
+                        help="the warp's azimuths from the plane of incidence, degrees, ascending in [0, 180), as a "
+                             "preset's [sample] azimuths_deg: every view is rendered with the sample turned to each "
+                             "(the sun and cameras turned about its normal) and averaged (default: the --tables "
+                             "bake's, where its summary records them, else one turn at 0)")
     parser.add_argument("--no-swatches", action="store_true", help="skip the front/back-lit colour swatches")
     parser.add_argument("--specular-weight", type=float, metavar="W",
                         help="the yarn materials' SpecularWeight in place of the bake's (a number ≥ 0; 0: the "
@@ -94,7 +100,7 @@ def check_arguments(args) -> None:
     """Every argument that can be checked without Blender, before Blender is imported and any work
     starts: the output folder, the input files and folders, the angles (the numbers are checked as
     they are parsed).  ParameterError (or MeasurementFormatError) naming the option otherwise."""
-    from .validation.framing import ParameterError, check_angles
+    from .validation.framing import ParameterError, check_angles, sweep_sample_azimuths
     from precompute.fit.measured_data import read_measurement
 
     from precompute.tables.folder import check_output_folder
@@ -124,6 +130,7 @@ def check_arguments(args) -> None:
     for option, folder in (("--tables", args.tables), ("--cloth-tables", args.cloth_tables)):
         if folder is not None and not pathlib.Path(folder).is_dir():
             raise ParameterError(option, folder, "an existing bake folder")
+    args.sample_azimuths = sweep_sample_azimuths(args.sample_azimuths, args.tables, "--sample-azimuths")
     if args.specular_weight is not None and not (math.isfinite(args.specular_weight) and args.specular_weight >= 0):
         raise ParameterError("--specular-weight", args.specular_weight, "a finite number ≥ 0")
     if args.measured is not None:
@@ -172,7 +179,8 @@ def _sweep(args, interrupt) -> dict:
     interrupt.check()
     settings = RigSettings(incidences_deg=tuple(args.incidences or DEFAULT_INCIDENCES_DEG),
                            views_deg=tuple(args.views or DEFAULT_VIEWS_DEG), resolution=args.resolution,
-                           samples=args.samples, seed=args.seed, patch_mm=args.patch_mm)
+                           samples=args.samples, seed=args.seed, patch_mm=args.patch_mm,
+                           sample_azimuths_deg=args.sample_azimuths)
     progress_shown = []
 
     def progress(done: int, total: int, what: str) -> None:
@@ -226,6 +234,9 @@ def _main(argv) -> int:
         sys.stdout.write((pathlib.Path(args.out) / "results.json").read_text(encoding="utf-8"))
         return 0
     print(f"report: {args.out}/report.md")
+    if len(results["sample_azimuths_deg"]) > 1:
+        print("sample averaged over its azimuth: the warp at "
+              + ", ".join(f"{a:g}°" for a in results["sample_azimuths_deg"]) + " from the plane of incidence")
     for kind, entry in results["materials"].items():
         ratios = entry["table1"]
         if ratios:

@@ -10,6 +10,9 @@ measured, at the views :func:`precompute.fit.figures.off_specular` picks (θi �
     python -m clothlight.validate --tables BAKE --material yarn \\
         --measured ../shared/data/real_fabrics/neural/red-fabric2.csv --out DIR
     python scripts/rendered_fabric_figures.py DIR/results.json
+
+It first names the azimuths the report's sample was averaged at (``sample_azimuths_deg``; the fit's
+forward model averages its preset's ``[sample] azimuths_deg``, which ``--tables`` brings by default).
 """
 
 from __future__ import annotations
@@ -57,7 +60,12 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("results", type=pathlib.Path, help="a validation report's results.json")
     args = parser.parse_args()
-    for name, f in rendered_figures(json.loads(args.results.read_text())).items():
+    results = json.loads(args.results.read_text())
+    azimuths = results.get("sample_azimuths_deg")  # absent from reports written before sweeps recorded them
+    if azimuths:
+        print(("sample averaged over the warp at " if len(azimuths) > 1 else "sample at one turn, the warp at ")
+              + ", ".join(f"{a:g}°" for a in azimuths) + " from the plane of incidence")
+    for name, f in rendered_figures(results).items():
         rms = f["relative_rms"]
         back = ", ".join(f"{view} {ratio:.2f}" for view, ratio in f["backscatter_red"].items())
         print(f"{name}: relative RMS R {rms['R']:.3f}, G {rms['G']:.3f}, B {rms['B']:.3f}, pooled {rms['RGB']:.3f}; "

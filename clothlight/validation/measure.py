@@ -102,6 +102,33 @@ def measure_view(pixels: np.ndarray, *, theta_i_deg: float, theta_v_deg: float, 
     )
 
 
+def mean_over_turns(turns) -> list[ViewMeasurement]:
+    """Per view, the mean of its measurements at each turn of the sample about its normal
+    (``turns``: one list of views per turn, the same views in the same order): the sample averaged
+    over its azimuth, as an instrument that measures an isotropic BRDF reports it.  Every quantity
+    is the mean of the turns' (``cloth_pixels`` rounded to a whole number); a single turn's views are
+    returned as they are."""
+    turns = [list(views) for views in turns]
+    if not turns:
+        raise ParameterError("turns", turns, "the views of at least one turn")
+    if len(turns) == 1:
+        return turns[0]
+    angles = [(v.theta_i_deg, v.theta_v_deg) for v in turns[0]]
+    if any([(v.theta_i_deg, v.theta_v_deg) for v in views] != angles for views in turns):
+        raise ParameterError("turns", [len(views) for views in turns], "the same views at every turn")
+    averaged = []
+    for views in zip(*turns):
+        def mean(name: str) -> list[float]:
+            return np.mean([getattr(v, name) for v in views], axis=0).tolist()
+
+        averaged.append(ViewMeasurement(
+            theta_i_deg=views[0].theta_i_deg, theta_v_deg=views[0].theta_v_deg, rgb_sum=mean("rgb_sum"),
+            cloth_pixels=int(round(float(np.mean([v.cloth_pixels for v in views])))),
+            coverage=float(np.mean([v.coverage for v in views])), sum_over_cos_rgb=mean("sum_over_cos_rgb"),
+            brdf_rgb=mean("brdf_rgb")))
+    return averaged
+
+
 def find_view(views, theta_i_deg: float, theta_v_deg: float):
     """The measurement at (θi, θv) in ``views``, or None."""
     return next((v for v in views if v.theta_i_deg == theta_i_deg and v.theta_v_deg == theta_v_deg), None)

@@ -165,6 +165,19 @@ def interreflection_section(light: dict | None) -> list[str]:
     return lines + [""]
 
 
+def azimuths_sentence(azimuths) -> list[str]:
+    """The report's lines on the turns of the sample a sweep averaged (``results["sample_azimuths_deg"]``;
+    none for a results.json written before sweeps recorded them)."""
+    if not azimuths:
+        return []
+    angles = ", ".join(f"{a:g}°" for a in azimuths)
+    if len(azimuths) == 1:
+        return [f"The sample was measured at one turn: its warp at {angles} from the plane of incidence.", ""]
+    return [f"The sample was averaged over its azimuth: every view and swatch is the mean of {len(azimuths)} renders "
+            f"with the warp at {angles} from the plane of incidence (the sun and the cameras turned together about "
+            "the sample's normal), as a measured isotropic BRDF averages the weave.", ""]
+
+
 def markdown_report(results: dict, plots: list[str], plot_note: str | None) -> str:
     """The compact report: settings, plots, colour checks, metrics and the per-view table."""
     s = results["settings"]
@@ -174,6 +187,7 @@ def markdown_report(results: dict, plots: list[str], plot_note: str | None) -> s
              f"{sample['thickness_mm']:.3g} mm thick; every view frames the same central {s['patch_mm']:g} mm patch. "
              f"{s['resolution']}² pixels, {s['samples']} samples per pixel, seed {s['seed']}, "
              f"sun {s['sun_irradiance_w_per_m2']:g} W/m². Sweep time {results['seconds']['total']:.1f} s.", "",
+             *azimuths_sentence(results.get("sample_azimuths_deg")),
              "Calibrated cloth BRDF f = Σ L_p a_p / (E cos θi · A cos θv) (1/sr): L_p pixel radiance, a_p pixel "
              "cross-section, E sun irradiance, A patch area (paper §4, step 5). θv < 0 is the light's side.", ""]
     lines += [f"![{name}]({name})" for name in plots] + ([f"*{plot_note}*"] if plot_note else []) + [""]

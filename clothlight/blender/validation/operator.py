@@ -7,6 +7,11 @@ cancels (the rig is removed).  In background mode timers never fire and ``INVOKE
 output folder; the sweep plot is loaded as an image ("ClothLight Validation") for the Image
 Editor and its folder kept in ``window_manager["clothlight_validation_dir"]``.
 
+The sample is averaged over the azimuths its tables' bake records (a preset's ``[sample]
+azimuths_deg``), as ``python -m clothlight.validate --tables`` does by default; tables that record
+none measure it at one turn.  The operator has no property of its own for them (the command line's
+``--sample-azimuths`` chooses others).
+
 The sweep itself (:mod:`.run`: the garment material, the table reader, OpenEXR, numba's grids) is
 imported when a sweep starts, not when the add-on is enabled.
 """
@@ -23,8 +28,15 @@ import bpy
 from ...mesh_attributes import CLOTH_NORMAL
 from ...render_bounds import VALIDATION_RESOLUTION, VALIDATION_SAMPLES
 from ...weave import WeaveParameterError
-from ...validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, MATERIALS
+from ...validation.framing import (
+    DEFAULT_INCIDENCES_DEG,
+    DEFAULT_VIEWS_DEG,
+    MATERIALS,
+    YARN_MATERIALS,
+    sweep_sample_azimuths,
+)
 from precompute.fit.measured_data import MeasurementFormatError
+from precompute.tables.exr import TableError
 from .rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES, RigSettings
 
 if TYPE_CHECKING:
@@ -32,7 +44,7 @@ if TYPE_CHECKING:
 
 from precompute.errors import ParameterError
 #: Errors that are the user's input, reported without a traceback.
-INPUT_ERRORS = (ParameterError, WeaveParameterError, MeasurementFormatError)
+INPUT_ERRORS = (ParameterError, WeaveParameterError, MeasurementFormatError, TableError)
 PLOT_IMAGE = "ClothLight Validation"
 
 
@@ -104,14 +116,21 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
         return pathlib.Path(bpy.path.abspath(self.out_dir))
 
     def _prepare(self, context) -> ValidationRun:
-        from .run import ValidationRun
+        from .run import ValidationRun, tables_of_sample
 
         sample = sample_in_context(context)
         materials = tuple(kind for kind in MATERIALS if kind.upper() in self.materials)
         tables = bpy.path.abspath(self.tables_dir) if self.tables_dir else None
+        # the sample's azimuths from the tables named, else from those a yarn sweep reads (the sample's material's)
+        recorded_in = tables
+        if recorded_in is None and sample is not None and set(YARN_MATERIALS) & set(materials):
+            recorded_in = tables_of_sample(sample)
+        if recorded_in is not None and not pathlib.Path(recorded_in).is_dir():
+            raise ParameterError("tables_dir", recorded_in, "an existing bake folder")
         settings = RigSettings(incidences_deg=parse_angles(self.incidences, "incidences"),
                                views_deg=parse_angles(self.views, "views"),
-                               resolution=self.resolution, samples=self.samples)
+                               resolution=self.resolution, samples=self.samples,
+                               sample_azimuths_deg=sweep_sample_azimuths(None, recorded_in))
         return ValidationRun(sample, self._output_folder(), materials=materials, tables_dir=tables,
                              measured_csv=bpy.path.abspath(self.measured_csv) if self.measured_csv else None,
                              settings=settings, swatches=self.swatches)

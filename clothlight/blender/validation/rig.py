@@ -17,6 +17,12 @@ light bounces (the paper's model has no inter-reflection between yarns, §7).  T
 materials are lit by the rig's sun lamp, direct light only by default, so that they see the same
 single sun as the sun mode; the one measured "in a scene" (``yarn_scene``) is rendered with full
 path tracing instead (:meth:`Rig.use_path_tracing`, :data:`SCENE_BOUNCES`), so yarns light each other.
+
+Turns.  A sweep may measure the sample at several azimuths about its normal
+(:attr:`RigSettings.sample_azimuths_deg`): :meth:`Rig.set_azimuth` turns the sun and the camera
+together by α about the sample's normal through the patch centre, which is the sample turned by −α,
+as the fit's forward model turns them (``response_render``); it works alike for a built sample and a
+user's object.  The framing keeps the sample's edges out of view at every turn (:mod:`.framing`).
 """
 
 from __future__ import annotations
@@ -46,11 +52,13 @@ from ..sample_object import build_sample_object
 from ...weave import WeaveParameters
 from ...validation.framing import (
     DEFAULT_INCIDENCES_DEG,
+    DEFAULT_RIG_AZIMUTHS_DEG,
     DEFAULT_VIEWS_DEG,
     ParameterError,
     SampleBounds,
     check_angles,
     check_patch,
+    check_sample_azimuths,
     largest_patch_mm,
     pixel_aspect,
     toward_camera,
@@ -104,6 +112,10 @@ class RigSettings:
         repeats (or, for a surface without a weave, the largest patch) that keeps edges out of view.
     sun_irradiance
         E, W/m² on a plane facing the sun.
+    sample_azimuths_deg
+        The sample's azimuths α about its normal (the warp's angle from the plane of incidence,
+        degrees), checked as a preset's ``[sample] azimuths_deg`` (ascending, distinct, in [0, 180)):
+        every view is measured at each and averaged.  Default: one turn, α = 0.
     """
 
     incidences_deg: tuple[float, ...] = DEFAULT_INCIDENCES_DEG
@@ -113,6 +125,7 @@ class RigSettings:
     seed: int = 0
     patch_mm: float | None = None
     sun_irradiance: float = DEFAULT_SUN_IRRADIANCE
+    sample_azimuths_deg: tuple[float, ...] = DEFAULT_RIG_AZIMUTHS_DEG
 
     def __post_init__(self):
         incidences, views = check_angles(self.incidences_deg, self.views_deg)
@@ -127,6 +140,8 @@ class RigSettings:
         if not (isinstance(self.sun_irradiance, (int, float)) and math.isfinite(self.sun_irradiance)
                 and self.sun_irradiance > 0):
             raise ParameterError("sun_irradiance", self.sun_irradiance, "> 0 W/m²")
+        object.__setattr__(self, "sample_azimuths_deg",
+                           check_sample_azimuths(self.sample_azimuths_deg, "sample_azimuths_deg"))
 
     @property
     def max_view_deg(self) -> float:
@@ -198,6 +213,7 @@ class Rig:
     material: object = None
     theta_i_deg: float | None = None
     theta_v_deg: float | None = None
+    azimuth_deg: float = 0.0
     _owned: list = field(default_factory=list)
 
     @property
@@ -230,9 +246,28 @@ class Rig:
         for name, value in (SCENE_BOUNCES if on else DIRECT_BOUNCES).items():
             setattr(self.scene.cycles, name, value)
 
+    def set_azimuth(self, azimuth_deg: float) -> None:
+        """Turn the sun and the camera together by α (degrees) about the sample's normal through the
+        patch centre (module docstring): the sample measured turned by −α.  0: the plane of
+        incidence x-z, as a rig is built."""
+        self.azimuth_deg = float(azimuth_deg)
+        if self.theta_i_deg is not None:
+            self.set_incidence(self.theta_i_deg)
+        if self.theta_v_deg is not None:
+            self.set_view(self.theta_v_deg)
+
+    def _turn(self, obj) -> None:
+        """Turn ``obj`` (aimed in the plane x-z) by the rig's azimuth about the normal through the patch centre."""
+        if self.azimuth_deg != 0.0:
+            center = self.patch_center
+            obj.matrix_world = (Matrix.Translation(center) @ Matrix.Rotation(math.radians(self.azimuth_deg), 4, "Z")
+                                @ Matrix.Translation(-center) @ obj.matrix_world)
+
     def set_incidence(self, theta_i_deg: float) -> None:
-        """Sun at zenith θi on the −x side (θi = 180°: straight from behind), and the material told."""
+        """Sun at zenith θi on the −x side (θi = 180°: straight from behind), turned by the rig's
+        azimuth, and the material told."""
         _aim(self.sun, toward_sun(theta_i_deg), self.patch_center, 0.0)
+        self._turn(self.sun)
         self.theta_i_deg = float(theta_i_deg)
         self._sync_sun()
 
@@ -243,8 +278,10 @@ class Rig:
             sync_sun(self.material, self.sun)
 
     def set_view(self, theta_v_deg: float) -> None:
-        """Camera at signed zenith θv framing the patch exactly (``framing``: non-square pixels)."""
+        """Camera at signed zenith θv framing the patch exactly (``framing``: non-square pixels),
+        turned by the rig's azimuth (its image x stays in the plane of incidence)."""
         _aim(self.camera, toward_camera(theta_v_deg), self.patch_center, self._camera_distance)
+        self._turn(self.camera)
         render = self.scene.render
         render.pixel_aspect_x, render.pixel_aspect_y = pixel_aspect(theta_v_deg)
         self.theta_v_deg = float(theta_v_deg)
@@ -277,7 +314,7 @@ def build_rig(sample, settings: RigSettings = RigSettings()) -> Rig:
     ``sample``: a mesh object whose mesh carries the ``cloth_normal`` attribute (a ClothLight woven
     sample or :func:`calibration_plane`; it is copied, never changed), a WeaveParameters (a sample is
     built), or None (:data:`VALIDATION_WEAVE`).  Raises ParameterError when the patch would bring
-    the sample's edges into view.
+    the sample's edges into view at any of the settings' sample azimuths.
     """
     scene = bpy.data.scenes.new(RIG_SCENE)
     owned = [scene]
@@ -312,10 +349,11 @@ def build_rig(sample, settings: RigSettings = RigSettings()) -> Rig:
             owned += [copy.data, copy]
         bounds = sample_bounds(copy)
         if settings.patch_mm is None:
-            patch_mm = largest_patch_mm(bounds, settings.resolution, settings.max_view_deg, settings.max_incidence_deg)
+            patch_mm = largest_patch_mm(bounds, settings.resolution, settings.max_view_deg, settings.max_incidence_deg,
+                                        settings.sample_azimuths_deg)
         else:
             check_patch(settings.patch_mm, bounds, settings.resolution, settings.max_view_deg,
-                        settings.max_incidence_deg)
+                        settings.max_incidence_deg, settings.sample_azimuths_deg)
             patch_mm = float(settings.patch_mm)
 
         configure_measurement_render(scene, resolution=(settings.resolution, settings.resolution),

@@ -9,7 +9,10 @@ For every material asked for (the yarn material reading baked tables, the paper'
 rig renders every (θi, θv) and measures the calibrated cloth BRDF (``yarn_scene`` with full path
 tracing, every other material with direct light only); then, for the colour checks of
 §6.1, the sample at normal view lit from the front (θi = 0) and from behind (θi = 180°).  With a
-measurement the paper's normalisation and the metrics are added.  Outputs in ``out_dir``:
+measurement the paper's normalisation and the metrics are added.  With several sample azimuths
+(:attr:`.rig.RigSettings.sample_azimuths_deg`) all of it is rendered at each turn of the sample
+about its normal and every view and swatch is the mean over the turns, as a measured isotropic BRDF
+averages the weave over its azimuth.  Outputs in ``out_dir``:
 ``results.json``, ``report.md``, ``sweeps.png`` (and ``sweeps_paper_normalised.png`` with a
 measurement), ``swatches/*.png`` and the float renders under ``renders/``.
 """
@@ -38,7 +41,13 @@ from ...validation.framing import (
     YARN_MATERIALS,
     ParameterError,
 )
-from ...validation.measure import apply_paper_normalisation, channel_ratios, find_view, paper_normalisation_factor
+from ...validation.measure import (
+    apply_paper_normalisation,
+    channel_ratios,
+    find_view,
+    mean_over_turns,
+    paper_normalisation_factor,
+)
 from precompute.fit.measured_data import read_measurement, relative_rms_error, rms_error, shape_correlation
 from precompute.tables.folder import check_output_folder, staged_folder
 from ...validation.report import VALIDATION_FOLDER_NAMES, swatch_exposure, write_report, write_swatch_png
@@ -98,7 +107,8 @@ class ValidationRun:
     measured_csv
         A measurement file (:mod:`.measured_data` format), or None.
     settings
-        Angles, framing and render settings (:class:`.rig.RigSettings`).
+        Angles, framing and render settings (:class:`.rig.RigSettings`), the sample's azimuths
+        included: every view and swatch is rendered at each and averaged.
     swatches
         Also render the front- and back-lit colour swatches (§6.1).
     specular_weight
@@ -159,7 +169,7 @@ class ValidationRun:
         self.swatches = bool(swatches)
         per_material = (len(settings.incidences_deg) * len(settings.views_deg)
                         + (len(SWATCH_INCIDENCES_DEG) if swatches else 0))
-        self.total = len(self.materials) * per_material
+        self.total = len(self.materials) * len(settings.sample_azimuths_deg) * per_material
         self.results: dict | None = None
 
     def steps(self) -> Iterator[Progress]:
@@ -186,49 +196,79 @@ class ValidationRun:
 
     def _sweep(self, rig, created: list, start: float) -> Iterator[Progress]:
         """The renders of :meth:`steps` into :attr:`_folder`, then the results and the report."""
-        curves, swatches, seconds = {}, {}, {}
+        turns, swatches, seconds = {}, {}, {}
         done = 0
         for kind in self.materials:
             material_start = time.perf_counter()
             created.append(self._dress(rig, kind))
-            views = []
-            for theta_i in self.settings.incidences_deg:
-                rig.set_incidence(theta_i)
-                for theta_v in self.settings.views_deg:
-                    rig.set_view(theta_v)
-                    views.append(rig.measure(self._render_path(kind, theta_i, theta_v)))
-                    done += 1
-                    yield Progress(done, self.total, f"{kind}: θi = {theta_i:g}°, θv = {theta_v:g}°")
-            curves[kind] = views
-            if self.swatches:
-                images = {}
-                rig.set_view(0.0)
-                for side, theta_i in SWATCH_INCIDENCES_DEG.items():
+            turns[kind], images = {}, {}
+            for azimuth in self.settings.sample_azimuths_deg:
+                rig.set_azimuth(azimuth)
+                views = []
+                for theta_i in self.settings.incidences_deg:
                     rig.set_incidence(theta_i)
-                    images[side] = rig.render(self._render_path(kind, swatch=side))
-                    done += 1
-                    yield Progress(done, self.total, f"{kind}: swatch lit from the {side}")
+                    for theta_v in self.settings.views_deg:
+                        rig.set_view(theta_v)
+                        views.append(rig.measure(self._render_path(kind, theta_i, theta_v, azimuth=azimuth)))
+                        done += 1
+                        yield Progress(done, self.total,
+                                       f"{kind}: θi = {theta_i:g}°, θv = {theta_v:g}°{self._turn_label(azimuth)}")
+                turns[kind][azimuth] = views
+                if self.swatches:
+                    images[azimuth] = {}
+                    rig.set_view(0.0)
+                    for side, theta_i in SWATCH_INCIDENCES_DEG.items():
+                        rig.set_incidence(theta_i)
+                        images[azimuth][side] = rig.render(self._render_path(kind, swatch=side, azimuth=azimuth))
+                        done += 1
+                        yield Progress(done, self.total,
+                                       f"{kind}: swatch lit from the {side}{self._turn_label(azimuth)}")
+            if images:
                 swatches[kind] = self._swatch_entries(kind, images)
             seconds[kind] = time.perf_counter() - material_start
-        self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
+        self.results = self._assemble(rig, turns, swatches, seconds, time.perf_counter() - start)
         self.results["files"] = write_report(self.results, self._folder)
         # A last step before the folder is swapped in: a stop asked for while the report was written
         # still leaves nothing.
         yield Progress(done, self.total, "report written")
 
-    def _render_path(self, kind: str, theta_i: float = 0.0, theta_v: float = 0.0, swatch: str | None = None):
-        name = f"swatch_{swatch}.exr" if swatch else f"i{theta_i:+05.1f}_v{theta_v:+05.1f}.exr"
+    @property
+    def _turned(self) -> bool:
+        """Whether the sample is measured at more than one turn (file names then carry the azimuth)."""
+        return len(self.settings.sample_azimuths_deg) > 1
+
+    def _turn_label(self, azimuth: float) -> str:
+        return f", α = {azimuth:g}°" if self._turned else ""
+
+    def _turn_suffix(self, azimuth: float) -> str:
+        """What a render's or swatch's file name gets for its turn: the azimuth, where there are several."""
+        return f"_a{azimuth:05.1f}" if self._turned else ""
+
+    def _render_path(self, kind: str, theta_i: float = 0.0, theta_v: float = 0.0, swatch: str | None = None,
+                     azimuth: float = 0.0):
+        turn = self._turn_suffix(azimuth)
+        name = f"swatch_{swatch}{turn}.exr" if swatch else f"i{theta_i:+05.1f}_v{theta_v:+05.1f}{turn}.exr"
         return self._folder / "renders" / kind / name
 
     def _swatch_entries(self, kind: str, images: dict) -> dict:
-        """The §6.1 swatches of ``kind`` from their renders ({side: pixels}): mean colour, ratios, PNG."""
+        """The §6.1 swatches of ``kind`` from their renders ({azimuth: {side: pixels}}): mean colour
+        (over the turns), ratios, PNG (the first turn's; with several turns one per turn in ``turns``)."""
         entries = {}
-        exposure = swatch_exposure(*images.values())
-        for side, pixels in images.items():
-            mean = pixels[..., :3].astype(np.float64).mean(axis=(0, 1)) / self.settings.sun_irradiance
-            png = write_swatch_png(pixels, self._folder / "swatches" / f"{kind}_{side}.png", exposure)
+        exposure = swatch_exposure(*(pixels for sides in images.values() for pixels in sides.values()))
+        for side in next(iter(images.values())):
+            means, pngs = [], []
+            for azimuth, sides in images.items():
+                pixels = sides[side]
+                means.append(pixels[..., :3].astype(np.float64).mean(axis=(0, 1)) / self.settings.sun_irradiance)
+                name = f"{kind}_{side}{self._turn_suffix(azimuth)}.png"
+                png = write_swatch_png(pixels, self._folder / "swatches" / name, exposure)
+                pngs.append(str(png.relative_to(self._folder)))
+            mean = np.mean(means, axis=0)
             entries[side] = {"theta_i_deg": SWATCH_INCIDENCES_DEG[side], "mean_rgb_per_irradiance": mean.tolist(),
-                             "ratios": channel_ratios(mean), "png": str(png.relative_to(self._folder))}
+                             "ratios": channel_ratios(mean), "png": pngs[0]}
+            if self._turned:
+                entries[side]["turns"] = [{"azimuth_deg": azimuth, "mean_rgb_per_irradiance": m.tolist(), "png": png}
+                                          for azimuth, m, png in zip(images, means, pngs)]
         return entries
 
     def _dress(self, rig, kind: str, material=None):
@@ -263,19 +303,20 @@ class ValidationRun:
                   "tables": distributed.folder_payload(self.tables.brdf_path.parent) if self.tables else None,
                   "cloth": (distributed.folder_payload(self.cloth_tables.lobe_path.parent) if self.cloth_tables
                             else None)}
-        tasks = [(kind, theta_i, tuple(self.settings.views_deg), None)
-                 for kind in self.materials for theta_i in self.settings.incidences_deg]
+        azimuths = self.settings.sample_azimuths_deg
+        tasks = [(kind, theta_i, tuple(self.settings.views_deg), None, azimuth)
+                 for kind in self.materials for azimuth in azimuths for theta_i in self.settings.incidences_deg]
         if self.swatches:
-            tasks += [(kind, theta_i, (0.0,), side) for kind in self.materials
+            tasks += [(kind, theta_i, (0.0,), side, azimuth) for kind in self.materials for azimuth in azimuths
                       for side, theta_i in SWATCH_INCIDENCES_DEG.items()]
         done = []
 
         def task_done(index: int) -> None:
-            kind, theta_i, views, side = tasks[index]
+            kind, theta_i, views, side, azimuth = tasks[index]
             done.append(len(views))
             if progress is not None:
                 what = f"swatch lit from the {side}" if side else f"θi = {theta_i:g}°, all views"
-                progress(sum(done), self.total, f"{kind}: {what}")
+                progress(sum(done), self.total, f"{kind}: {what}{self._turn_label(azimuth)}")
 
         rig = build_rig(self.sample, self.settings)
         try:
@@ -292,21 +333,21 @@ class ValidationRun:
                     raise
             with staged_folder(self.out_dir, VALIDATION_FOLDER_NAMES, "out_dir", job="validation") as folder:
                 self._folder = folder
-                curves = {kind: [] for kind in self.materials}
+                turns = {kind: {azimuth: [] for azimuth in azimuths} for kind in self.materials}
                 images = {kind: {} for kind in self.materials}
                 seconds = dict.fromkeys(self.materials, 0.0)
-                for (kind, theta_i, views, side), (measured, files, task_seconds) in zip(tasks, results):
+                for (kind, theta_i, views, side, azimuth), (measured, files, task_seconds) in zip(tasks, results):
                     seconds[kind] += task_seconds
                     for theta_v, exr in zip(views, files):
-                        path = self._render_path(kind, theta_i, theta_v, swatch=side)
+                        path = self._render_path(kind, theta_i, theta_v, swatch=side, azimuth=azimuth)
                         path.parent.mkdir(parents=True, exist_ok=True)
                         path.write_bytes(exr.tobytes())
                     if side:
-                        images[kind][side] = measured
+                        images[kind].setdefault(azimuth, {})[side] = measured
                     else:
-                        curves[kind] += measured
+                        turns[kind][azimuth] += measured
                 swatches = {kind: self._swatch_entries(kind, images[kind]) for kind in self.materials if images[kind]}
-                self.results = self._assemble(rig, curves, swatches, seconds, time.perf_counter() - start)
+                self.results = self._assemble(rig, turns, swatches, seconds, time.perf_counter() - start)
                 self.results["files"] = write_report(self.results, self._folder)
                 if progress is not None:  # as steps(): a stop asked for now still leaves nothing
                     progress(self.total, self.total, "report written")
@@ -330,8 +371,11 @@ class ValidationRun:
                                        mode=GENERAL_MODE)
         return build_baseline_material(name="ClothLight Gonioreflectometer Baseline", mode=SUN_MODE)
 
-    def _assemble(self, rig, curves, swatches, seconds, total_seconds) -> dict:
+    def _assemble(self, rig, turns, swatches, seconds, total_seconds) -> dict:
+        """The results from each material's views at each turn (``turns``: {kind: {azimuth: views}})
+        and its swatch entries: every view the mean over the turns (:func:`.measure.mean_over_turns`)."""
         s = self.settings
+        curves = {kind: mean_over_turns(list(by_turn.values())) for kind, by_turn in turns.items()}
         results = {
             "schema": SCHEMA,
             "settings": {
@@ -347,6 +391,9 @@ class ValidationRun:
                 "cloth_dir": str(self.cloth_tables.lobe_path.parent) if self.cloth_tables else None,
                 "measured_csv": str(self.measured_csv) if self.measured_csv else None,
             },
+            # the warp's azimuths from the plane of incidence at which every view and swatch was
+            # rendered and averaged (the sun and cameras turned about the sample's normal)
+            "sample_azimuths_deg": list(s.sample_azimuths_deg),
             "units": {
                 "angles": "degrees; θv negative on the light's side, θv = θi the mirror direction",
                 "rgb_sum": "sum of linear RGB pixel values (W m⁻² sr⁻¹) over cloth pixels",
@@ -370,6 +417,9 @@ class ValidationRun:
             if self.measurement is not None:
                 entry["metrics"] = compare_with_measurement(views, self.measurement)
             entry["views"] = [asdict(v) for v in views]
+            if self._turned:
+                entry["turns"] = [{"azimuth_deg": azimuth, "views": [asdict(v) for v in turn]}
+                                  for azimuth, turn in turns[kind].items()]
             if kind in swatches:
                 entry["swatches"] = swatches[kind]
             results["materials"][kind] = entry
@@ -585,19 +635,21 @@ def _close_worker_sweeps() -> None:
 atexit.register(_close_worker_sweeps)
 
 
-def render_sweep_task(inputs: dict, kind: str, theta_i: float, views_deg: tuple, swatch: str | None) -> tuple:
-    """A cluster task: the sweep's renders of material ``kind`` at incidence ``theta_i`` — every
-    view of ``views_deg`` measured (a list of ViewMeasurement), or the ``swatch`` side's pixels —
-    with each render's EXR file (uint8 arrays) and the task's seconds."""
+def render_sweep_task(inputs: dict, kind: str, theta_i: float, views_deg: tuple, swatch: str | None,
+                      azimuth: float = 0.0) -> tuple:
+    """A cluster task: the sweep's renders of material ``kind`` at incidence ``theta_i`` with the
+    sample turned to ``azimuth`` — every view of ``views_deg`` measured (a list of ViewMeasurement),
+    or the ``swatch`` side's pixels — with each render's EXR file (uint8 arrays) and the task's seconds."""
     start = time.perf_counter()
     sweep = _worker_sweep(inputs, kind in GARMENT_MATERIALS)
     rig = sweep.rig
     sweep.materials[kind] = sweep.run._dress(rig, kind, sweep.materials.get(kind))
+    rig.set_azimuth(azimuth)
     rig.set_incidence(theta_i)
     measured, files = [], []
     for theta_v in views_deg:
         rig.set_view(theta_v)
-        path = sweep.run._render_path(kind, theta_i, theta_v, swatch=swatch)
+        path = sweep.run._render_path(kind, theta_i, theta_v, swatch=swatch, azimuth=azimuth)
         measured.append(rig.render(path) if swatch else rig.measure(path))
         files.append(np.frombuffer(path.read_bytes(), np.uint8))
         path.unlink()

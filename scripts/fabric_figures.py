@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import pathlib
 import sys
 
@@ -78,7 +79,7 @@ def fit_folder_brdf(folder: pathlib.Path, measured):
 def main() -> int:
     from clothlight.fit.forward import build_forward_model
     from precompute.fit.baseline import baseline_brdf, fit_baseline
-    from precompute.fit.figures import fabric_figures, figures_text
+    from precompute.fit.figures import diffuse_shortfall, fabric_figures, figures_text
     from precompute.fit.objective import Objective, load_measurement, split_views
     from precompute.optics.cook_torrance import specular_from_config
     from precompute.optics.medium import DEFAULT_PRESET, load_preset_config
@@ -92,6 +93,9 @@ def main() -> int:
     parser.add_argument("--relative-error", type=float, default=0.03, help="a --preset's forward model's (0.03)")
     parser.add_argument("--seed", type=int, default=1, help="a --preset's transport seed (1)")
     parser.add_argument("--json", type=pathlib.Path, help="also write the figures here")
+    parser.add_argument("--diffuse-shortfall", action="store_true",
+                        help="also the figures of the cloth plus the constant BRDF per channel that brings it "
+                             "closest on the plane of incidence (precompute.fit.figures.diffuse_shortfall)")
     args = parser.parse_args()
 
     measurement = load_measurement(args.measured)
@@ -118,6 +122,14 @@ def main() -> int:
                "model": fabric_figures(cloth[:count], objective.measured, views, swatches=cloth[count:]),
                "baseline": fabric_figures(fitted, objective.measured, views)}
     print("\n".join(figures_text(results["model"], label)))
+    if args.diffuse_shortfall:
+        shortfall = diffuse_shortfall(cloth[:count], objective.measured, views)
+        results["diffuse_shortfall"] = {"brdf_per_sr": shortfall.tolist(), "albedo": (math.pi * shortfall).tolist(),
+                                        "figures": fabric_figures(cloth[:count] + shortfall, objective.measured, views)}
+        rgb = ", ".join(f"{c:.4f}" for c in shortfall)
+        print("\n".join(figures_text(results["diffuse_shortfall"]["figures"],
+                                      f"the same plus a Lambertian term of {rgb} /sr in R, G, B "
+                                      f"(albedo {', '.join(f'{a:.3f}' for a in math.pi * shortfall)})")))
     print("\n".join(figures_text(results["baseline"], "the paper's Lambert + Cook–Torrance fitted to the plane "
                                                       "of incidence")))
     if args.json is not None:

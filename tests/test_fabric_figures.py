@@ -7,8 +7,8 @@ import pytest
 from clothlight.fit.forward import rig_views, sample_azimuths
 from precompute.optics.measured_sample import DEFAULT_SAMPLE_AZIMUTHS_DEG
 from precompute.errors import ParameterError
-from precompute.fit.figures import (band_penalty, band_ratios, fabric_figures, main_channel, off_specular_views,
-                                    parse_band, view_index)
+from precompute.fit.figures import (band_penalty, band_ratios, diffuse_shortfall, fabric_figures, main_channel,
+                                    off_specular_views, parse_band, view_index)
 from precompute.fit.objective import split_views
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
@@ -65,6 +65,25 @@ def test_the_figures_of_a_cloth_against_itself_and_against_a_changed_one():
     bluer = fabric_figures(RawCurves.rgb * np.array([1.0, 1.0, 0.5]), RawCurves.rgb, views)["plane_of_incidence"]
     assert bluer["B"] == pytest.approx(0.5) and bluer["per_channel"] == pytest.approx(0.5 / np.sqrt(3.0))
     assert bluer["pooled"] < 0.3 * bluer["per_channel"]
+
+
+def test_the_diffuse_shortfall_is_the_lambertian_light_a_cloth_lacks():
+    views = split_views(RawCurves)
+    lacking = np.array([0.01, 0.004, 0.0])
+    short = diffuse_shortfall(RawCurves.rgb - lacking, RawCurves.rgb, views)
+    np.testing.assert_allclose(short, lacking, atol=1e-12)
+    restored = fabric_figures(RawCurves.rgb - lacking + short, RawCurves.rgb, views)
+    assert restored["plane_of_incidence"]["per_channel"] == pytest.approx(0.0, abs=1e-12)
+    # a cloth with light to spare lacks none; one that lacks it only off the plane is not credited with it
+    assert diffuse_shortfall(RawCurves.rgb * 1.2, RawCurves.rgb, views).tolist() == [0.0, 0.0, 0.0]
+    off_plane = RawCurves.rgb - np.where(np.asarray(views.held_out, bool)[:, None], 0.02, 0.0)
+    assert diffuse_shortfall(off_plane, RawCurves.rgb, views).tolist() == [0.0, 0.0, 0.0]
+    # the least-squares constant: any other one leaves each channel further from the measurement
+    noisy = RawCurves.rgb * (1.0 + 0.1 * np.sin(np.arange(len(RawCurves.rgb))))[:, None] - lacking
+    best = fabric_figures(noisy + diffuse_shortfall(noisy, RawCurves.rgb, views), RawCurves.rgb, views)
+    for nudge in (-0.001, 0.001):
+        worse = fabric_figures(noisy + diffuse_shortfall(noisy, RawCurves.rgb, views) + nudge, RawCurves.rgb, views)
+        assert all(worse["plane_of_incidence"][c] > best["plane_of_incidence"][c] for c in "RG")
 
 
 def test_the_bands_read_the_backscatter_in_the_main_channel_and_the_off_specular_colour():

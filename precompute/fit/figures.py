@@ -175,6 +175,21 @@ def fabric_figures(model: np.ndarray, measured: np.ndarray, views: Views, *,
     return figures
 
 
+def diffuse_shortfall(model: np.ndarray, measured: np.ndarray, views: Views) -> np.ndarray:
+    """(3,) the constant BRDF per channel (1/sr, ≥ 0) that, added to ``model``, brings it closest to
+    ``measured`` (both (M, 3)) on the plane of incidence: a Lambertian reflector of albedo π c that the
+    cloth lacks.  Each channel's relative RMS is a sum of squares over a fixed norm, so its least-squares
+    constant is the mean of measured − model over the plane's views, floored at 0 (a cloth cannot
+    subtract light).  A diagnostic of the model's shape, not a fitted term: where adding it brings the
+    held-out views closer too, the fabric reflects light the model's layers do not send back
+    (``scripts/fabric_figures.py --diffuse-shortfall``, docs/fitting.md)."""
+    model, measured = np.asarray(model, float), np.asarray(measured, float)
+    plane = in_plane(views)
+    if not plane.any():
+        raise ParameterError("views", "none in the plane of incidence", "a measurement with in-plane views")
+    return np.maximum(0.0, (measured[plane] - model[plane]).mean(axis=0))
+
+
 def figures_text(figures: dict, label: str) -> list[str]:
     """``figures`` (:func:`fabric_figures`) as lines of text, headed by ``label``."""
     lines = [f"{label}:"]
@@ -203,5 +218,5 @@ def figures_text(figures: dict, label: str) -> list[str]:
     return lines
 
 
-__all__ = ["BACKSCATTER_VIEWS", "band_penalty", "band_ratios", "fabric_figures", "figures_text", "in_plane",
-           "main_channel", "off_specular_views", "parse_band", "relative_rms", "view_index"]
+__all__ = ["BACKSCATTER_VIEWS", "band_penalty", "band_ratios", "diffuse_shortfall", "fabric_figures", "figures_text",
+           "in_plane", "main_channel", "off_specular_views", "parse_band", "relative_rms", "view_index"]

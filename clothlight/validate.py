@@ -157,24 +157,11 @@ def stdout_to_stderr():
         os.close(saved)
 
 
-def tables_sample_weave(tables_dir):
-    """The woven sample a bake folder's preset was fitted on (its summary's sample weave,
-    :mod:`precompute.optics.measured_sample`), or None for the validation's own."""
-    from precompute.optics.measured_sample import DEFAULT_SAMPLE_WEAVE
-    from precompute.tables import folder as table_folder
-
-    from .weave.sample_weaves import sample_weave
-
-    summary = table_folder.check_yarn_table_folder(pathlib.Path(tables_dir).resolve()).summary
-    name = table_folder.summary_sample_weave(summary, tables_dir)
-    return None if name == DEFAULT_SAMPLE_WEAVE else sample_weave(name, summary["medium"]["yarn"]["radius_mm"])
-
-
 def _sweep(args, interrupt) -> dict:
     from .blender import scene_files
     from .blender.validation.rig import RigSettings
     from .blender.validation.run import run_validation
-    from .validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, ParameterError
+    from .validation.framing import DEFAULT_INCIDENCES_DEG, DEFAULT_VIEWS_DEG, ParameterError, tables_sample_weave
 
     interrupt.check()
     settings = RigSettings(incidences_deg=tuple(args.incidences or DEFAULT_INCIDENCES_DEG),

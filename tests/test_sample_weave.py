@@ -137,7 +137,7 @@ def test_the_forward_model_renders_the_weave_its_preset_names(monkeypatch):
 
 
 def test_the_validation_of_a_bake_renders_the_sample_weave_it_records(tmp_path):
-    from clothlight.validate import tables_sample_weave
+    from clothlight.validation.framing import tables_sample_weave
 
     n_i, n_o, samples = 3, 3, 8
     rng = np.random.default_rng(0)

@@ -222,6 +222,21 @@ def tables_sample_azimuths(tables_dir) -> tuple[float, ...] | None:
     return sample_azimuths_deg({SAMPLE_TABLE: table}) if SAMPLE_AZIMUTHS_KEY in table else None
 
 
+def tables_sample_weave(tables_dir):
+    """The woven sample a bake folder's preset was fitted on (its summary's sample weave,
+    :mod:`precompute.optics.measured_sample`) as WeaveParameters, or None for the validation's own."""
+    import pathlib
+
+    from precompute.optics.measured_sample import DEFAULT_SAMPLE_WEAVE
+    from precompute.tables import folder as table_folder
+
+    from ..weave.sample_weaves import sample_weave
+
+    summary = table_folder.check_yarn_table_folder(pathlib.Path(tables_dir).resolve()).summary
+    name = table_folder.summary_sample_weave(summary, tables_dir)
+    return None if name == DEFAULT_SAMPLE_WEAVE else sample_weave(name, summary["medium"]["yarn"]["radius_mm"])
+
+
 def sweep_sample_azimuths(azimuths, tables_dir, name: str = "sample_azimuths_deg") -> tuple[float, ...]:
     """The sample azimuths a sweep averages: ``azimuths`` where given (checked, ParameterError naming
     ``name``), else those the bake folder ``tables_dir`` records (:func:`tables_sample_azimuths`),

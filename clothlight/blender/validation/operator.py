@@ -34,6 +34,7 @@ from ...validation.framing import (
     MATERIALS,
     YARN_MATERIALS,
     sweep_sample_azimuths,
+    tables_sample_weave,
 )
 from precompute.fit.measured_data import MeasurementFormatError
 from precompute.tables.exr import TableError
@@ -69,7 +70,7 @@ def _angle_text(angles) -> str:
 
 
 class CLOTHLIGHT_OT_validate(bpy.types.Operator):
-    """Measure the active ClothLight sample (or a default woven sample) in a virtual gonioreflectometer:
+    """Measure the active ClothLight sample (or the woven sample its tables name) in a virtual gonioreflectometer:
     cloth BRDF against view angle per incidence, for the yarn material and the paper's baseline, with plots
     and a report"""
 
@@ -127,6 +128,8 @@ class CLOTHLIGHT_OT_validate(bpy.types.Operator):
             recorded_in = tables_of_sample(sample)
         if recorded_in is not None and not pathlib.Path(recorded_in).is_dir():
             raise ParameterError("tables_dir", recorded_in, "an existing bake folder")
+        if sample is None and tables is not None:
+            sample = tables_sample_weave(tables)  # the weave the tables were fitted on, as the command line builds
         settings = RigSettings(incidences_deg=parse_angles(self.incidences, "incidences"),
                                views_deg=parse_angles(self.views, "views"),
                                resolution=self.resolution, samples=self.samples,

@@ -27,7 +27,6 @@ import bpy
 
 from ...mesh_attributes import CLOTH_NORMAL
 from ...render_bounds import VALIDATION_RESOLUTION, VALIDATION_SAMPLES
-from ...weave import WeaveParameterError
 from ...validation.framing import (
     DEFAULT_INCIDENCES_DEG,
     DEFAULT_VIEWS_DEG,
@@ -36,16 +35,15 @@ from ...validation.framing import (
     sweep_sample_azimuths,
     tables_sample_weave,
 )
-from precompute.fit.measured_data import MeasurementFormatError
-from precompute.tables.exr import TableError
 from .rig import DEFAULT_RESOLUTION, DEFAULT_SAMPLES, RigSettings
 
 if TYPE_CHECKING:
     from .run import ValidationRun
 
-from precompute.errors import ParameterError
-#: Errors that are the user's input, reported without a traceback.
-INPUT_ERRORS = (ParameterError, WeaveParameterError, MeasurementFormatError, TableError)
+from precompute.errors import InputError, ParameterError
+#: Errors that are the user's input, reported without a traceback: a bad setting, weave, measurement or
+#: bake folder (each an InputError, whose module need not be imported when the add-on registers).
+INPUT_ERRORS = (InputError,)
 PLOT_IMAGE = "ClothLight Validation"
 
 

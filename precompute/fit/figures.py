@@ -214,7 +214,9 @@ def figures_text(figures: dict, label: str) -> list[str]:
                          f"{c['model_over_measured'][0]:.2f}, median {c['model_over_measured'][1]:.2f}, "
                          f"max {c['model_over_measured'][2]:.2f}")
     if "back_over_front" in figures:
-        lines.append(f"  lit from behind / from the front (luminance, normal view): {figures['back_over_front']:.3f}")
+        lines.append(f"  lit from behind / from the front (luminance, normal view, the sun straight behind it: its "
+                     f"unscattered beam included; in daylight: scripts/daylight_swatches.py): "
+                     f"{figures['back_over_front']:.3f}")
     return lines
 
 

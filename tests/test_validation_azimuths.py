@@ -316,29 +316,33 @@ def test_the_band_figures_script_names_the_azimuths(tmp_path, capsys, monkeypatc
         assert out.startswith(line) and (line or out == ""), out
 
 
-@pytest.mark.render
-def test_the_operator_takes_the_azimuths_from_its_tables(tmp_path, bpy, small_bake):
+def operator_results(bpy, bake, out, **settings) -> dict:
+    """results.json of the add-on's Validate operator run on ``bake`` with no sample active (the class
+    registered for the run where the add-on is not)."""
     from clothlight.blender.validation.operator import CLOTHLIGHT_OT_validate
 
-    bake = recording(small_bake, tmp_path / "bake", [0, 90])
     registered = hasattr(bpy.types, CLOTHLIGHT_OT_validate.__name__)
     if not registered:
         bpy.utils.register_class(CLOTHLIGHT_OT_validate)
     try:
         bpy.ops.wm.read_homefile(use_empty=True)
-        assert bpy.ops.clothlight.validate(out_dir=str(tmp_path / "v"), materials={"YARN"}, tables_dir=str(bake),
-                                           incidences="30", views="0 40", resolution=16, samples=1,
-                                           swatches=False) == {"FINISHED"}
+        assert bpy.ops.clothlight.validate(out_dir=str(out), materials={"YARN"}, tables_dir=str(bake),
+                                           incidences="30", samples=1, swatches=False, **settings) == {"FINISHED"}
     finally:
         if not registered:
             bpy.utils.unregister_class(CLOTHLIGHT_OT_validate)
-    results = json.loads((tmp_path / "v" / "results.json").read_text())
+    return json.loads((out / "results.json").read_text())
+
+
+@pytest.mark.render
+def test_the_operator_takes_the_azimuths_from_its_tables(tmp_path, bpy, small_bake):
+    bake = recording(small_bake, tmp_path / "bake", [0, 90])
+    results = operator_results(bpy, bake, tmp_path / "v", views="0 40", resolution=16)
     assert results["sample_azimuths_deg"] == [0.0, 90.0] and len(results["materials"]["yarn"]["turns"]) == 2
 
 
 @pytest.mark.render
 def test_the_operator_builds_the_weave_its_tables_were_fitted_on(tmp_path, bpy, small_bake):
-    from clothlight.blender.validation.operator import CLOTHLIGHT_OT_validate
     from clothlight.weave.sample_weaves import sample_weave
     from precompute.tables.folder import SAMPLE_WEAVE_KEY
 
@@ -346,18 +350,7 @@ def test_the_operator_builds_the_weave_its_tables_were_fitted_on(tmp_path, bpy, 
     summary = json.loads((bake / SUMMARY_FILE).read_text())
     summary["medium"] = {"yarn": {"radius_mm": 0.1}}
     (bake / SUMMARY_FILE).write_text(json.dumps({**summary, SAMPLE_WEAVE_KEY: "pressed"}))
-    registered = hasattr(bpy.types, CLOTHLIGHT_OT_validate.__name__)
-    if not registered:
-        bpy.utils.register_class(CLOTHLIGHT_OT_validate)
-    try:
-        bpy.ops.wm.read_homefile(use_empty=True)
-        assert bpy.ops.clothlight.validate(out_dir=str(tmp_path / "v"), materials={"YARN"}, tables_dir=str(bake),
-                                           incidences="30", views="0", resolution=64, samples=1,
-                                           swatches=False) == {"FINISHED"}
-    finally:
-        if not registered:
-            bpy.utils.unregister_class(CLOTHLIGHT_OT_validate)
-    results = json.loads((tmp_path / "v" / "results.json").read_text())
+    results = operator_results(bpy, bake, tmp_path / "v", views="0", resolution=64)
     pressed, built = sample_weave("pressed", 0.1), results["settings"]["sample"]["weave"]
     assert built["spacing_mm"] == pytest.approx(pressed.spacing_mm)
     assert built["semi_axes_mm"] == pytest.approx(list(pressed.semi_axes_mm))
